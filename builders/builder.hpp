@@ -1,0 +1,25 @@
+// Builder interface and registry. Adding a builder = one .cpp file + one line in registry.cpp.
+#pragma once
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "builders/bvh.hpp"
+
+namespace bvhlab {
+
+struct BuilderInfo {
+  std::string name;         // e.g. "sah-binned"
+  std::string description;  // one line for `bvhlab builders`
+  std::function<Bvh(const BuildInput&, const BuildOptions&)> build;
+};
+
+const std::vector<BuilderInfo>& builders();
+// Throws std::invalid_argument naming the valid builders when `name` is unknown.
+const BuilderInfo& findBuilder(const std::string& name);
+
+// Times the build, validates the input (empty input is an error), fills BuildStats.
+Bvh buildBvh(const std::string& builder, const BuildInput& input, const BuildOptions& options,
+             BuildStats* stats = nullptr);
+
+}  // namespace bvhlab

@@ -1,0 +1,87 @@
+// The one binary-BVH type every builder emits, and the cost model they share.
+// Builders are primitive-agnostic: they see boxes and centroids, never triangles.
+#pragma once
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace bvhlab {
+
+struct Aabb {
+  glm::vec3 min{std::numeric_limits<float>::infinity()};
+  glm::vec3 max{-std::numeric_limits<float>::infinity()};
+
+  void grow(const glm::vec3& p) { min = glm::min(min, p); max = glm::max(max, p); }
+  void grow(const Aabb& b) { min = glm::min(min, b.min); max = glm::max(max, b.max); }
+  bool empty() const { return !(min.x <= max.x && min.y <= max.y && min.z <= max.z); }
+  glm::vec3 extent() const { return max - min; }
+  glm::vec3 center() const { return 0.5f * (min + max); }
+  // Half the surface area: the SAH only needs ratios, and Embree/tinybvh use the half area too.
+  float halfArea() const {
+    if (empty()) return 0.0f;
+    glm::vec3 e = extent();
+    return e.x * e.y + e.y * e.z + e.z * e.x;
+  }
+  bool contains(const Aabb& b) const {
+    return glm::all(glm::lessThanEqual(min, b.min)) && glm::all(glm::greaterThanEqual(max, b.max));
+  }
+};
+
+// A node of the binary BVH. Inner nodes: count == 0, children at `first` and `first + 1` are NOT
+// implied: `left`/`right` are explicit so builders may emit in any order; the packer re-orders
+// depth-first (see layout/layout.hpp).
+struct BvhNode {
+  Aabb bounds;
+  uint32_t left = 0, right = 0;   // inner: child node indices
+  uint32_t first = 0, count = 0;  // leaf: range in Bvh::primIndices; count > 0 marks a leaf
+  bool isLeaf() const { return count > 0; }
+};
+
+struct Bvh {
+  std::vector<BvhNode> nodes;         // nodes[0] is the root
+  std::vector<uint32_t> primIndices;  // leaf ranges index this; entries are input primitive ids
+};
+
+// SAH cost model shared by every builder (Ct = Ci = 1 by default, half areas, normalised by the
+// root's area: the convention of Embree and tinybvh, so our figures compare with theirs).
+struct CostModel {
+  float traversalCost = 1.0f;     // Ct
+  float intersectionCost = 1.0f;  // Ci
+};
+
+struct BuildOptions {
+  uint32_t maxLeafSize = 4;  // 1..kMaxLeafSize primitives per leaf
+  CostModel cost;
+  uint32_t bins = 0;         // sah-binned: bin count (0 = the builder's measured default)
+};
+
+// Input: one box and one centroid per primitive (same length).
+struct BuildInput {
+  std::span<const Aabb> boxes;
+  std::span<const glm::vec3> centroids;
+};
+
+struct BuildStats {
+  std::string builder;
+  uint32_t leafSize = 0;
+  size_t primitives = 0, nodes = 0, leaves = 0;
+  uint32_t depth = 0;      // root alone = depth 1
+  double sahCost = 0.0;    // normalised by root half-area
+  double buildMs = 0.0;
+  size_t bytes = 0;        // packed layout bytes (nodes + triangles + attributes), filled by the packer
+  double primsPerLeafMean = 0.0;
+  uint32_t primsPerLeafMax = 0;
+};
+
+constexpr uint32_t kMaxLeafSize = 255;  // the packed node stores a leaf count in 8 bits
+
+// SAH cost of a built tree with the given model (recomputed from the tree, not trusted from a builder).
+double sahCost(const Bvh& bvh, const CostModel& cost);
+// Node/leaf/depth/leaf-size statistics of a built tree (sahCost included; buildMs/bytes left 0).
+BuildStats computeStats(const Bvh& bvh, const CostModel& cost);
+
+}  // namespace bvhlab

@@ -1,0 +1,10 @@
+# Writes OUT: a C++ file mapping each GLSL module's file name to its text.
+set(body "#include <map>\n#include <string>\nnamespace bvhlab {\nconst std::map<std::string, std::string>& glslSources() {\n  static const std::map<std::string, std::string> sources = {\n")
+foreach(f ${FILES})
+  get_filename_component(name ${f} NAME)
+  file(READ ${f} text)
+  string(APPEND body "    {\"${name}\", R\"__GLSL__(${text})__GLSL__\"},\n")
+endforeach()
+string(APPEND body "  };\n  return sources;\n}\n}  // namespace bvhlab\n")
+file(WRITE ${OUT}.tmp "${body}")
+execute_process(COMMAND ${CMAKE_COMMAND} -E copy_if_different ${OUT}.tmp ${OUT})

@@ -1,0 +1,20 @@
+// common.glsl — types and counters every module uses. C++ mirror: shaders/common.hpp.
+struct Ray {
+  vec3 origin;
+  vec3 dir;  // not necessarily unit length: object-space rays keep world t
+};
+
+// Closest mesh hit: `tri` indexes the TRIANGLE stream (packed order), bary = (u, v) of v1, v2.
+struct MeshHit {
+  float t;
+  int tri;
+  vec2 bary;
+};
+
+// Per-pixel traversal statistics, written to the stats render target.
+uint g_nodeVisits = 0u;
+uint g_triTests = 0u;
+bool g_stackOverflow = false;  // a kernel sets this instead of overflowing silently
+
+const float INF = 1.0 / 0.0;
+const float PI = 3.14159265358979;

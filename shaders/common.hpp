@@ -1,0 +1,33 @@
+// common.hpp — C++ mirror of common.glsl. Mirrors read like their GLSL: `using namespace glm`
+// inside namespace bvhlab::glsl, same names, same order of operations.
+#pragma once
+#include <cstdint>
+#include <limits>
+
+#include <glm/glm.hpp>
+
+namespace bvhlab::glsl {
+using namespace glm;
+
+struct Ray {
+  vec3 origin;
+  vec3 dir;
+};
+
+struct MeshHit {
+  float t;
+  int tri;
+  vec2 bary;
+};
+
+// The GLSL globals become one struct the CPU caller owns (one per ray/pixel).
+struct Counters {
+  uint32_t nodeVisits = 0;
+  uint32_t triTests = 0;
+  bool stackOverflow = false;
+};
+
+constexpr float INF = std::numeric_limits<float>::infinity();
+constexpr float PI = 3.14159265358979f;
+
+}  // namespace bvhlab::glsl
