@@ -14,8 +14,10 @@ CACHE="${BVHLAB_DATA_CACHE:-$HERE/cache}"
 SUMS="$HERE/checksums.sha256"
 
 # What we keep. Meshes: the report's bunny, a few classic scanned models (10k-89k triangles), and one
-# binary STL and one ASCII PLY so the loaders see real files of every format.
-MESHES=(bunny00.off armadillo.off ChineseDragon-10kv.off refined_elephant.off cow.off knot1.off pig.stl b9.ply)
+# binary STL and two small ASCII PLYs (one with normals and extra elements) so the loaders see real
+# files of every format.
+MESHES=(bunny00.off armadillo.off ChineseDragon-10kv.off refined_elephant.off cow.off knot1.off pig.stl sphere.ply
+        colored_tetra.ply)
 WORLDS=(city.exr courtyard.exr forest.exr interior.exr night.exr studio.exr sunrise.exr sunset.exr license.txt)
 CGAL_TARBALL=usr/share/doc/libcgal-dev/data.tar.gz
 BLENDER_WORLDS=usr/share/blender/datafiles/studiolights/world
