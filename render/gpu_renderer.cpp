@@ -1,0 +1,254 @@
+#include "render/gpu_renderer.hpp"
+
+#include <chrono>
+#include <stdexcept>
+
+#include <glad/gl.h>
+
+#include "render/gl_context.hpp"
+
+namespace bvhlab {
+
+namespace {
+
+enum Unit { kUnitNodes = 0, kUnitTriangles = 1, kUnitAttributes = 2, kUnitTextures = 3, kUnitWorld = 4 };
+
+GLuint compileStage(GLenum stage, const std::string& source, const AssembledShader* map) {
+  GLuint s = glCreateShader(stage);
+  const char* text = source.c_str();
+  glShaderSource(s, 1, &text, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    glGetShaderiv(s, GL_INFO_LOG_LENGTH, &len);
+    std::string log(std::max(len, 1), '\0');
+    glGetShaderInfoLog(s, len, nullptr, log.data());
+    glDeleteShader(s);
+    throw ShaderError(std::string(stage == GL_VERTEX_SHADER ? "vertex" : "fragment") +
+                      " shader failed to compile:\n" + (map ? map->mapLog(log) : log));
+  }
+  return s;
+}
+
+}  // namespace
+
+GpuRenderer::GpuRenderer(const PreparedScene& scene, const ShaderOptions& shader, const FrameOptions& frame)
+    : scene_(scene), options_(shader), frame_(frame) {
+  if (frame.width < 1 || frame.height < 1) throw std::invalid_argument("image size must be at least 1x1");
+  compile();
+  upload();
+  createFramebuffer();
+  setCamera(frame.camera);
+  checkGl("GpuRenderer setup");
+}
+
+GpuRenderer::~GpuRenderer() {
+  glDeleteProgram(program_);
+  glDeleteVertexArrays(1, &vao_);
+  glDeleteFramebuffers(1, &fbo_);
+  GLuint textures[] = {colorTex_, statsTex_, streams_[0], streams_[1], streams_[2], texArray_, worldTex_};
+  glDeleteTextures(7, textures);
+  glDeleteBuffers(3, streamBuffers_);
+  glDeleteBuffers(1, &ubo_);
+}
+
+void GpuRenderer::compile() {
+  SceneFeatures features = analyzeScene(scene_.scene);
+  if (options_.bvhStackSize < 1) options_.bvhStackSize = 1;
+  shader_ = assembleTracer(features, options_);
+  GLuint vs = compileStage(GL_VERTEX_SHADER, fullscreenVertexShader(), nullptr);
+  GLuint fs = compileStage(GL_FRAGMENT_SHADER, shader_.source, &shader_);
+  program_ = glCreateProgram();
+  glAttachShader(program_, vs);
+  glAttachShader(program_, fs);
+  glLinkProgram(program_);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(program_, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    glGetProgramiv(program_, GL_INFO_LOG_LENGTH, &len);
+    std::string log(std::max(len, 1), '\0');
+    glGetProgramInfoLog(program_, len, nullptr, log.data());
+    throw ShaderError("tracer program failed to link:\n" + shader_.mapLog(log));
+  }
+  glCreateVertexArrays(1, &vao_);
+}
+
+unsigned GpuRenderer::uploadStream(const std::vector<glm::uvec4>& texels, const char* name, unsigned* buffer) {
+  static const glm::uvec4 kDummy(0u);  // streams of a mesh-less scene in the uber shader
+  const glm::uvec4* data = texels.empty() ? &kDummy : texels.data();
+  const GLsizeiptr count = texels.empty() ? 1 : static_cast<GLsizeiptr>(texels.size());
+  GLuint tex = 0;
+  if (options_.storage == Storage::Tbo) {
+    GLint maxTexels = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &maxTexels);
+    if (count > maxTexels)
+      throw std::runtime_error(std::string(name) + " stream has " + std::to_string(count) +
+                               " texels, above GL_MAX_TEXTURE_BUFFER_SIZE = " + std::to_string(maxTexels) +
+                               " (try --storage tex2d)");
+    glCreateBuffers(1, buffer);
+    glNamedBufferStorage(*buffer, count * sizeof(glm::uvec4), data, 0);
+    glCreateTextures(GL_TEXTURE_BUFFER, 1, &tex);
+    glTextureBuffer(tex, GL_RGBA32UI, *buffer);
+  } else {
+    GLint maxSize = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &maxSize);
+    const GLsizeiptr width = kTex2DWidth, height = (count + width - 1) / width;
+    if (height > maxSize)
+      throw std::runtime_error(std::string(name) + " stream needs " + std::to_string(height) + " rows of " +
+                               std::to_string(width) + " texels, above GL_MAX_TEXTURE_SIZE = " +
+                               std::to_string(maxSize));
+    std::vector<glm::uvec4> padded(width * height, glm::uvec4(0u));
+    std::copy(data, data + count, padded.begin());
+    glCreateTextures(GL_TEXTURE_2D, 1, &tex);
+    glTextureStorage2D(tex, 1, GL_RGBA32UI, GLsizei(width), GLsizei(height));
+    glTextureSubImage2D(tex, 0, 0, 0, GLsizei(width), GLsizei(height), GL_RGBA_INTEGER, GL_UNSIGNED_INT,
+                        padded.data());
+    glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  }
+  checkGl(name);
+  return tex;
+}
+
+void GpuRenderer::upload() {
+  const SceneData& d = scene_.data;
+  std::vector<uint8_t> block = d.uniformBlock();
+  glCreateBuffers(1, &ubo_);
+  glNamedBufferStorage(ubo_, GLsizeiptr(block.size()), block.data(), 0);
+  GLint maxBlock = 0;
+  glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &maxBlock);
+  if (GLint(block.size()) > maxBlock)
+    throw std::runtime_error("scene has too many objects/materials/lights for one uniform block (" +
+                             std::to_string(block.size()) + " > " + std::to_string(maxBlock) + " bytes)");
+
+  const PackedBvh& p = scene_.packed;
+  streams_[0] = uploadStream(p.nodes, "node", &streamBuffers_[0]);
+  streams_[1] = uploadStream(p.triangles, "triangle", &streamBuffers_[1]);
+  streams_[2] = uploadStream(p.attributes, "attribute", &streamBuffers_[2]);
+
+  // Material textures (a 1x1x1 dummy keeps the uber shader's sampler complete).
+  const TextureArray& ta = d.textures;
+  const int layers = std::max(1, ta.layers);
+  glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &texArray_);
+  glTextureStorage3D(texArray_, 1, GL_RGBA32F, ta.width, ta.height, layers);
+  std::vector<glm::vec4> texels = ta.texels;
+  if (texels.empty()) texels.assign(size_t(ta.width) * ta.height, glm::vec4(1.0f));
+  glTextureSubImage3D(texArray_, 0, 0, 0, 0, ta.width, ta.height, layers, GL_RGBA, GL_FLOAT, texels.data());
+  glTextureParameteri(texArray_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTextureParameteri(texArray_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTextureParameteri(texArray_, GL_TEXTURE_WRAP_S, GL_REPEAT);
+  glTextureParameteri(texArray_, GL_TEXTURE_WRAP_T, GL_REPEAT);
+
+  glCreateTextures(GL_TEXTURE_2D, 1, &worldTex_);
+  if (d.worldMap) {
+    glTextureStorage2D(worldTex_, 1, GL_RGBA32F, d.worldMap->width, d.worldMap->height);
+    glTextureSubImage2D(worldTex_, 0, 0, 0, d.worldMap->width, d.worldMap->height, GL_RGBA, GL_FLOAT,
+                        d.worldMap->texels.data());
+  } else {
+    const glm::vec4 black(0.0f);
+    glTextureStorage2D(worldTex_, 1, GL_RGBA32F, 1, 1);
+    glTextureSubImage2D(worldTex_, 0, 0, 0, 1, 1, GL_RGBA, GL_FLOAT, &black);
+  }
+  glTextureParameteri(worldTex_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTextureParameteri(worldTex_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTextureParameteri(worldTex_, GL_TEXTURE_WRAP_S, GL_REPEAT);
+  glTextureParameteri(worldTex_, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  checkGl("scene upload");
+
+  glUseProgram(program_);
+  auto seti = [&](const char* n, int v) { glUniform1i(glGetUniformLocation(program_, n), v); };
+  auto setf = [&](const char* n, float v) { glUniform1f(glGetUniformLocation(program_, n), v); };
+  auto set3 = [&](const char* n, glm::vec3 v) { glUniform3f(glGetUniformLocation(program_, n), v.x, v.y, v.z); };
+  seti("u_nodes", kUnitNodes);
+  seti("u_triangles", kUnitTriangles);
+  seti("u_attributes", kUnitAttributes);
+  seti("u_textures", kUnitTextures);
+  seti("u_worldMap", kUnitWorld);
+  seti("u_meshPresent", p.triangles.empty() ? 0 : 1);
+  const World& w = scene_.scene.world;
+  seti("u_worldKind", static_cast<int>(w.kind));
+  setf("u_worldIntensity", w.intensity);
+  setf("u_worldRotation", glm::radians(w.rotationDeg));
+  set3("u_worldColor", w.color);
+  set3("u_skyZenith", w.zenith);
+  set3("u_skyHorizon", w.horizon);
+  set3("u_skyGround", w.ground);
+  setf("u_exposure", frame_.exposure);
+  setf("u_sceneRadius", d.sceneRadius);
+  glUniform2f(glGetUniformLocation(program_, "u_resolution"), float(frame_.width), float(frame_.height));
+  checkGl("uniforms");
+}
+
+void GpuRenderer::setCamera(const Camera& camera) {
+  frame_.camera = camera;
+  CameraBasis b = cameraBasis(camera, frame_.width, frame_.height);
+  glUseProgram(program_);
+  glUniform3fv(glGetUniformLocation(program_, "u_eye"), 1, &b.eye.x);
+  glUniform3fv(glGetUniformLocation(program_, "u_forward"), 1, &b.forward.x);
+  glUniform3fv(glGetUniformLocation(program_, "u_right"), 1, &b.right.x);
+  glUniform3fv(glGetUniformLocation(program_, "u_up"), 1, &b.up.x);
+}
+
+void GpuRenderer::createFramebuffer() {
+  glCreateFramebuffers(1, &fbo_);
+  glCreateTextures(GL_TEXTURE_2D, 1, &colorTex_);
+  glTextureStorage2D(colorTex_, 1, GL_RGBA8, frame_.width, frame_.height);
+  glNamedFramebufferTexture(fbo_, GL_COLOR_ATTACHMENT0, colorTex_, 0);
+  if (options_.countStats) {
+    glCreateTextures(GL_TEXTURE_2D, 1, &statsTex_);
+    glTextureStorage2D(statsTex_, 1, GL_RGBA32UI, frame_.width, frame_.height);
+    glNamedFramebufferTexture(fbo_, GL_COLOR_ATTACHMENT1, statsTex_, 0);
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glNamedFramebufferDrawBuffers(fbo_, 2, bufs);
+  } else {
+    glNamedFramebufferDrawBuffer(fbo_, GL_COLOR_ATTACHMENT0);
+  }
+  if (glCheckNamedFramebufferStatus(fbo_, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw std::runtime_error("offscreen framebuffer incomplete");
+}
+
+double GpuRenderer::drawFrame() {
+  auto start = std::chrono::steady_clock::now();
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+  glViewport(0, 0, frame_.width, frame_.height);
+  glUseProgram(program_);
+  glBindBufferBase(GL_UNIFORM_BUFFER, 0, ubo_);
+  glBindTextureUnit(kUnitNodes, streams_[0]);
+  glBindTextureUnit(kUnitTriangles, streams_[1]);
+  glBindTextureUnit(kUnitAttributes, streams_[2]);
+  glBindTextureUnit(kUnitTextures, texArray_);
+  glBindTextureUnit(kUnitWorld, worldTex_);
+  glBindVertexArray(vao_);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glFinish();
+  auto end = std::chrono::steady_clock::now();
+  checkGl("drawFrame");
+  return std::chrono::duration<double, std::milli>(end - start).count();
+}
+
+std::vector<uint8_t> GpuRenderer::readColor() const {
+  std::vector<uint8_t> px(size_t(frame_.width) * frame_.height * 4);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
+  glReadBuffer(GL_COLOR_ATTACHMENT0);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, frame_.width, frame_.height, GL_RGBA, GL_UNSIGNED_BYTE, px.data());
+  checkGl("readColor");
+  return px;
+}
+
+std::vector<glm::uvec4> GpuRenderer::readStats() const {
+  if (!options_.countStats) throw std::logic_error("readStats needs a renderer built with countStats");
+  std::vector<glm::uvec4> px(size_t(frame_.width) * frame_.height);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
+  glReadBuffer(GL_COLOR_ATTACHMENT1);
+  glReadPixels(0, 0, frame_.width, frame_.height, GL_RGBA_INTEGER, GL_UNSIGNED_INT, px.data());
+  checkGl("readStats");
+  return px;
+}
+
+}  // namespace bvhlab

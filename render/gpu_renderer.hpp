@@ -1,0 +1,55 @@
+// The GPU side: compiles the assembled tracer, uploads the scene and the packed BVH, draws frames
+// into an offscreen FBO and reads back the image and the per-pixel traversal statistics.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "render/prepared_scene.hpp"
+#include "shaders/assemble.hpp"
+
+namespace bvhlab {
+
+struct FrameOptions {
+  int width = 640, height = 360;
+  Camera camera;
+  float exposure = 1.0f;
+};
+
+// A shader that failed to compile or link; what() names the module and line of each message.
+struct ShaderError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class GpuRenderer {
+ public:
+  // Needs a current GL context. Throws ShaderError / std::runtime_error.
+  GpuRenderer(const PreparedScene& scene, const ShaderOptions& shader, const FrameOptions& frame);
+  ~GpuRenderer();
+  GpuRenderer(const GpuRenderer&) = delete;
+  GpuRenderer& operator=(const GpuRenderer&) = delete;
+
+  double drawFrame();  // draws one frame, waits for it (glFinish), returns wall-clock ms
+  std::vector<uint8_t> readColor() const;      // RGBA8, rows bottom-up
+  std::vector<glm::uvec4> readStats() const;   // needs ShaderOptions::countStats
+  const AssembledShader& shader() const { return shader_; }
+  void setCamera(const Camera& camera);
+
+ private:
+  void compile();
+  void upload();
+  void createFramebuffer();
+  unsigned uploadStream(const std::vector<glm::uvec4>& texels, const char* name, unsigned* buffer);
+
+  const PreparedScene& scene_;
+  ShaderOptions options_;
+  FrameOptions frame_;
+  AssembledShader shader_;
+  unsigned program_ = 0, vao_ = 0, fbo_ = 0, colorTex_ = 0, statsTex_ = 0, ubo_ = 0;
+  unsigned streams_[3] = {0, 0, 0}, streamBuffers_[3] = {0, 0, 0};
+  unsigned texArray_ = 0, worldTex_ = 0;
+};
+
+}  // namespace bvhlab

@@ -1,0 +1,199 @@
+#include "shaders/assemble.hpp"
+
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+
+#include "traversal/kernels.hpp"
+
+namespace bvhlab {
+
+View parseView(const std::string& s) {
+  if (s == "shaded") return View::Shaded;
+  if (s == "normal") return View::Normal;
+  if (s == "depth") return View::Depth;
+  if (s == "primid") return View::PrimId;
+  throw std::invalid_argument("unknown view '" + s + "' (valid: shaded, normal, depth, primid, visits)");
+}
+Branching parseBranching(const std::string& s) {
+  if (s == "full") return Branching::Full;
+  if (s == "report") return Branching::Report;
+  throw std::invalid_argument("unknown branching '" + s + "' (valid: full, report)");
+}
+Storage parseStorage(const std::string& s) {
+  if (s == "tbo") return Storage::Tbo;
+  if (s == "tex2d") return Storage::Tex2D;
+  throw std::invalid_argument("unknown storage '" + s + "' (valid: tbo, tex2d)");
+}
+const char* viewName(View v) {
+  static const char* names[] = {"shaded", "normal", "depth", "primid"};
+  return names[static_cast<int>(v)];
+}
+const char* branchingName(Branching b) { return b == Branching::Full ? "full" : "report"; }
+const char* storageName(Storage s) { return s == Storage::Tbo ? "tbo" : "tex2d"; }
+
+SceneFeatures analyzeScene(const Scene& scene) {
+  SceneFeatures f;
+  for (const Object& o : scene.objects) {
+    if (o.kind == ObjectKind::Mesh) continue;
+    f.kinds[static_cast<int>(o.kind)] = true;
+    ++f.numObjects;
+  }
+  f.mesh = scene.triangleCount() > 0;
+  f.numLights = static_cast<int>(scene.lights.size());
+  f.numMaterials = static_cast<int>(scene.materials.size());
+  f.lights = f.numLights > 0;
+  f.shadows = f.lights && (f.numObjects > 0 || f.mesh);
+  for (const Material& m : scene.materials) {
+    if (m.reflectivity > 0.0f || m.transparency > 0.0f) f.reflection = true;
+    if (m.transparency > 0.0f) f.refraction = true;
+    if (m.texture >= 0) f.textures = true;
+  }
+  f.world = scene.world.kind;
+  return f;
+}
+
+int effectiveDepth(const SceneFeatures& f, int requested, bool uber) {
+  if (requested < 1) throw std::invalid_argument("max depth must be >= 1");
+  if (uber) return requested;
+  return (f.reflection || f.refraction) ? requested : 1;
+}
+
+const std::string& glslModule(const std::string& name) {
+  auto it = glslSources().find(name);
+  if (it == glslSources().end()) throw std::out_of_range("no GLSL module named '" + name + "'");
+  return it->second;
+}
+
+namespace {
+
+int countLines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  if (!s.empty() && s.back() != '\n') ++n;
+  return n;
+}
+
+class Assembler {
+ public:
+  void raw(const std::string& name, const std::string& text) {
+    ShaderModule m{name, line_, countLines(text)};
+    out_.source += text;
+    if (!text.empty() && text.back() != '\n') out_.source += '\n';
+    line_ += m.lineCount;
+    out_.modules.push_back(m);
+  }
+  void module(const std::string& name) { raw(name, glslModule(name)); }
+  AssembledShader take() { return std::move(out_); }
+
+ private:
+  AssembledShader out_;
+  int line_ = 1;
+};
+
+const char* kKindModules[6] = {"prim_sphere.glsl", "prim_box.glsl", "prim_cylinder.glsl",
+                               "prim_cone.glsl", "prim_torus.glsl", "prim_plane.glsl"};
+const char* kKindDefines[6] = {"HAS_SPHERE", "HAS_BOX", "HAS_CYLINDER", "HAS_CONE", "HAS_TORUS", "HAS_PLANE"};
+
+}  // namespace
+
+AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
+  const bool uber = o.uber;
+  std::ostringstream d;
+  d << "#version 450 core\n";
+  const int depth = effectiveDepth(f, o.maxDepth, uber);
+  d << "#define MAX_DEPTH " << depth << "\n";
+  d << "#define VIEW " << static_cast<int>(o.view) << "\n";
+  d << "#define NUM_OBJECTS " << f.numObjects << "\n";
+  d << "#define NUM_LIGHTS " << f.numLights << "\n";
+  d << "#define OBJECT_ARRAY_SIZE " << std::max(1, f.numObjects) << "\n";
+  d << "#define MATERIAL_ARRAY_SIZE " << std::max(1, f.numMaterials) << "\n";
+  d << "#define LIGHT_ARRAY_SIZE " << std::max(1, f.numLights) << "\n";
+  d << "#define BVH_STACK_SIZE " << o.bvhStackSize << "\n";
+  if (uber) d << "#define UBER 1\n";
+  if (o.countStats) d << "#define COUNT_STATS 1\n";
+  if (o.reinhard) d << "#define TONEMAP_REINHARD 1\n";
+  for (int k = 0; k < 6; ++k)
+    if (uber || f.kinds[k]) d << "#define " << kKindDefines[k] << " 1\n";
+  const bool mesh = uber || f.mesh;
+  if (mesh) {
+    d << "#define HAS_MESH 1\n";
+    d << "#define MESH_PRESENT " << (uber ? "(u_meshPresent != 0)" : "true") << "\n";
+  }
+  if (uber || f.lights) d << "#define HAS_LIGHTS 1\n";
+  if (uber || f.shadows) d << "#define HAS_SHADOWS 1\n";
+  if (uber || f.refraction) d << "#define HAS_REFRACTION 1\n";
+  if (uber || f.textures) d << "#define HAS_TEXTURES 1\n";
+  if (!uber) {
+    d << (f.world == WorldKind::Color ? "#define WORLD_COLOR 1\n"
+          : f.world == WorldKind::Sky ? "#define WORLD_SKY 1\n"
+                                      : "#define WORLD_MAP 1\n");
+  }
+
+  Assembler a;
+  a.raw("<defines>", d.str());
+  a.module("common.glsl");
+  if (mesh) {
+    if (uber) a.raw("<uber>", "uniform int u_meshPresent;\n");
+    a.module(o.storage == Storage::Tbo ? "storage_tbo.glsl" : "storage_tex2d.glsl");
+    a.module("layout.glsl");
+    a.module("ray_box.glsl");
+    a.module("ray_triangle.glsl");
+    a.module(findKernel(o.kernel).glslFile);
+  }
+  for (int k = 0; k < 6; ++k)
+    if (uber || f.kinds[k]) a.module(kKindModules[k]);
+  if (uber || f.textures) a.module("textures.glsl");
+  a.module("scene.glsl");
+  if (uber || f.world == WorldKind::Color) a.module("world_color.glsl");
+  if (uber || f.world == WorldKind::Sky) a.module("world_sky.glsl");
+  if (uber || f.world == WorldKind::Map) a.module("world_map.glsl");
+  a.module("world.glsl");
+  a.module("shade.glsl");
+  if (o.view == View::Shaded) a.module(o.branching == Branching::Full ? "trace_full.glsl" : "trace_report.glsl");
+  a.module("main.glsl");
+  AssembledShader s = a.take();
+  s.effectiveDepth = depth;
+  return s;
+}
+
+bool AssembledShader::hasModule(const std::string& name) const {
+  for (const ShaderModule& m : modules)
+    if (m.name == name) return true;
+  return false;
+}
+
+std::string AssembledShader::locate(int line) const {
+  for (const ShaderModule& m : modules)
+    if (line >= m.firstLine && line < m.firstLine + m.lineCount)
+      return m.name + ":" + std::to_string(line - m.firstLine + 1);
+  return "<assembled>:" + std::to_string(line);
+}
+
+std::string AssembledShader::mapLog(const std::string& log) const {
+  // Mesa: "0:123(45): error: ..."   NVIDIA: "0(123) : error C0000: ..."
+  static const std::regex mesa(R"(^\s*\d+:(\d+)\(\d+\):\s*)");
+  static const std::regex nvidia(R"(^\s*\d+\((\d+)\)\s*:\s*)");
+  std::istringstream in(log);
+  std::ostringstream out;
+  std::string lineText;
+  while (std::getline(in, lineText)) {
+    std::smatch m;
+    if (std::regex_search(lineText, m, mesa) || std::regex_search(lineText, m, nvidia))
+      out << locate(std::stoi(m[1].str())) << ": " << m.suffix().str() << "\n";
+    else if (!lineText.empty())
+      out << lineText << "\n";
+  }
+  return out.str();
+}
+
+std::string fullscreenVertexShader() {
+  return "#version 450 core\n"
+         "// One triangle that covers the viewport.\n"
+         "void main() {\n"
+         "  vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));\n"
+         "  gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);\n"
+         "}\n";
+}
+
+}  // namespace bvhlab

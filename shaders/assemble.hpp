@@ -1,0 +1,77 @@
+// Shader assembly: the fragment shader is concatenated from modules according to the scene's
+// content ("simulate only the effects a scene calls for"), or from all of them (--uber).
+#pragma once
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "datasets/scene.hpp"
+
+namespace bvhlab {
+
+enum class View { Shaded, Normal, Depth, PrimId };
+enum class Branching { Full, Report };  // full: trace both Fresnel branches; report: Algorithm 1's compromise
+enum class Storage { Tbo, Tex2D };
+
+View parseView(const std::string&);
+Branching parseBranching(const std::string&);
+Storage parseStorage(const std::string&);
+const char* viewName(View);
+const char* branchingName(Branching);
+const char* storageName(Storage);
+
+// What a scene needs simulated.
+struct SceneFeatures {
+  std::array<bool, 6> kinds{};  // analytic kinds present (ObjectKind order, Mesh excluded)
+  bool mesh = false;            // triangles present: traversal kernel + layout modules
+  bool lights = false;
+  bool shadows = false;         // lights and anything that can occlude
+  bool reflection = false;      // some material reflects (mirror or dielectric)
+  bool refraction = false;      // some material is transparent
+  bool textures = false;
+  WorldKind world = WorldKind::Sky;
+  int numObjects = 0, numMaterials = 0, numLights = 0;  // analytic objects only
+};
+SceneFeatures analyzeScene(const Scene& scene);
+
+struct ShaderOptions {
+  int maxDepth = 5;
+  View view = View::Shaded;
+  Branching branching = Branching::Full;
+  std::string kernel = "stack-ordered";
+  Storage storage = Storage::Tbo;
+  int bvhStackSize = 64;  // from the packed tree depth (see traversal/kernels.hpp)
+  bool countStats = false;
+  bool reinhard = false;
+  bool uber = false;
+};
+
+struct ShaderModule {
+  std::string name;  // file name, e.g. "shade.glsl"
+  int firstLine = 0; // 1-based line of the assembled source where the module starts
+  int lineCount = 0;
+};
+
+struct AssembledShader {
+  std::string source;
+  std::vector<ShaderModule> modules;  // in order; the preamble is module "<defines>"
+  int effectiveDepth = 1;             // max depth after specialisation
+  bool hasModule(const std::string& name) const;
+  // "file.glsl:LINE" for a line of the assembled source.
+  std::string locate(int line) const;
+  // Rewrites a driver's compile log ("0:123(4): error ..." Mesa, "0(123) : error ..." NVIDIA) so each
+  // message names the module and its own line.
+  std::string mapLog(const std::string& log) const;
+};
+
+// Effective max depth: lowered to 1 when nothing reflects or refracts (uber keeps the request).
+int effectiveDepth(const SceneFeatures& features, int requested, bool uber);
+AssembledShader assembleTracer(const SceneFeatures& features, const ShaderOptions& options);
+std::string fullscreenVertexShader();
+
+// Name -> text of every embedded .glsl module (generated at build time from shaders/ and traversal/).
+const std::map<std::string, std::string>& glslSources();
+const std::string& glslModule(const std::string& name);  // throws std::out_of_range naming it
+
+}  // namespace bvhlab

@@ -1,0 +1,73 @@
+// main.glsl — the full-screen pass: one camera ray per pixel (or per sub-sample), the chosen view,
+// tone mapping and the sRGB encode. C++ mirror: shaders/tracer.hpp (renderPixel).
+
+#define VIEW_SHADED 0
+#define VIEW_NORMAL 1
+#define VIEW_DEPTH 2
+#define VIEW_PRIMID 3
+
+uniform vec3 u_eye;
+uniform vec3 u_forward;  // unit view direction
+uniform vec3 u_right;    // scaled by tan(fov/2) * aspect
+uniform vec3 u_up;       // scaled by tan(fov/2)
+uniform vec2 u_resolution;
+uniform float u_exposure;
+uniform float u_sceneRadius;  // for the depth view
+
+layout(location = 0) out vec4 o_color;
+#ifdef COUNT_STATS
+layout(location = 1) out uvec4 o_stats;  // node visits, triangle tests, mesh rays | overflow bit, primary id + 1
+#endif
+
+Ray cameraRay(vec2 pixel) {
+  vec2 ndc = 2.0 * pixel / u_resolution - 1.0;
+  return Ray(u_eye, normalize(u_forward + ndc.x * u_right + ndc.y * u_up));
+}
+
+float srgbEncode(float c) {
+  return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
+}
+
+vec3 displayColor(vec3 c) {
+  c *= u_exposure;
+#ifdef TONEMAP_REINHARD
+  c = c / (1.0 + c);
+#endif
+  c = clamp(c, 0.0, 1.0);
+  return vec3(srgbEncode(c.r), srgbEncode(c.g), srgbEncode(c.b));
+}
+
+// A distinct, never-black colour per primitive id.
+vec3 idColor(int id) {
+  uint h = uint(id) * 2654435761u;
+  h ^= h >> 15;
+  return vec3(0.2) + 0.8 * vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) / 255.0;
+}
+
+void main() {
+  Ray ray = cameraRay(gl_FragCoord.xy);
+  int primaryId = -1;
+  vec3 color;
+#if VIEW == VIEW_SHADED
+  color = displayColor(radiance(ray));
+#else
+  Hit h;
+  bool found = intersectScene(ray, INF, h);
+  color = vec3(0.0);  // misses are pure black in every debug view
+  if (found) {
+    primaryId = h.id;
+#if VIEW == VIEW_NORMAL
+    color = abs(h.normal);  // a unit vector always has a component >= 1/sqrt(3): never black
+#elif VIEW == VIEW_DEPTH
+    color = vec3(max(u_sceneRadius / (u_sceneRadius + h.t), 1.0 / 255.0));
+#elif VIEW == VIEW_PRIMID
+    color = idColor(h.id);
+#endif
+  }
+#endif
+  o_color = vec4(color, 1.0);
+#ifdef COUNT_STATS
+  o_stats = uvec4(g_nodeVisits, g_triTests, g_meshRays | (g_stackOverflow ? 0x80000000u : 0u),
+                  uint(primaryId + 1));
+#endif
+}

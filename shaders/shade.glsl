@@ -1,0 +1,104 @@
+// shade.glsl — local shading at a hit: emission + ambient + Lambert/Blinn-Phong from every light
+// with a hard shadow ray. Secondary-ray origins are offset here. C++ mirror: shaders/tracer.hpp.
+
+// Secondary rays start a small distance off the surface so they do not re-hit it ("acne").
+// The offset is relative: float spacing at |p| is |p| * 2^-23 ~ 1.2e-7 |p|, and intersection
+// error is a few hundred ulps of the coordinates, so 1e-4 * (1 + max|p|) clears it with margin
+// while staying far below any feature size the shipped scenes have.
+#define RAY_OFFSET_SCALE 1e-4
+
+vec3 offsetRayOrigin(vec3 p, vec3 towards) {
+  float scale = RAY_OFFSET_SCALE * (1.0 + max(max(abs(p.x), abs(p.y)), abs(p.z)));
+  return p + towards * scale;
+}
+
+vec3 surfaceAlbedo(MaterialData m, vec2 uv) {
+  vec3 albedo = m.color.rgb;
+#ifdef HAS_TEXTURES
+  if (m.color.w >= 0.0) albedo *= textureLod(u_textures, vec3(uv * m.uvScale.xy, m.color.w), 0.0).rgb;
+#endif
+  return albedo;
+}
+
+// n faces the incoming ray (the caller flips it); p is the hit point.
+vec3 shadeLocal(MaterialData m, vec3 albedo, vec3 p, vec3 n, vec3 viewDir) {
+  vec3 color = m.emission.rgb + albedo * m.lighting.y * u_ambient.rgb;
+#ifdef HAS_LIGHTS
+  for (int i = 0; i < NUM_LIGHTS; ++i) {
+    LightData light = u_lights[i];
+    vec3 toLight;
+    float distance;
+    if (light.position.w > 0.5) {
+      toLight = -light.position.xyz;
+      distance = INF;
+    } else {
+      vec3 d = light.position.xyz - p;
+      distance = length(d);
+      toLight = d / distance;
+    }
+    float nDotL = dot(n, toLight);
+    if (nDotL > 0.0) {
+#ifdef HAS_SHADOWS
+      vec3 origin = offsetRayOrigin(p, n);
+      // The shadow ray stops at the light; origin moved by the offset, so measure from it.
+      float tLight = light.position.w > 0.5 ? INF : length(light.position.xyz - origin);
+      if (occluded(Ray(origin, toLight), tLight)) continue;
+#endif
+      vec3 h = normalize(toLight - viewDir);
+      float spec = m.lighting.z > 0.0 ? m.lighting.z * pow(max(dot(n, h), 0.0), m.lighting.w) : 0.0;
+      color += light.radiance.rgb * (albedo * m.lighting.x * nDotL + vec3(spec));
+    }
+  }
+#endif
+  return color;
+}
+
+// Schlick's approximation; F0 from the IOR ratio (the report's eq. 5-6). cosTheta is the cosine on
+// the side of the optically thinner medium, which is what makes the approximation hold on exit too.
+float schlickFresnel(float cosTheta, float ior) {
+  float r0 = (ior - 1.0) / (ior + 1.0);
+  r0 = r0 * r0;
+  float m = clamp(1.0 - cosTheta, 0.0, 1.0);
+  return r0 + (1.0 - r0) * m * m * m * m * m;
+}
+
+// How a surface splits an incoming ray: weights of its local shading, reflection and refraction,
+// and the refracted direction (valid when kt > 0).
+struct Scatter {
+  float kLocal;
+  float kr;
+  float kt;
+  vec3 refracted;
+  vec3 n;         // normal facing the incoming ray
+  bool entering;
+};
+
+Scatter scatterAt(MaterialData m, Hit h, vec3 dir) {
+  Scatter s;
+  s.entering = dot(dir, h.geomNormal) < 0.0;
+  s.n = s.entering ? h.normal : -h.normal;
+  float reflectivity = m.optics.x;
+  float transparency = m.optics.y;
+  float opaque = 1.0 - transparency;
+  s.kLocal = opaque * (1.0 - reflectivity);
+  s.kr = opaque * reflectivity;
+  s.kt = 0.0;
+  s.refracted = vec3(0.0);
+#ifdef HAS_REFRACTION
+  if (transparency > 0.0) {
+    float ior = m.optics.z;
+    float eta = s.entering ? 1.0 / ior : ior;
+    float cosI = min(-dot(dir, s.n), 1.0);
+    float sin2T = eta * eta * max(1.0 - cosI * cosI, 0.0);
+    float fresnel = 1.0;  // total internal reflection
+    if (sin2T < 1.0) {
+      float cosT = sqrt(1.0 - sin2T);
+      s.refracted = eta * dir + (eta * cosI - cosT) * s.n;
+      fresnel = schlickFresnel(s.entering ? cosI : cosT, ior);
+    }
+    s.kr += transparency * fresnel;
+    s.kt = transparency * (1.0 - fresnel);
+  }
+#endif
+  return s;
+}
