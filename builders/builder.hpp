@@ -18,6 +18,13 @@ const std::vector<BuilderInfo>& builders();
 // Throws std::invalid_argument naming the valid builders when `name` is unknown.
 const BuilderInfo& findBuilder(const std::string& name);
 
+// The checks buildBvh makes before it calls a builder (a BuilderInfo::build function assumes them):
+// non-empty input, as many centroids as boxes, at most 2^32 - 1 primitives, maxLeafSize in
+// 1..kMaxLeafSize, every box and centroid finite with min <= max, and a scene small enough that its
+// half area is finite. Throws InputError for bad data (naming the primitive index) and
+// std::invalid_argument for bad options.
+void validateBuildInput(const BuildInput& input, const BuildOptions& options);
+
 // Times the build, validates the input (empty input is an error), fills BuildStats.
 Bvh buildBvh(const std::string& builder, const BuildInput& input, const BuildOptions& options,
              BuildStats* stats = nullptr);

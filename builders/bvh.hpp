@@ -57,6 +57,9 @@ struct BuildOptions {
   uint32_t maxLeafSize = 4;  // 1..kMaxLeafSize primitives per leaf
   CostModel cost;
   uint32_t bins = 0;         // sah-binned: bin count (0 = the builder's measured default)
+  // Worker threads for builders that split their top levels into tasks (0 = hardware concurrency).
+  // The tree never depends on it: the task split is fixed and results are spliced in a fixed order.
+  uint32_t threads = 0;
 };
 
 // Input: one box and one centroid per primitive (same length).

@@ -1,0 +1,105 @@
+// The builder registry and the one entry point that validates, times and measures a build.
+// Adding a builder: write builders/NAME.cpp with a `Bvh buildX(const BuildInput&, const BuildOptions&)`
+// and add its declaration + one line to the table below.
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "builders/builder.hpp"
+#include "datasets/scene.hpp"  // InputError
+
+namespace bvhlab {
+
+// Defined in builders/<name>.cpp.
+Bvh buildMedianBvh(const BuildInput&, const BuildOptions&);
+Bvh buildSahBinnedBvh(const BuildInput&, const BuildOptions&);
+Bvh buildEmbreeBvh(const BuildInput&, const BuildOptions&);
+Bvh buildEmbreeLowBvh(const BuildInput&, const BuildOptions&);
+
+const std::vector<BuilderInfo>& builders() {
+  static const std::vector<BuilderInfo> table = {
+      {"median", "complete binary tree, object-median splits on the longest axis, full leaves",
+       buildMedianBvh},
+      {"sah-binned", "binned SAH (options.bins bins per axis), median fallback", buildSahBinnedBvh},
+      {"embree", "Embree 3 rtcBuildBVH, quality MEDIUM (the reference)", buildEmbreeBvh},
+      {"embree-low", "Embree 3 rtcBuildBVH, quality LOW (Morton codes)", buildEmbreeLowBvh},
+  };
+  return table;
+}
+
+const BuilderInfo& findBuilder(const std::string& name) {
+  for (const BuilderInfo& info : builders())
+    if (info.name == name) return info;
+  std::ostringstream msg;
+  msg << "unknown BVH builder '" << name << "'; valid builders:";
+  for (const BuilderInfo& info : builders()) msg << ' ' << info.name;
+  throw std::invalid_argument(msg.str());
+}
+
+namespace {
+
+bool finite(const glm::vec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+std::string str(const glm::vec3& v) {
+  std::ostringstream s;
+  s << '(' << v.x << ", " << v.y << ", " << v.z << ')';
+  return s.str();
+}
+
+}  // namespace
+
+void validateBuildInput(const BuildInput& input, const BuildOptions& options) {
+  if (options.maxLeafSize < 1 || options.maxLeafSize > kMaxLeafSize)
+    throw std::invalid_argument("BVH build: maxLeafSize " + std::to_string(options.maxLeafSize) +
+                                " is outside 1.." + std::to_string(kMaxLeafSize));
+  if (!(options.cost.traversalCost >= 0.0f && options.cost.intersectionCost > 0.0f) ||
+      !std::isfinite(options.cost.traversalCost) || !std::isfinite(options.cost.intersectionCost))
+    throw std::invalid_argument("BVH build: cost model needs traversalCost >= 0 and intersectionCost > 0");
+  if (input.boxes.empty())
+    throw InputError("BVH build: the input has no primitives (empty scene?)");
+  if (input.boxes.size() != input.centroids.size())
+    throw InputError("BVH build: " + std::to_string(input.boxes.size()) + " boxes but " +
+                     std::to_string(input.centroids.size()) + " centroids");
+  if (input.boxes.size() > std::numeric_limits<uint32_t>::max())
+    throw InputError("BVH build: " + std::to_string(input.boxes.size()) +
+                     " primitives; at most 2^32 - 1 are supported");
+  Aabb scene, centroids;
+  for (size_t i = 0; i < input.boxes.size(); ++i) {
+    const Aabb& b = input.boxes[i];
+    if (!finite(b.min) || !finite(b.max) || !glm::all(glm::lessThanEqual(b.min, b.max)))
+      throw InputError("BVH build: primitive " + std::to_string(i) + " has a non-finite or inverted box: min " +
+                       str(b.min) + " max " + str(b.max));
+    if (!finite(input.centroids[i]))
+      throw InputError("BVH build: primitive " + std::to_string(i) + " has a non-finite centroid " +
+                       str(input.centroids[i]));
+    scene.grow(b);
+    centroids.grow(input.centroids[i]);
+  }
+  // Builders subtract coordinates and multiply extents; a scene whose extent or half area overflows
+  // a float would turn those into Inf and then NaN.
+  if (!finite(scene.extent()) || !std::isfinite(scene.halfArea()) || !finite(centroids.extent()))
+    throw InputError("BVH build: scene bounds " + str(scene.min) + " .. " + str(scene.max) +
+                     " are too large (extent or area overflows float)");
+}
+
+Bvh buildBvh(const std::string& builder, const BuildInput& input, const BuildOptions& options,
+             BuildStats* stats) {
+  const BuilderInfo& info = findBuilder(builder);
+  validateBuildInput(input, options);
+  const auto start = std::chrono::steady_clock::now();
+  Bvh bvh = info.build(input, options);
+  const auto stop = std::chrono::steady_clock::now();
+  if (stats) {
+    *stats = computeStats(bvh, options.cost);
+    stats->builder = info.name;
+    stats->leafSize = options.maxLeafSize;
+    stats->buildMs = std::chrono::duration<double, std::milli>(stop - start).count();
+  }
+  return bvh;
+}
+
+}  // namespace bvhlab

@@ -1,0 +1,79 @@
+// Tree statistics recomputed from a built Bvh: nothing here trusts what a builder says about itself.
+#include <algorithm>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "builders/bvh.hpp"
+
+namespace bvhlab {
+
+namespace {
+
+// Visits every node reachable from the root with an explicit stack (a degenerate tree may be as
+// deep as it has primitives), calling visit(node, depth) with the root at depth 1.
+template <class Visit>
+void walkNodes(const Bvh& bvh, Visit&& visit) {
+  if (bvh.nodes.empty()) return;
+  std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 1u}};
+  size_t visited = 0;
+  while (!stack.empty()) {
+    auto [index, depth] = stack.back();
+    stack.pop_back();
+    // A well-formed tree visits each node once; more visits than nodes means a cycle or a DAG.
+    if (index >= bvh.nodes.size() || ++visited > bvh.nodes.size())
+      throw std::runtime_error("malformed BVH: child index out of range or node reached twice");
+    const BvhNode& node = bvh.nodes[index];
+    visit(node, depth);
+    if (!node.isLeaf()) {
+      stack.push_back({node.right, depth + 1});
+      stack.push_back({node.left, depth + 1});
+    }
+  }
+}
+
+}  // namespace
+
+double sahCost(const Bvh& bvh, const CostModel& cost) {
+  if (bvh.nodes.empty()) return 0.0;
+  const double rootArea = bvh.nodes[0].bounds.halfArea();
+  double inner = 0.0, leaf = 0.0;
+  walkNodes(bvh, [&](const BvhNode& node, uint32_t) {
+    const double area = node.bounds.halfArea();
+    if (node.isLeaf())
+      leaf += area * node.count;
+    else
+      inner += area;
+  });
+  // A root of zero area (all primitives are one point) has no meaningful ratio: every node has the
+  // root's box then, so each area ratio is 1 and the cost is the plain node/reference count.
+  if (rootArea <= 0.0) {
+    double innerCount = 0.0, refCount = 0.0;
+    walkNodes(bvh, [&](const BvhNode& node, uint32_t) {
+      if (node.isLeaf())
+        refCount += node.count;
+      else
+        innerCount += 1.0;
+    });
+    return cost.traversalCost * innerCount + cost.intersectionCost * refCount;
+  }
+  return (cost.traversalCost * inner + cost.intersectionCost * leaf) / rootArea;
+}
+
+BuildStats computeStats(const Bvh& bvh, const CostModel& cost) {
+  BuildStats stats;
+  walkNodes(bvh, [&](const BvhNode& node, uint32_t depth) {
+    ++stats.nodes;
+    stats.depth = std::max(stats.depth, depth);
+    if (node.isLeaf()) {
+      ++stats.leaves;
+      stats.primitives += node.count;
+      stats.primsPerLeafMax = std::max(stats.primsPerLeafMax, node.count);
+    }
+  });
+  stats.primsPerLeafMean = stats.leaves ? double(stats.primitives) / double(stats.leaves) : 0.0;
+  stats.sahCost = sahCost(bvh, cost);
+  return stats;
+}
+
+}  // namespace bvhlab
