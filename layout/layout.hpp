@@ -33,6 +33,7 @@
 // clear error naming the stream and its size.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -80,5 +81,9 @@ struct NodeRecord {
   bool isLeaf() const { return count > 0; }
 };
 NodeRecord unpackNode(const PackedBvh& packed, uint32_t index);
+
+// Throws std::runtime_error naming the first stream longer than maxTexels, the storage kind's limit
+// (tbo: GL_MAX_TEXTURE_BUFFER_SIZE; tex2d: kTex2DWidth * GL_MAX_TEXTURE_SIZE).
+void checkStreamLimits(const PackedBvh& packed, const std::string& storage, uint64_t maxTexels);
 
 }  // namespace bvhlab
