@@ -12,11 +12,6 @@
 
 namespace bvhlab {
 
-struct FrameOptions {
-  int width = 640, height = 360;
-  Camera camera;
-  float exposure = 1.0f;
-};
 
 // A shader that failed to compile or link; what() names the module and line of each message.
 struct ShaderError : std::runtime_error {

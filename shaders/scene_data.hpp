@@ -44,6 +44,13 @@ struct SceneData {
 
 SceneData buildSceneData(const Scene& scene);
 
+// What a frame looks at: image size, camera, exposure.
+struct FrameOptions {
+  int width = 640, height = 360;
+  Camera camera;
+  float exposure = 1.0f;
+};
+
 // Camera basis as main.glsl wants it.
 struct CameraBasis {
   glm::vec3 eye, forward, right, up;  // right/up scaled by tan(fov/2) (and aspect for right)

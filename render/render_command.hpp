@@ -1,0 +1,35 @@
+// `bvhlab render`: one scene, one configuration, timed frames, image + JSON out.
+#pragma once
+#include <optional>
+#include <string>
+
+#include <glm/glm.hpp>
+
+namespace bvhlab {
+
+struct RenderCommand {
+  std::string input;
+  std::string output;       // image path ('' = none)
+  std::string visitsOutput; // heatmap path ('' = none)
+  bool json = false;
+  std::optional<int> width, height, depth;
+  int frames = 5, warmup = 2;
+  std::string backend = "osmesa";
+  std::string view = "shaded";  // shaded|normal|depth|primid|visits
+  bool uber = false;
+  std::string builder = "sah-binned";
+  std::string kernel = "stack-ordered";
+  int leafSize = 4;
+  int bins = 0;
+  std::string storage = "tbo";
+  std::string branching = "full";
+  std::optional<glm::vec3> eye, target, up;
+  std::optional<float> fov;
+  std::optional<float> exposure;
+  bool cpu = false;  // render with the C++ mirror instead of GL
+};
+
+// Runs it; prints the JSON object on stdout when asked. Returns the process exit code.
+int runRender(const RenderCommand& cmd);
+
+}  // namespace bvhlab

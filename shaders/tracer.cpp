@@ -1,0 +1,425 @@
+// C++ mirror of the tracer modules. Each function below carries the name of its GLSL twin and the
+// same statement order; the GLSL "uniforms" are the members of Tracer.
+#include "shaders/tracer.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "shaders/common.hpp"
+#include "shaders/primitives.hpp"
+#include "traversal/kernels.hpp"
+
+namespace bvhlab {
+namespace glsl {
+
+namespace {
+
+// GLSL built-ins that GLM lacks or names differently.
+float atan2f_(float y, float x) { return std::atan2(y, x); }
+
+// texture()/textureLod() with GL_LINEAR: texel centres at (i + 0.5) / size.
+vec4 bilinear(const vec4* texels, int w, int h, vec2 uv, bool repeatT) {
+  float x = uv.x * float(w) - 0.5f, y = uv.y * float(h) - 0.5f;
+  float fx = floor(x), fy = floor(y);
+  float ax = x - fx, ay = y - fy;
+  auto at = [&](int i, int j) {
+    i = ((i % w) + w) % w;  // GL_REPEAT in s
+    j = repeatT ? ((j % h) + h) % h : clamp(j, 0, h - 1);
+    return texels[size_t(j) * size_t(w) + size_t(i)];
+  };
+  int i0 = int(fx), j0 = int(fy);
+  return mix(mix(at(i0, j0), at(i0 + 1, j0), ax), mix(at(i0, j0 + 1), at(i0 + 1, j0 + 1), ax), ay);
+}
+
+constexpr int KIND_SPHERE = 0, KIND_BOX = 1, KIND_CYLINDER = 2, KIND_CONE = 3, KIND_TORUS = 4, KIND_PLANE = 5;
+constexpr float RAY_OFFSET_SCALE = 1e-4f;
+constexpr float MIN_BRANCH_WEIGHT = 1.0f / 1024.0f;
+
+struct Hit {
+  float t;
+  vec3 normal;
+  vec3 geomNormal;
+  vec2 uv;
+  int material;
+  int id;
+};
+
+struct Scatter {
+  float kLocal;
+  float kr;
+  float kt;
+  vec3 refracted;
+  vec3 n;
+  bool entering;
+};
+
+struct PathVertex {
+  Ray ray;
+  vec3 weight;
+  int depth;
+};
+
+struct Tracer {
+  // "uniforms"
+  const Scene& scene;
+  const SceneData& data;
+  const PackedBvh& bvh;
+  const ShaderOptions& options;
+  const KernelInfo& kernel;
+  int MAX_DEPTH;
+  int NUM_OBJECTS;
+  int NUM_LIGHTS;
+  bool MESH_PRESENT;
+  // "globals"
+  Counters counters;
+
+  // ---- scene.glsl -------------------------------------------------------------------------
+  static vec3 objectPoint(const ObjectData& o, vec3 p) {
+    vec4 h = vec4(p, 1.0f);
+    return vec3(dot(o.worldToObject0, h), dot(o.worldToObject1, h), dot(o.worldToObject2, h));
+  }
+  static vec3 objectVector(const ObjectData& o, vec3 v) {
+    return vec3(dot(vec3(o.worldToObject0), v), dot(vec3(o.worldToObject1), v), dot(vec3(o.worldToObject2), v));
+  }
+  static vec3 worldNormal(const ObjectData& o, vec3 n) {
+    return n.x * vec3(o.worldToObject0) + n.y * vec3(o.worldToObject1) + n.z * vec3(o.worldToObject2);
+  }
+
+  static bool intersectObject(const ObjectData& o, Ray r, float tMax, float& t, vec3& n, vec2& uv) {
+    int kind = o.info.x;
+    t = tMax;
+    n = vec3(0.0f, 1.0f, 0.0f);
+    uv = vec2(0.0f);
+    if (kind == KIND_SPHERE) return intersectSphere(r, 0.0f, tMax, t, n, uv);
+    if (kind == KIND_BOX) return intersectBox(r, 0.0f, tMax, t, n, uv);
+    if (kind == KIND_CYLINDER) return intersectCylinder(r, 0.0f, tMax, t, n, uv);
+    if (kind == KIND_CONE) return intersectCone(r, 0.0f, tMax, t, n, uv);
+    if (kind == KIND_TORUS) return intersectTorus(r, vec2(o.params), 0.0f, tMax, t, n, uv);
+    if (kind == KIND_PLANE) return intersectPlane(r, o.params.z > 0.5f, 0.0f, tMax, t, n, uv);
+    return false;
+  }
+
+  int triangleId(int tri) const { return int(bvh.triangles[size_t(3 * tri)].w); }
+  int triangleMaterial(int tri) const { return int(bvh.triangles[size_t(3 * tri + 1)].w); }
+
+  bool intersectScene(Ray ray, float tMax, Hit& hit) {
+    hit.t = tMax;
+    hit.normal = vec3(0.0f, 1.0f, 0.0f);
+    hit.geomNormal = hit.normal;
+    hit.uv = vec2(0.0f);
+    hit.material = 0;
+    hit.id = -1;
+    bool found = false;
+    for (int i = 0; i < NUM_OBJECTS; ++i) {
+      const ObjectData& o = data.objects[size_t(i)];
+      Ray r = Ray{objectPoint(o, ray.origin), objectVector(o, ray.dir)};
+      float t;
+      vec3 n;
+      vec2 uv;
+      if (intersectObject(o, r, hit.t, t, n, uv)) {
+        found = true;
+        hit.t = t;
+        hit.normal = normalize(worldNormal(o, n));
+        hit.geomNormal = hit.normal;
+        hit.uv = uv;
+        hit.material = o.info.y;
+        hit.id = i;
+      }
+    }
+    if (MESH_PRESENT) {
+      counters.meshRays++;
+      MeshHit mh;
+      if (kernel.traceClosest(bvh, ray, 0.0f, hit.t, mh, counters)) {
+        found = true;
+        vec3 v0, v1, v2;
+        loadTriangle(bvh, mh.tri, v0, v1, v2);
+        vec3 shadingNormal;
+        vec2 uv;
+        loadAttributes(bvh, mh.tri, mh.bary, shadingNormal, uv);
+        vec3 geomNormal = normalize(cross(v1 - v0, v2 - v0));
+        hit.t = mh.t;
+        hit.geomNormal = geomNormal;
+        hit.normal = dot(shadingNormal, geomNormal) > 0.0f ? normalize(shadingNormal) : geomNormal;
+        hit.uv = uv;
+        hit.material = triangleMaterial(mh.tri);
+        hit.id = NUM_OBJECTS + triangleId(mh.tri);
+      }
+    }
+    return found;
+  }
+
+  bool occluded(Ray ray, float tMax) {
+    for (int i = 0; i < NUM_OBJECTS; ++i) {
+      const ObjectData& o = data.objects[size_t(i)];
+      Ray r = Ray{objectPoint(o, ray.origin), objectVector(o, ray.dir)};
+      float t;
+      vec3 n;
+      vec2 uv;
+      if (intersectObject(o, r, tMax, t, n, uv)) return true;
+    }
+    if (MESH_PRESENT) {
+      counters.meshRays++;
+      if (kernel.traceAny(bvh, ray, 0.0f, tMax, counters)) return true;
+    }
+    return false;
+  }
+
+  // ---- world*.glsl ------------------------------------------------------------------------
+  vec3 worldColor(vec3) const { return scene.world.color; }
+  vec3 worldSky(vec3 dir) const {
+    const World& w = scene.world;
+    float y = dir.y / length(dir);
+    return y < 0.0f ? mix(w.horizon, w.ground, min(-y * 4.0f, 1.0f)) : mix(w.horizon, w.zenith, sqrt(y));
+  }
+  vec2 equirectUv(vec3 dir) const {
+    vec3 d = normalize(dir);
+    float phi = atan2f_(d.z, d.x) + radians(scene.world.rotationDeg);
+    float theta = asin(clamp(d.y, -1.0f, 1.0f));
+    return vec2(phi / (2.0f * PI) + 0.5f, theta / PI + 0.5f);
+  }
+  vec3 worldMap(vec3 dir) const {
+    const Image* m = data.worldMap;
+    if (!m) return vec3(0.0f);
+    return vec3(bilinear(m->texels.data(), m->width, m->height, equirectUv(dir), false));
+  }
+  vec3 worldRadiance(vec3 dir) const {
+    WorldKind k = scene.world.kind;
+    vec3 c = k == WorldKind::Color ? worldColor(dir) : (k == WorldKind::Sky ? worldSky(dir) : worldMap(dir));
+    return c * scene.world.intensity;
+  }
+
+  // ---- shade.glsl -------------------------------------------------------------------------
+  static vec3 offsetRayOrigin(vec3 p, vec3 towards) {
+    float scale = RAY_OFFSET_SCALE * (1.0f + max(max(abs(p.x), abs(p.y)), abs(p.z)));
+    return p + towards * scale;
+  }
+
+  vec3 surfaceAlbedo(const MaterialData& m, vec2 uv) const {
+    vec3 albedo = vec3(m.color);
+    if (m.color.w >= 0.0f) {
+      const TextureArray& ta = data.textures;
+      const vec4* layer = ta.texels.data() + size_t(m.color.w) * size_t(ta.width) * size_t(ta.height);
+      albedo *= vec3(bilinear(layer, ta.width, ta.height, uv * vec2(m.uvScale), true));
+    }
+    return albedo;
+  }
+
+  vec3 shadeLocal(const MaterialData& m, vec3 albedo, vec3 p, vec3 n, vec3 viewDir) {
+    vec3 color = vec3(m.emission) + albedo * m.lighting.y * vec3(data.ambient);
+    for (int i = 0; i < NUM_LIGHTS; ++i) {
+      const LightData& light = data.lights[size_t(i)];
+      vec3 toLight;
+      float distance;
+      if (light.position.w > 0.5f) {
+        toLight = -vec3(light.position);
+        distance = INF;
+      } else {
+        vec3 d = vec3(light.position) - p;
+        distance = length(d);
+        toLight = d / distance;
+      }
+      float nDotL = dot(n, toLight);
+      if (nDotL > 0.0f) {
+        vec3 origin = offsetRayOrigin(p, n);
+        float tLight = light.position.w > 0.5f ? INF : length(vec3(light.position) - origin);
+        if (occluded(Ray{origin, toLight}, tLight)) continue;
+        vec3 h = normalize(toLight - viewDir);
+        float spec = m.lighting.z > 0.0f ? m.lighting.z * pow(max(dot(n, h), 0.0f), m.lighting.w) : 0.0f;
+        color += vec3(light.radiance) * (albedo * m.lighting.x * nDotL + vec3(spec));
+      }
+    }
+    return color;
+  }
+
+  static float schlickFresnel(float cosTheta, float ior) {
+    float r0 = (ior - 1.0f) / (ior + 1.0f);
+    r0 = r0 * r0;
+    float m = clamp(1.0f - cosTheta, 0.0f, 1.0f);
+    return r0 + (1.0f - r0) * m * m * m * m * m;
+  }
+
+  static Scatter scatterAt(const MaterialData& m, const Hit& h, vec3 dir) {
+    Scatter s;
+    s.entering = dot(dir, h.geomNormal) < 0.0f;
+    s.n = s.entering ? h.normal : -h.normal;
+    float reflectivity = m.optics.x;
+    float transparency = m.optics.y;
+    float opaque = 1.0f - transparency;
+    s.kLocal = opaque * (1.0f - reflectivity);
+    s.kr = opaque * reflectivity;
+    s.kt = 0.0f;
+    s.refracted = vec3(0.0f);
+    if (transparency > 0.0f) {
+      float ior = m.optics.z;
+      float eta = s.entering ? 1.0f / ior : ior;
+      float cosI = min(-dot(dir, s.n), 1.0f);
+      float sin2T = eta * eta * max(1.0f - cosI * cosI, 0.0f);
+      float fresnel = 1.0f;
+      if (sin2T < 1.0f) {
+        float cosT = sqrt(1.0f - sin2T);
+        s.refracted = eta * dir + (eta * cosI - cosT) * s.n;
+        fresnel = schlickFresnel(s.entering ? cosI : cosT, ior);
+      }
+      s.kr += transparency * fresnel;
+      s.kt = transparency * (1.0f - fresnel);
+    }
+    return s;
+  }
+
+  // ---- trace_full.glsl --------------------------------------------------------------------
+  vec3 radianceFull(Ray primary) {
+    vec3 color = vec3(0.0f);
+    std::vector<PathVertex> stack(size_t(MAX_DEPTH + 1));
+    int sp = 0;
+    stack[size_t(sp++)] = PathVertex{primary, vec3(1.0f), 1};
+    while (sp > 0) {
+      PathVertex v = stack[size_t(--sp)];
+      Hit h;
+      if (!intersectScene(v.ray, INF, h)) {
+        color += v.weight * worldRadiance(v.ray.dir);
+        continue;
+      }
+      const MaterialData& m = data.materials[size_t(h.material)];
+      vec3 dir = normalize(v.ray.dir);
+      vec3 p = v.ray.origin + h.t * v.ray.dir;
+      Scatter s = scatterAt(m, h, dir);
+      if (s.kLocal > 0.0f) color += v.weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, s.n, dir);
+      if (MAX_DEPTH > 1) {
+        if (v.depth >= MAX_DEPTH) continue;
+        vec3 wt = v.weight * s.kt;
+        if (max(max(wt.r, wt.g), wt.b) > MIN_BRANCH_WEIGHT)
+          stack[size_t(sp++)] = PathVertex{Ray{offsetRayOrigin(p, -s.n), s.refracted}, wt, v.depth + 1};
+        vec3 wr = v.weight * s.kr;
+        if (max(max(wr.r, wr.g), wr.b) > MIN_BRANCH_WEIGHT)
+          stack[size_t(sp++)] = PathVertex{Ray{offsetRayOrigin(p, s.n), reflect(dir, s.n)}, wr, v.depth + 1};
+      }
+    }
+    return color;
+  }
+
+  // ---- trace_report.glsl ------------------------------------------------------------------
+  vec3 reflectedColor(Ray ray) {
+    Hit h;
+    if (!intersectScene(ray, INF, h)) return worldRadiance(ray.dir);
+    const MaterialData& m = data.materials[size_t(h.material)];
+    vec3 dir = normalize(ray.dir);
+    Scatter s = scatterAt(m, h, dir);
+    return shadeLocal(m, surfaceAlbedo(m, h.uv), ray.origin + h.t * ray.dir, s.n, dir);
+  }
+
+  vec3 radianceReport(Ray primary) {
+    vec3 color = vec3(0.0f);
+    Ray ray = primary;
+    vec3 weight = vec3(1.0f);
+    for (int depth = 1; depth <= MAX_DEPTH; ++depth) {
+      Hit h;
+      if (!intersectScene(ray, INF, h)) {
+        color += weight * worldRadiance(ray.dir);
+        break;
+      }
+      const MaterialData& m = data.materials[size_t(h.material)];
+      vec3 dir = normalize(ray.dir);
+      vec3 p = ray.origin + h.t * ray.dir;
+      Scatter s = scatterAt(m, h, dir);
+      if (s.kLocal > 0.0f) color += weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, s.n, dir);
+      if (depth == MAX_DEPTH) break;
+      Ray reflected = Ray{offsetRayOrigin(p, s.n), reflect(dir, s.n)};
+      if (s.kr > 0.0f && s.kt > 0.0f) {
+        color += weight * s.kr * reflectedColor(reflected);
+        weight *= s.kt;
+        ray = Ray{offsetRayOrigin(p, -s.n), s.refracted};
+      } else if (s.kt > 0.0f) {
+        weight *= s.kt;
+        ray = Ray{offsetRayOrigin(p, -s.n), s.refracted};
+      } else if (s.kr > 0.0f) {
+        weight *= s.kr;
+        ray = reflected;
+      } else {
+        break;
+      }
+      if (max(max(weight.r, weight.g), weight.b) <= MIN_BRANCH_WEIGHT) break;
+    }
+    return color;
+  }
+
+  // ---- main.glsl --------------------------------------------------------------------------
+  static float srgbEncode(float c) { return c <= 0.0031308f ? 12.92f * c : 1.055f * pow(c, 1.0f / 2.4f) - 0.055f; }
+  vec3 displayColor(vec3 c, float exposure) const {
+    c *= exposure;
+    if (options.reinhard) c = c / (1.0f + c);
+    c = clamp(c, 0.0f, 1.0f);
+    return vec3(srgbEncode(c.r), srgbEncode(c.g), srgbEncode(c.b));
+  }
+  static vec3 idColor(int id) {
+    uint32_t h = uint32_t(id) * 2654435761u;
+    h ^= h >> 15;
+    return vec3(0.2f) + 0.8f * vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) / 255.0f;
+  }
+
+  // One pixel: returns the colour written to o_color and fills `stats` like o_stats.
+  vec3 renderPixel(Ray ray, float exposure, float sceneRadius, uvec4& stats) {
+    counters = Counters{};
+    int primaryId = -1;
+    vec3 color;
+    if (options.view == View::Shaded) {
+      color = displayColor(options.branching == Branching::Full ? radianceFull(ray) : radianceReport(ray), exposure);
+    } else {
+      Hit h;
+      bool found = intersectScene(ray, INF, h);
+      color = vec3(0.0f);
+      if (found) {
+        primaryId = h.id;
+        if (options.view == View::Normal) color = abs(h.normal);
+        if (options.view == View::Depth) color = vec3(max(sceneRadius / (sceneRadius + h.t), 1.0f / 255.0f));
+        if (options.view == View::PrimId) color = idColor(h.id);
+      }
+    }
+    stats = uvec4(counters.nodeVisits, counters.triTests,
+                  counters.meshRays | (counters.stackOverflow ? 0x80000000u : 0u), uint32_t(primaryId + 1));
+    return color;
+  }
+};
+
+}  // namespace
+}  // namespace glsl
+
+ReferenceImage renderReference(const Scene& scene, const SceneData& data, const PackedBvh& bvh,
+                               const ShaderOptions& options, const FrameOptions& frame) {
+  using namespace glsl;
+  const auto start = std::chrono::steady_clock::now();
+  SceneFeatures features = analyzeScene(scene);
+  ReferenceImage img;
+  img.width = frame.width;
+  img.height = frame.height;
+  img.rgba.resize(size_t(frame.width) * frame.height * 4);
+  img.stats.resize(size_t(frame.width) * frame.height);
+  CameraBasis cam = cameraBasis(frame.camera, frame.width, frame.height);
+  const KernelInfo& kernel = findKernel(options.kernel);
+
+  auto worker = [&](int first, int step) {
+    Tracer tr{scene, data, bvh, options, kernel, effectiveDepth(features, options.maxDepth, options.uber),
+              features.numObjects, features.numLights, !bvh.triangles.empty(), {}};
+    const vec2 resolution(float(frame.width), float(frame.height));
+    for (int y = first; y < frame.height; y += step)
+      for (int x = 0; x < frame.width; ++x) {
+        // main.glsl: cameraRay(gl_FragCoord.xy), pixel centres at +0.5
+        vec2 pixel(float(x) + 0.5f, float(y) + 0.5f);
+        vec2 ndc = 2.0f * pixel / resolution - 1.0f;
+        Ray ray{cam.eye, normalize(cam.forward + ndc.x * cam.right + ndc.y * cam.up)};
+        size_t i = size_t(y) * frame.width + x;
+        vec3 c = tr.renderPixel(ray, frame.exposure, data.sceneRadius, img.stats[i]);
+        // Float -> UNORM8 conversion as GL specifies it: round(clamp(c) * 255).
+        for (int k = 0; k < 3; ++k) img.rgba[4 * i + k] = uint8_t(std::lround(clamp(c[k], 0.0f, 1.0f) * 255.0f));
+        img.rgba[4 * i + 3] = 255;
+      }
+  };
+  unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+  std::vector<std::thread> pool;
+  for (unsigned t = 0; t < threads; ++t) pool.emplace_back(worker, int(t), int(threads));
+  for (std::thread& t : pool) t.join();
+  img.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return img;
+}
+
+}  // namespace bvhlab

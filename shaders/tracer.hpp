@@ -1,0 +1,27 @@
+// tracer.hpp — C++ mirror of the tracer modules (scene.glsl, shade.glsl, world*.glsl, trace_full.glsl,
+// trace_report.glsl, main.glsl). It runs the uber path (every module, runtime switches), which the
+// tests prove equal to every specialised shader. Used as the oracle for the GLSL renderer.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "layout/layout.hpp"
+#include "shaders/assemble.hpp"
+#include "shaders/scene_data.hpp"
+
+namespace bvhlab {
+
+struct ReferenceImage {
+  int width = 0, height = 0;
+  std::vector<uint8_t> rgba;       // RGBA8 bottom-up, as glReadPixels returns it
+  std::vector<glm::uvec4> stats;   // as the COUNT_STATS render target
+  double ms = 0.0;
+};
+
+// Renders with the C++ mirror on all cores.
+ReferenceImage renderReference(const Scene& scene, const SceneData& data, const PackedBvh& bvh,
+                               const ShaderOptions& options, const FrameOptions& frame);
+
+}  // namespace bvhlab
