@@ -1,0 +1,206 @@
+#include "datasets/image_io.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <string>
+#include <system_error>
+
+#include <OpenImageIO/imageio.h>
+
+namespace bvhlab {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Guards against absurd headers (a 2^28-pixel RGBA32F image is already 4 GiB).
+constexpr int64_t kMaxPixels = int64_t(1) << 28;
+
+[[noreturn]] void fail(const fs::path& path, const std::string& what) {
+  throw InputError(path.string() + ": " + what);
+}
+
+// OIIO error text can span lines; our messages are one line.
+std::string oneLine(std::string s) {
+  std::replace(s.begin(), s.end(), '\n', ' ');
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s.empty() ? std::string("unknown OpenImageIO error") : s;
+}
+
+std::unique_ptr<OIIO::ImageInput> openInput(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) fail(path, "image file not found");
+  if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
+  auto in = OIIO::ImageInput::open(path.string());
+  if (!in) fail(path, "cannot read image (" + oneLine(OIIO::geterror()) + ")");
+  const OIIO::ImageSpec& spec = in->spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) fail(path, "empty image");
+  if (spec.depth > 1) fail(path, "volume images are not supported");
+  if (int64_t(spec.width) * spec.height > kMaxPixels)
+    fail(path, "image too large (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) + ")");
+  return in;
+}
+
+// Whether integer pixel data in this file is sRGB-encoded: yes unless the file says it is linear.
+bool isSrgbEncoded(const OIIO::ImageSpec& spec) {
+  if (spec.format.is_floating_point()) return false;
+  std::string cs = spec.get_string_attribute("oiio:ColorSpace");
+  std::transform(cs.begin(), cs.end(), cs.begin(), [](unsigned char c) { return std::tolower(c); });
+  return cs != "linear" && cs != "scene_linear";
+}
+
+std::string uniqueSuffix() {
+  static std::atomic<unsigned> counter{0};
+  return ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+}
+
+// Writes through `write(tmpPath)` to a sibling temporary file, then renames it over `path`.
+template <class WriteFn>
+void writeAtomically(const fs::path& path, WriteFn&& write) {
+  std::error_code ec;
+  const fs::path dir = path.parent_path();
+  if (!dir.empty()) {
+    fs::create_directories(dir, ec);
+    if (ec) fail(path, "cannot create directory " + dir.string() + " (" + ec.message() + ")");
+  }
+  fs::path tmp = path;
+  tmp += uniqueSuffix();
+  try {
+    write(tmp);
+  } catch (...) {
+    fs::remove(tmp, ec);
+    throw;
+  }
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    fail(path, "cannot rename temporary file into place (" + ec.message() + ")");
+  }
+}
+
+// One image out through OIIO, bottom-up rows (negative y stride walks the buffer from its last row).
+void writeOiio(const fs::path& path, const fs::path& tmp, const char* format, const OIIO::ImageSpec& spec,
+               const void* bottomUp, size_t rowBytes) {
+  auto out = OIIO::ImageOutput::create(format);
+  if (!out) fail(path, std::string("no OpenImageIO writer for ") + format);
+  if (!out->open(tmp.string(), spec)) fail(path, "cannot write image (" + oneLine(out->geterror()) + ")");
+  const auto* lastRow = static_cast<const uint8_t*>(bottomUp) + rowBytes * size_t(spec.height - 1);
+  bool ok = out->write_image(spec.format, lastRow, OIIO::AutoStride, -OIIO::stride_t(rowBytes));
+  ok = out->close() && ok;
+  if (!ok) fail(path, "cannot write image (" + oneLine(out->geterror()) + ")");
+}
+
+}  // namespace
+
+float srgbToLinear(float encoded) {
+  // IEC 61966-2-1: linear segment below 0.04045, power 2.4 above.
+  if (encoded <= 0.04045f) return encoded / 12.92f;
+  return std::pow((encoded + 0.055f) / 1.055f, 2.4f);
+}
+
+float linearToSrgb(float linear) {
+  // Negatives and NaN encode as black (NaN fails the comparison); above 1 clips to white.
+  const float c = linear > 0.0f ? std::min(linear, 1.0f) : 0.0f;
+  if (c <= 0.0031308f) return 12.92f * c;
+  return 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+}
+
+Image loadImage(const fs::path& path) {
+  auto in = openInput(path);
+  const OIIO::ImageSpec spec = in->spec();
+  const int w = spec.width, h = spec.height, nch = std::min(spec.nchannels, 4);
+  std::vector<float> raw(size_t(w) * h * nch);
+  if (!in->read_image(0, 0, 0, nch, OIIO::TypeDesc::FLOAT, raw.data()))
+    fail(path, "cannot decode image (" + oneLine(in->geterror()) + ")");
+  in->close();
+
+  const bool srgb = isSrgbEncoded(spec);
+  const bool hasAlpha = nch == 2 || nch == 4;
+  Image img;
+  img.width = w;
+  img.height = h;
+  img.name = path.string();
+  img.texels.resize(size_t(w) * h);
+  for (int y = 0; y < h; ++y) {
+    const float* row = raw.data() + size_t(h - 1 - y) * w * nch;  // file row h-1-y is our row y
+    for (int x = 0; x < w; ++x) {
+      const float* p = row + size_t(x) * nch;
+      glm::vec3 rgb = nch >= 3 ? glm::vec3(p[0], p[1], p[2]) : glm::vec3(p[0]);
+      if (srgb) rgb = glm::vec3(srgbToLinear(rgb.r), srgbToLinear(rgb.g), srgbToLinear(rgb.b));
+      const float a = hasAlpha ? p[nch - 1] : 1.0f;
+      img.texels[size_t(y) * w + x] = glm::vec4(rgb, a);
+    }
+  }
+  for (const glm::vec4& t : img.texels)
+    if (!std::isfinite(t.r) || !std::isfinite(t.g) || !std::isfinite(t.b) || !std::isfinite(t.a))
+      fail(path, "image contains NaN or infinite values");
+  return img;
+}
+
+ImageRgba8 loadImageRgba8(const fs::path& path) {
+  auto in = openInput(path);
+  const OIIO::ImageSpec spec = in->spec();
+  if (spec.format != OIIO::TypeDesc::UINT8) fail(path, "not an 8-bit image (" + std::string(spec.format.c_str()) + ")");
+  const int w = spec.width, h = spec.height, nch = std::min(spec.nchannels, 4);
+  std::vector<uint8_t> raw(size_t(w) * h * nch);
+  if (!in->read_image(0, 0, 0, nch, OIIO::TypeDesc::UINT8, raw.data()))
+    fail(path, "cannot decode image (" + oneLine(in->geterror()) + ")");
+  in->close();
+
+  ImageRgba8 img;
+  img.width = w;
+  img.height = h;
+  img.rgba.resize(size_t(w) * h * 4);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const uint8_t* p = raw.data() + (size_t(h - 1 - y) * w + x) * nch;
+      uint8_t* q = img.rgba.data() + (size_t(y) * w + x) * 4;
+      q[0] = p[0];
+      q[1] = nch >= 3 ? p[1] : p[0];
+      q[2] = nch >= 3 ? p[2] : p[0];
+      q[3] = (nch == 2 || nch == 4) ? p[nch - 1] : 255;
+    }
+  return img;
+}
+
+void saveImageRgba8(const fs::path& path, int width, int height, const std::vector<uint8_t>& rgbaBottomUp) {
+  if (width <= 0 || height <= 0 || rgbaBottomUp.size() != size_t(width) * height * 4)
+    throw std::invalid_argument("saveImageRgba8(" + path.string() + "): buffer of " +
+                                std::to_string(rgbaBottomUp.size()) + " bytes for a " + std::to_string(width) +
+                                "x" + std::to_string(height) + " RGBA8 image");
+  OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
+  writeAtomically(path, [&](const fs::path& tmp) {
+    writeOiio(path, tmp, "png", spec, rgbaBottomUp.data(), size_t(width) * 4);
+  });
+}
+
+void saveImageExr(const fs::path& path, const Image& image) {
+  if (image.width <= 0 || image.height <= 0 || image.texels.size() != size_t(image.width) * image.height)
+    throw std::invalid_argument("saveImageExr(" + path.string() + "): image size does not match its texels");
+  OIIO::ImageSpec spec(image.width, image.height, 4, OIIO::TypeDesc::FLOAT);
+  spec.attribute("compression", "zip");
+  writeAtomically(path, [&](const fs::path& tmp) {
+    writeOiio(path, tmp, "openexr", spec, image.texels.data(), size_t(image.width) * sizeof(glm::vec4));
+  });
+}
+
+std::vector<uint8_t> encodeSrgb8(const Image& image) {
+  std::vector<uint8_t> out(image.texels.size() * 4);
+  auto quantise = [](float v) {  // NaN -> 0 (fails the comparison)
+    return uint8_t(std::lround((v > 0.0f ? std::min(v, 1.0f) : 0.0f) * 255.0f));
+  };
+  for (size_t i = 0; i < image.texels.size(); ++i) {
+    const glm::vec4 t = image.texels[i];
+    out[4 * i + 0] = quantise(linearToSrgb(t.r));
+    out[4 * i + 1] = quantise(linearToSrgb(t.g));
+    out[4 * i + 2] = quantise(linearToSrgb(t.b));
+    out[4 * i + 3] = quantise(t.a);
+  }
+  return out;
+}
+
+}  // namespace bvhlab
