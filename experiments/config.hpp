@@ -1,0 +1,89 @@
+// Experiment configs: a TOML file that describes a sweep (format: experiments/README.md), parsed,
+// validated up front and expanded into a deterministic list of runs, each with a stable key.
+#pragma once
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace bvhlab {
+
+// One axis a config may sweep. Runs expand with the first axis varying slowest.
+struct AxisInfo {
+  std::string_view plural;    // key in [axes] and [[sweep]]: "leaf_sizes"
+  std::string_view singular;  // key in runs, result rows, [[exclude]] and the reference: "leaf_size"
+  std::string_view flag;      // `bvhlab render` flag: "--leaf-size"
+};
+const std::vector<AxisInfo>& experimentAxes();
+const AxisInfo* findAxis(std::string_view pluralOrSingular);
+
+// One value on one axis.
+struct AxisValue {
+  std::string label;     // how rows, plots and [[exclude]] name it ("bunny00", "sah-binned[bins=8]", "4")
+  nlohmann::json value;  // what the run key hashes and the executor reads (scene/builder: an object)
+  std::filesystem::path file;  // scene only: the resolved file (the key hashes the path as written)
+};
+
+// Settings shared by every run of a config ([render]); all but the timeout are part of the run key.
+struct RunRender {
+  int width = 320, height = 180;
+  int warmup = 2, frames = 10;
+  std::string backend = "osmesa";
+  bool heatmaps = true;                       // ask for --visits-out next to every image
+  std::map<std::string, std::string> env;     // extra environment for the renderer (LP_NUM_THREADS, ...)
+  std::vector<std::string> args;              // extra renderer flags, appended verbatim
+  double timeoutSeconds = 600.0;              // a run past this is killed and recorded as failed
+
+  nlohmann::json keyJson() const;
+};
+
+struct RunSpec {
+  std::size_t index = 0;  // position in the expansion: shards take index % N == I
+  std::string key;        // 16 hex digits: FNV-1a 64 of keyJson(); stable across machines
+  std::vector<std::pair<std::string, AxisValue>> axes;  // singular axis -> value, experimentAxes() order
+  RunRender render;
+  std::vector<std::string> sweeps;  // [[sweep]] names the run belongs to; empty for reference-only runs
+  std::string referenceKey;         // run whose image is this run's reference image ("" = none)
+  bool referenceOnly = false;       // added only to serve as a reference, not part of any sweep
+
+  const AxisValue* axis(std::string_view singular) const;
+  std::string describe() const;        // "bunny00 sah-binned stack-ordered leaf_size=4"
+  nlohmann::json keyJson() const;      // {"axes": {singular: value}, "render": {...}}
+  nlohmann::json toJson() const;       // everything, for plan.json
+  static RunSpec fromJson(const nlohmann::json& j);
+};
+
+// Names the renderer accepts, for validation. An empty list is not checked (registry not built in).
+struct KnownNames {
+  std::vector<std::string> builders;
+  std::vector<std::string> kernels;
+};
+KnownNames registeredNames();  // from bvhlab::builders() and the kernel registry when present
+
+struct ExperimentConfig {
+  std::filesystem::path file;
+  std::string text;  // the file as read
+  std::string hash;  // FNV-1a 64 of text, 16 hex digits
+  std::string name, description;
+  bool seedFigures = false;       // report adds sections mirroring the seed report's Figs. 8-12
+  RunRender render;
+  nlohmann::json reference;       // [experiment.reference] as written: singular axis -> value, frames, warmup
+  std::vector<std::string> sweepNames;
+  std::map<std::string, std::vector<std::string>> axisLabels;  // singular -> labels in config order
+  std::vector<RunSpec> runs;      // sweep runs, then reference-only runs; runs[i].index == i
+};
+
+// Throws InputError "FILE:LINE: KEY: what is wrong" for every problem found in the file.
+ExperimentConfig parseExperimentConfig(std::string_view text, const std::filesystem::path& file,
+                                       const KnownNames& names);
+ExperimentConfig loadExperimentConfig(const std::filesystem::path& file, const KnownNames& names);
+ExperimentConfig loadExperimentConfig(const std::filesystem::path& file);  // registeredNames()
+
+// FNV-1a 64-bit hash as 16 lower-case hex digits (stable across platforms and runs).
+std::string hashHex(std::string_view bytes);
+
+}  // namespace bvhlab

@@ -1,0 +1,117 @@
+#include "experiments/executor.hpp"
+
+#include <charconv>
+
+#include "experiments/process.hpp"
+
+namespace bvhlab {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string number(double v) {
+  char buf[32];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);  // shortest round-trip form
+  return std::string(buf, end);
+}
+
+std::string vec3Flag(const json& v) {
+  return number(v.at(0).get<double>()) + "," + number(v.at(1).get<double>()) + "," + number(v.at(2).get<double>());
+}
+
+std::string scalarFlag(const json& v) {
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_number_integer()) return std::to_string(v.get<int64_t>());
+  return v.dump();
+}
+
+// The last non-empty line of a log: usually the renderer's "bvhlab: error: ..." line.
+std::string lastLine(const std::string& text) {
+  size_t end = text.find_last_not_of("\r\n \t");
+  if (end == std::string::npos) return "";
+  const size_t start = text.rfind('\n', end);
+  return text.substr(start == std::string::npos ? 0 : start + 1, end - (start == std::string::npos ? 0 : start + 1) + 1);
+}
+
+}  // namespace
+
+std::vector<std::string> renderCommandLine(const fs::path& binary, const RunRequest& request) {
+  const RunSpec& spec = request.spec;
+  const AxisValue* scene = spec.axis("scene");
+  if (!scene) throw std::invalid_argument("run " + spec.key + " has no scene");
+  const RunRender& r = spec.render;
+  std::vector<std::string> argv = {binary.string(),
+                                   "render",
+                                   scene->file.string(),
+                                   "--json",
+                                   "-o",
+                                   request.image.string(),
+                                   "--width",
+                                   std::to_string(r.width),
+                                   "--height",
+                                   std::to_string(r.height),
+                                   "--frames",
+                                   std::to_string(r.frames),
+                                   "--warmup",
+                                   std::to_string(r.warmup),
+                                   "--backend",
+                                   r.backend};
+  if (!request.visitsImage.empty()) argv.insert(argv.end(), {"--visits-out", request.visitsImage.string()});
+  for (const char* key : {"eye", "target", "up"})
+    if (scene->value.contains(key)) argv.insert(argv.end(), {std::string("--") + key, vec3Flag(scene->value[key])});
+  if (scene->value.contains("fov")) argv.insert(argv.end(), {"--fov", number(scene->value["fov"].get<double>())});
+
+  for (const auto& [name, value] : spec.axes) {
+    const AxisInfo* axis = findAxis(name);
+    if (name == "scene") continue;
+    if (name == "builder") {
+      argv.insert(argv.end(), {"--builder", value.value.at("name").get<std::string>()});
+      if (value.value.contains("bins")) argv.insert(argv.end(), {"--bins", scalarFlag(value.value["bins"])});
+    } else if (name == "uber") {
+      if (value.value.get<bool>()) argv.push_back("--uber");
+    } else {
+      argv.insert(argv.end(), {std::string(axis->flag), scalarFlag(value.value)});
+    }
+  }
+  argv.insert(argv.end(), r.args.begin(), r.args.end());
+  return argv;
+}
+
+RunExecutor subprocessExecutor(fs::path binary) {
+  if (binary.empty()) binary = fs::read_symlink("/proc/self/exe");
+  return [binary](RunRequest& request) -> json {
+    const std::vector<std::string> argv = renderCommandLine(binary, request);
+    request.command = shellQuote(argv);
+    ProcessOptions options;
+    options.env = request.spec.render.env;
+    options.timeoutSeconds = request.spec.render.timeoutSeconds;
+    const ProcessResult p = runProcess(argv, options);
+    request.log = p.err;
+
+    json result;
+    std::string parseError;
+    try {
+      result = json::parse(p.out);
+    } catch (const json::parse_error& e) {
+      parseError = e.what();
+    }
+    if (p.timedOut)
+      throw RunFailure("renderer timed out after " + number(request.spec.render.timeoutSeconds) + " s", result);
+    if (!p.ok()) {
+      const std::string why = lastLine(p.err);
+      throw RunFailure("renderer " + p.status() + (why.empty() ? "" : ": " + why),
+                       result.is_object() ? result : json());
+    }
+    if (!result.is_object()) {
+      std::string shown = p.out.substr(0, 200);
+      throw RunFailure("renderer printed no JSON object on stdout" +
+                       (parseError.empty() ? std::string() : " (" + parseError + ")") +
+                       (shown.empty() ? std::string(": stdout was empty") : ": " + shown));
+    }
+    return result;
+  };
+}
+
+}  // namespace bvhlab

@@ -1,0 +1,305 @@
+#include "experiments/runner.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+
+#include "datasets/scene.hpp"  // InputError
+#include "experiments/process.hpp"
+#include "experiments/provenance.hpp"
+#include "experiments/sweep_dir.hpp"
+
+namespace bvhlab {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::pair<int, int> parseShard(const std::string& text) {
+  const size_t slash = text.find('/');
+  int index = -1, count = 0;
+  try {
+    if (slash == std::string::npos) throw std::invalid_argument("no slash");
+    size_t used = 0;
+    index = std::stoi(text.substr(0, slash), &used);
+    if (used != slash) throw std::invalid_argument("trailing characters");
+    const std::string n = text.substr(slash + 1);
+    count = std::stoi(n, &used);
+    if (used != n.size()) throw std::invalid_argument("trailing characters");
+  } catch (const std::exception&) {
+    throw InputError("--shard: expected I/N (e.g. 0/4), got '" + text + "'");
+  }
+  if (count < 1 || index < 0 || index >= count)
+    throw InputError("--shard: need 0 <= I < N, got '" + text + "'");
+  return {index, count};
+}
+
+namespace {
+
+// Keeps the last `limit` bytes of a log (a shader compile error is at the end of stderr).
+std::string tail(const std::string& text, size_t limit = 8000) {
+  if (text.size() <= limit) return text;
+  return "[... " + std::to_string(text.size() - limit) + " bytes cut ...]\n" + text.substr(text.size() - limit);
+}
+
+std::string duration(double seconds) {
+  const long s = long(seconds + 0.5);
+  char buf[32];
+  if (s >= 3600) std::snprintf(buf, sizeof buf, "%ldh%02ldm", s / 3600, (s / 60) % 60);
+  else if (s >= 60) std::snprintf(buf, sizeof buf, "%ldm%02lds", s / 60, s % 60);
+  else std::snprintf(buf, sizeof buf, "%lds", s);
+  return buf;
+}
+
+class Progress {
+ public:
+  Progress(bool enabled, size_t total) : enabled_(enabled && ::isatty(STDERR_FILENO)), total_(total) {}
+  void update(size_t done, double secondsPerRun, size_t remaining, const std::string& what) {
+    if (!enabled_) return;
+    std::string eta = secondsPerRun > 0.0 ? " eta " + duration(secondsPerRun * double(remaining)) : "";
+    std::string line = "[" + std::to_string(done) + "/" + std::to_string(total_) + "]" + eta + "  " + what;
+    if (line.size() > 110) line = line.substr(0, 107) + "...";
+    std::fprintf(stderr, "\r\033[K%s", line.c_str());
+    std::fflush(stderr);
+    shown_ = true;
+  }
+  void finish() {
+    if (shown_) std::fprintf(stderr, "\r\033[K");
+  }
+
+ private:
+  bool enabled_;
+  size_t total_;
+  bool shown_ = false;
+};
+
+}  // namespace
+
+SweepOutcome runSweep(const RunOptions& options) {
+  if (options.shardCount < 1 || options.shardIndex < 0 || options.shardIndex >= options.shardCount)
+    throw InputError("--shard: need 0 <= I < N");
+  const ExperimentConfig config = options.names ? loadExperimentConfig(options.config, *options.names)
+                                                : loadExperimentConfig(options.config);
+  SweepDir dir{options.outDir.empty() ? fs::path("results") / config.name : options.outDir};
+  fs::create_directories(dir.runs());
+  fs::create_directories(dir.images());
+
+  // The plan is rewritten on every invocation: an edited config keeps the runs whose keys survive.
+  if (fs::exists(dir.plan())) {
+    const json old = readPlan(dir);
+    if (old["config"]["hash"] != config.hash)
+      std::cerr << "bvhlab run: note: " << config.file.string() << " changed since " << dir.plan().string()
+                << " was written; finished runs whose parameters are unchanged are kept\n";
+  }
+  writePlan(dir, makePlan(config));
+
+  const std::optional<fs::path> sourceDir = findSourceDir();
+  const std::string commit = gitCommit(sourceDir);
+  const json machine = currentMachine().toJson();
+  RunExecutor executor = options.executor ? options.executor : subprocessExecutor(options.binary);
+
+  SweepOutcome outcome;
+  outcome.dir = dir.root;
+  std::vector<const RunSpec*> mine;
+  for (const RunSpec& run : config.runs)
+    if (run.index % size_t(options.shardCount) == size_t(options.shardIndex)) mine.push_back(&run);
+  outcome.shardRuns = mine.size();
+
+  std::map<std::string, json> records = readRecords(dir);
+  ImageErrorCache cache;
+  Progress progress(options.progress, mine.size());
+  double spentSeconds = 0.0;
+  size_t done = 0;
+  for (const RunSpec* run : mine) {
+    auto it = records.find(run->key);
+    if (it != records.end() && (it->second["status"] == "ok" || !options.retryFailed)) {
+      ++outcome.skipped;
+      ++done;
+      continue;
+    }
+    const size_t remaining = mine.size() - done;
+    progress.update(done, outcome.executed ? spentSeconds / double(outcome.executed) : 0.0, remaining,
+                    run->describe());
+
+    RunRequest request{*run, dir.image(run->key), run->render.heatmaps ? dir.visitsImage(run->key) : fs::path(), "", ""};
+    std::error_code ec;
+    fs::remove(request.image, ec);  // a stale image from an earlier attempt must not pass as this run's
+    if (!request.visitsImage.empty()) fs::remove(request.visitsImage, ec);
+
+    json record = {{"key", run->key},
+                   {"params", run->toJson()},
+                   {"config_name", config.name},
+                   {"config_hash", config.hash},
+                   {"git_commit", commit},
+                   {"machine", machine},
+                   {"started_at", utcNow()}};
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      json result = executor(request);
+      if (!result.is_object()) throw RunFailure("the executor returned no JSON object");
+      record["status"] = "ok";
+      record["result"] = std::move(result);
+    } catch (const RunFailure& f) {
+      record["status"] = "failed";
+      record["error"] = f.what();
+      if (!f.partialResult.is_null()) record["result"] = f.partialResult;
+    } catch (const std::exception& e) {
+      record["status"] = "failed";
+      record["error"] = e.what();
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    record["wall_s"] = seconds;
+    record["command"] = request.command;
+    record["log"] = tail(request.log);
+    record["image"] = fs::exists(request.image, ec) ? json("images/" + request.image.filename().string()) : json();
+    record["visits_image"] = !request.visitsImage.empty() && fs::exists(request.visitsImage, ec)
+                                 ? json("images/" + request.visitsImage.filename().string())
+                                 : json();
+
+    writeFileAtomic(dir.record(run->key), record.dump(1) + "\n");
+    records[run->key] = record;
+    ++outcome.executed;
+    ++done;
+    spentSeconds += seconds;
+    if (record["status"] != "ok") {
+      ++outcome.failed;
+      progress.finish();
+      std::cerr << "bvhlab run: run " << run->index << " (" << run->describe() << ") failed: "
+                << record["error"].get<std::string>() << "\n";
+    }
+    outcome.summary = writeResults(dir, &cache);
+  }
+  progress.finish();
+  outcome.summary = writeResults(dir, &cache);
+  return outcome;
+}
+
+json mergeSweeps(const std::vector<fs::path>& dirs, const fs::path& out) {
+  if (dirs.empty()) throw InputError("merge: no input directories");
+  SweepDir target{out};
+  std::vector<SweepDir> inputs;
+  // An existing output directory takes part like an input (merging into it is incremental).
+  std::error_code ec;
+  if (fs::exists(target.plan())) inputs.push_back(target);
+  for (const fs::path& d : dirs)
+    if (!fs::exists(target.plan()) || !fs::equivalent(d, out, ec)) inputs.push_back(SweepDir{d});
+
+  json plan;
+  std::string planFrom;
+  for (const SweepDir& in : inputs) {
+    json p = readPlan(in);
+    if (plan.is_null()) {
+      plan = std::move(p);
+      planFrom = in.root.string();
+    } else if (p["config"]["hash"] != plan["config"]["hash"]) {
+      throw InputError("merge: " + in.root.string() + " comes from a different config (hash " +
+                       p["config"]["hash"].get<std::string>() + ") than " + planFrom + " (hash " +
+                       plan["config"]["hash"].get<std::string>() + ")");
+    }
+  }
+
+  // Best record per key: ok beats failed; among equals the first input wins.
+  std::map<std::string, std::pair<json, const SweepDir*>> best;
+  for (const SweepDir& in : inputs)
+    for (auto& [key, record] : readRecords(in)) {
+      auto it = best.find(key);
+      if (it == best.end() || (it->second.first["status"] != "ok" && record["status"] == "ok"))
+        best[key] = {record, &in};
+    }
+
+  fs::create_directories(target.runs());
+  fs::create_directories(target.images());
+  writePlan(target, plan);
+  for (const auto& [key, entry] : best) {
+    const auto& [record, from] = entry;
+    if (from->root != target.root && !fs::equivalent(from->root, target.root, ec)) {
+      for (const char* field : {"image", "visits_image"})
+        if (record.contains(field) && record[field].is_string()) {
+          const fs::path rel = record[field].get<std::string>();
+          if (fs::exists(from->root / rel)) fs::copy_file(from->root / rel, target.root / rel,
+                                                           fs::copy_options::overwrite_existing);
+        }
+      writeFileAtomic(target.record(key), record.dump(1) + "\n");
+    }
+  }
+  return writeResults(target);
+}
+
+fs::path writeReport(const fs::path& dir) {
+  const std::optional<fs::path> source = findSourceDir();
+  if (!source)
+    throw std::runtime_error("cannot find experiments/report.py (set BVHLAB_SOURCE_DIR to the bvhlab source tree)");
+  const char* python = std::getenv("BVHLAB_PYTHON");
+  // Debian's python3 has python3-matplotlib; a pyenv/venv python3 on PATH usually does not.
+  const std::string interpreter = python && *python ? python : "/usr/bin/python3";
+  ProcessOptions options;
+  options.timeoutSeconds = 600.0;
+  const ProcessResult r = runProcess({interpreter, (*source / "experiments" / "report.py").string(), dir.string()},
+                                     options);
+  if (!r.ok())
+    throw std::runtime_error("report.py " + r.status() + ": " + tail(r.err + r.out, 2000));
+  if (!r.err.empty()) std::cerr << r.err;
+  return dir / "report.html";
+}
+
+int runCommand(const RunOptions& options) {
+  try {
+    const SweepOutcome o = runSweep(options);
+    const json& s = o.summary;
+    std::cerr << "bvhlab run: " << o.executed << " runs executed (" << o.failed << " failed), " << o.skipped
+              << " already finished; " << o.dir.string() << ": " << s["ok"] << " ok, " << s["failed"]
+              << " failed, " << s["pending"] << " pending of " << s["planned"] << "\n";
+    if (options.report) {
+      try {
+        std::cerr << "bvhlab run: report " << writeReport(o.dir).string() << "\n";
+      } catch (const std::exception& e) {
+        std::cerr << "bvhlab run: warning: no report: " << e.what() << "\n";
+      }
+    }
+    return 0;
+  } catch (const InputError& e) {
+    std::cerr << "bvhlab run: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "bvhlab run: error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+int mergeCommand(const std::vector<fs::path>& dirs, const fs::path& out) {
+  try {
+    const json s = mergeSweeps(dirs, out);
+    std::cerr << "bvhlab merge: " << out.string() << ": " << s["ok"] << " ok, " << s["failed"] << " failed, "
+              << s["pending"] << " pending of " << s["planned"] << "\n";
+    try {
+      std::cerr << "bvhlab merge: report " << writeReport(out).string() << "\n";
+    } catch (const std::exception& e) {
+      std::cerr << "bvhlab merge: warning: no report: " << e.what() << "\n";
+    }
+    return 0;
+  } catch (const InputError& e) {
+    std::cerr << "bvhlab merge: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "bvhlab merge: error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+int reportCommand(const fs::path& dir) {
+  try {
+    writeResults(SweepDir{dir});  // picks up runs finished since the last regeneration
+    std::cout << writeReport(dir).string() << "\n";
+    return 0;
+  } catch (const InputError& e) {
+    std::cerr << "bvhlab report: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "bvhlab report: error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace bvhlab

@@ -1,0 +1,56 @@
+// The on-disk state of one sweep (layout documented in experiments/README.md):
+//   DIR/plan.json            the expanded config: every run, its key and index, the config text + hash
+//   DIR/runs/KEY.json        one finished run (status ok or failed), written atomically
+//   DIR/images/KEY.png       its image; DIR/images/KEY.visits.png its visit heatmap
+//   DIR/results.json, .csv   one row per finished run of the plan, regenerated from the two above
+//   DIR/report.html          experiments/report.py's rendering of results.json
+// Only runs/ and images/ are state; everything else is derived and may be deleted.
+#pragma once
+#include <filesystem>
+#include <map>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include <nlohmann/json.hpp>
+
+#include "experiments/config.hpp"
+#include "experiments/image_error.hpp"
+
+namespace bvhlab {
+
+struct SweepDir {
+  std::filesystem::path root;
+
+  std::filesystem::path plan() const { return root / "plan.json"; }
+  std::filesystem::path runs() const { return root / "runs"; }
+  std::filesystem::path images() const { return root / "images"; }
+  std::filesystem::path record(const std::string& key) const { return runs() / (key + ".json"); }
+  std::filesystem::path image(const std::string& key) const { return images() / (key + ".png"); }
+  std::filesystem::path visitsImage(const std::string& key) const { return images() / (key + ".visits.png"); }
+};
+
+// Writes a temporary file beside `file`, flushes it to disk and renames it over `file`: a reader
+// (or a run after a kill) sees the old contents or the new, never a partial file.
+void writeFileAtomic(const std::filesystem::path& file, std::string_view contents);
+
+// plan.json: written by `run` before the first run starts.
+nlohmann::json makePlan(const ExperimentConfig& config);
+void writePlan(const SweepDir& dir, const nlohmann::json& plan);
+nlohmann::json readPlan(const SweepDir& dir);  // throws InputError when missing or unreadable
+
+// Finished runs by key. A record that cannot be parsed (a partial file from a crash on a file
+// system without atomic rename) is reported on stderr and ignored: its run counts as not finished.
+std::map<std::string, nlohmann::json> readRecords(const SweepDir& dir);
+
+// Image errors are cached per (run key, reference key) within one process.
+using ImageErrorCache = std::map<std::pair<std::string, std::string>, nlohmann::json>;
+
+// Regenerates results.json and results.csv from plan.json and runs/. Returns the summary object
+// (planned, ok, failed, pending, stale).
+nlohmann::json writeResults(const SweepDir& dir, ImageErrorCache* cache = nullptr);
+
+// results.csv columns, in order (renderer keys not listed here follow, sorted).
+const std::vector<std::string>& resultColumns();
+
+}  // namespace bvhlab
