@@ -1,0 +1,95 @@
+// kernel_stack_ordered.glsl — nearest child first: an inner node tests both child boxes, walks
+// into the one the ray enters first and pushes the other with its entry distance; a popped node
+// whose entry lies beyond the closest hit found since is skipped without being fetched.
+// C++ mirror: kernel_stack_ordered.hpp.
+//
+// Stack bound: the current node is held in registers, never on the stack; at depth k (root = 1)
+// the stack holds at most one entry per ancestor, the farther child of an ancestor whose nearer
+// subtree is being walked. A push happens at an inner node (depth <= D - 1) and makes at most
+// D - 1 entries, so BVH_STACK_SIZE >= D - 1 never overflows (stackSizeFor gives D, for the
+// unordered kernel); a chain whose every farther child is a leaf, with every box hit, needs D - 1.
+//
+// Counters: g_nodeVisits += 1 per node record fetched (loadNode): the root, each child whose box
+// is tested, and each node popped (its record is fetched again; its box is not re-tested).
+// g_triTests += 1 per intersectTriangle call.
+
+bool traverseOrdered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
+  hit = MeshHit(tMax, -1, vec2(0.0));
+  vec3 invDir = rayInverseDirection(ray.dir);
+  int stackNode[BVH_STACK_SIZE];
+  float stackEnter[BVH_STACK_SIZE];
+  int sp = 0;
+
+  int node = 0;
+  vec3 bmin, bmax;
+  uint a, escape, count;
+  float tEnter;
+  g_nodeVisits++;
+  loadNode(node, bmin, bmax, a, escape, count);
+  if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
+  while (true) {
+    if (count > 0u) {
+      for (uint i = 0u; i < count; ++i) {
+        int tri = int(a + i);
+        vec3 v0, v1, v2;
+        loadTriangle(tri, v0, v1, v2);
+        float t;
+        vec2 bary;
+        g_triTests++;
+        if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+          hit = MeshHit(t, tri, bary);
+          if (anyHit) return true;
+        }
+      }
+    } else {
+      int left = node + 1;
+      int right = int(a);
+      uint leftA, leftCount, rightA, rightCount;
+      float leftEnter, rightEnter;
+      g_nodeVisits++;
+      loadNode(left, bmin, bmax, leftA, escape, leftCount);
+      bool hitLeft = intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, leftEnter);
+      g_nodeVisits++;
+      loadNode(right, bmin, bmax, rightA, escape, rightCount);
+      bool hitRight = intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, rightEnter);
+      if (hitLeft && hitRight) {
+        if (sp == BVH_STACK_SIZE) {
+          g_stackOverflow = true;  // stop: the result so far is incomplete, the flag says so
+          return hit.tri >= 0;
+        }
+        bool leftFirst = leftEnter <= rightEnter;
+        stackNode[sp] = leftFirst ? right : left;
+        stackEnter[sp] = leftFirst ? rightEnter : leftEnter;
+        sp++;
+        node = leftFirst ? left : right;
+        a = leftFirst ? leftA : rightA;
+        count = leftFirst ? leftCount : rightCount;
+        continue;
+      }
+      if (hitLeft || hitRight) {
+        node = hitLeft ? left : right;
+        a = hitLeft ? leftA : rightA;
+        count = hitLeft ? leftCount : rightCount;
+        continue;
+      }
+    }
+    // Next pending node; those entered beyond the closest hit would fail their box test now.
+    while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+    if (sp == 0) break;
+    node = stackNode[--sp];
+    g_nodeVisits++;
+    loadNode(node, bmin, bmax, a, escape, count);
+  }
+  return hit.tri >= 0;
+}
+
+// Closest hit with tMin < t < tMax; hit.tri = -1 and hit.t = tMax when there is none.
+bool traceClosest(Ray ray, float tMin, float tMax, out MeshHit hit) {
+  return traverseOrdered(ray, tMin, tMax, false, hit);
+}
+
+// Any hit with tMin < t < tMax (shadow rays): the same walk, stopped at the first hit.
+bool traceAny(Ray ray, float tMin, float tMax) {
+  MeshHit hit;
+  return traverseOrdered(ray, tMin, tMax, true, hit);
+}

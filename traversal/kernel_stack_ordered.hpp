@@ -1,0 +1,89 @@
+// kernel_stack_ordered.hpp — C++ mirror of kernel_stack_ordered.glsl (nearest child first; stack
+// bound and counter definitions are documented there).
+#pragma once
+#include "traversal/layout.hpp"
+#include "traversal/ray_box.hpp"
+#include "traversal/ray_triangle.hpp"
+
+namespace bvhlab::glsl::stack_ordered {
+
+inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
+                            Counters& c) {
+  hit = MeshHit{tMax, -1, vec2(0.0f)};
+  vec3 invDir = rayInverseDirection(ray.dir);
+  StackArray<int> stackNode(s.stackSize);
+  StackArray<float> stackEnter(s.stackSize);
+  int sp = 0;
+
+  int node = 0;
+  vec3 bmin, bmax;
+  uint a, escape, count;
+  float tEnter;
+  c.nodeVisits++;
+  loadNode(s, node, bmin, bmax, a, escape, count);
+  if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
+  while (true) {
+    if (count > 0u) {
+      for (uint i = 0u; i < count; ++i) {
+        int tri = int(a + i);
+        vec3 v0, v1, v2;
+        loadTriangle(s, tri, v0, v1, v2);
+        float t;
+        vec2 bary;
+        c.triTests++;
+        if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+          hit = MeshHit{t, tri, bary};
+          if (anyHit) return true;
+        }
+      }
+    } else {
+      int left = node + 1;
+      int right = int(a);
+      uint leftA, leftCount, rightA, rightCount;
+      float leftEnter, rightEnter;
+      c.nodeVisits++;
+      loadNode(s, left, bmin, bmax, leftA, escape, leftCount);
+      bool hitLeft = intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, leftEnter);
+      c.nodeVisits++;
+      loadNode(s, right, bmin, bmax, rightA, escape, rightCount);
+      bool hitRight = intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, rightEnter);
+      if (hitLeft && hitRight) {
+        if (sp == s.stackSize) {
+          c.stackOverflow = true;
+          return hit.tri >= 0;
+        }
+        bool leftFirst = leftEnter <= rightEnter;
+        stackNode[sp] = leftFirst ? right : left;
+        stackEnter[sp] = leftFirst ? rightEnter : leftEnter;
+        sp++;
+        node = leftFirst ? left : right;
+        a = leftFirst ? leftA : rightA;
+        count = leftFirst ? leftCount : rightCount;
+        continue;
+      }
+      if (hitLeft || hitRight) {
+        node = hitLeft ? left : right;
+        a = hitLeft ? leftA : rightA;
+        count = hitLeft ? leftCount : rightCount;
+        continue;
+      }
+    }
+    while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+    if (sp == 0) break;
+    node = stackNode[--sp];
+    c.nodeVisits++;
+    loadNode(s, node, bmin, bmax, a, escape, count);
+  }
+  return hit.tri >= 0;
+}
+
+inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
+  return traverseOrdered(s, ray, tMin, tMax, false, hit, c);
+}
+
+inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
+  MeshHit hit;
+  return traverseOrdered(s, ray, tMin, tMax, true, hit, c);
+}
+
+}  // namespace bvhlab::glsl::stack_ordered

@@ -1,0 +1,64 @@
+// kernel_stack_unordered.hpp — C++ mirror of kernel_stack_unordered.glsl (the report's
+// Algorithm 2; stack bound and counter definitions are documented there).
+#pragma once
+#include "traversal/layout.hpp"
+#include "traversal/ray_box.hpp"
+#include "traversal/ray_triangle.hpp"
+
+namespace bvhlab::glsl::stack_unordered {
+
+inline bool traverseUnordered(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
+                              Counters& c) {
+  hit = MeshHit{tMax, -1, vec2(0.0f)};
+  vec3 invDir = rayInverseDirection(ray.dir);
+  StackArray<int> stack(s.stackSize);
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    int node = stack[--sp];
+    vec3 bmin, bmax;
+    uint a, escape, count;
+    c.nodeVisits++;
+    loadNode(s, node, bmin, bmax, a, escape, count);
+    if (count > 0u) {
+      for (uint i = 0u; i < count; ++i) {
+        int tri = int(a + i);
+        vec3 v0, v1, v2;
+        loadTriangle(s, tri, v0, v1, v2);
+        float t;
+        vec2 bary;
+        c.triTests++;
+        if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+          hit = MeshHit{t, tri, bary};
+          if (anyHit) return true;
+        }
+      }
+      continue;
+    }
+    int children[2] = {int(a), node + 1};  // second child pushed first
+    for (int k = 0; k < 2; ++k) {
+      uint childA, childEscape, childCount;
+      float tEnter;
+      c.nodeVisits++;
+      loadNode(s, children[k], bmin, bmax, childA, childEscape, childCount);
+      if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) continue;
+      if (sp == s.stackSize) {
+        c.stackOverflow = true;
+        return hit.tri >= 0;
+      }
+      stack[sp++] = children[k];
+    }
+  }
+  return hit.tri >= 0;
+}
+
+inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
+  return traverseUnordered(s, ray, tMin, tMax, false, hit, c);
+}
+
+inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
+  MeshHit hit;
+  return traverseUnordered(s, ray, tMin, tMax, true, hit, c);
+}
+
+}  // namespace bvhlab::glsl::stack_unordered

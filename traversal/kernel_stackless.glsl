@@ -1,0 +1,54 @@
+// kernel_stackless.glsl — no stack: nodes are visited in the stream's depth-first order. A node
+// whose box the ray meets continues to its first child (node + 1) if it is inner; a leaf, after its
+// triangles, and a node whose box is missed continue at their escape link (layout/layout.hpp).
+// Every step moves to a higher node index, so the walk ends after at most one visit per node.
+// C++ mirror: kernel_stackless.hpp.
+//
+// Counters: g_nodeVisits += 1 per node record fetched (loadNode), i.e. per node the walk reaches;
+// each has its box tested once. g_triTests += 1 per intersectTriangle call.
+
+bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
+  hit = MeshHit(tMax, -1, vec2(0.0));
+  vec3 invDir = rayInverseDirection(ray.dir);
+  uint node = 0u;
+  while (node != kEscapeEnd) {
+    vec3 bmin, bmax;
+    uint a, escape, count;
+    float tEnter;
+    g_nodeVisits++;
+    loadNode(int(node), bmin, bmax, a, escape, count);
+    if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
+      node = escape;
+      continue;
+    }
+    if (count == 0u) {
+      node = node + 1u;
+      continue;
+    }
+    for (uint i = 0u; i < count; ++i) {
+      int tri = int(a + i);
+      vec3 v0, v1, v2;
+      loadTriangle(tri, v0, v1, v2);
+      float t;
+      vec2 bary;
+      g_triTests++;
+      if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+        hit = MeshHit(t, tri, bary);
+        if (anyHit) return true;
+      }
+    }
+    node = escape;
+  }
+  return hit.tri >= 0;
+}
+
+// Closest hit with tMin < t < tMax; hit.tri = -1 and hit.t = tMax when there is none.
+bool traceClosest(Ray ray, float tMin, float tMax, out MeshHit hit) {
+  return traverseStackless(ray, tMin, tMax, false, hit);
+}
+
+// Any hit with tMin < t < tMax (shadow rays): the same walk, stopped at the first hit.
+bool traceAny(Ray ray, float tMin, float tMax) {
+  MeshHit hit;
+  return traverseStackless(ray, tMin, tMax, true, hit);
+}

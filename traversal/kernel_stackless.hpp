@@ -1,0 +1,55 @@
+// kernel_stackless.hpp — C++ mirror of kernel_stackless.glsl (escape links; counter definitions
+// are documented there).
+#pragma once
+#include "traversal/layout.hpp"
+#include "traversal/ray_box.hpp"
+#include "traversal/ray_triangle.hpp"
+
+namespace bvhlab::glsl::stackless {
+
+inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
+                              Counters& c) {
+  hit = MeshHit{tMax, -1, vec2(0.0f)};
+  vec3 invDir = rayInverseDirection(ray.dir);
+  uint node = 0u;
+  while (node != kEscapeEnd) {
+    vec3 bmin, bmax;
+    uint a, escape, count;
+    float tEnter;
+    c.nodeVisits++;
+    loadNode(s, int(node), bmin, bmax, a, escape, count);
+    if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
+      node = escape;
+      continue;
+    }
+    if (count == 0u) {
+      node = node + 1u;
+      continue;
+    }
+    for (uint i = 0u; i < count; ++i) {
+      int tri = int(a + i);
+      vec3 v0, v1, v2;
+      loadTriangle(s, tri, v0, v1, v2);
+      float t;
+      vec2 bary;
+      c.triTests++;
+      if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+        hit = MeshHit{t, tri, bary};
+        if (anyHit) return true;
+      }
+    }
+    node = escape;
+  }
+  return hit.tri >= 0;
+}
+
+inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
+  return traverseStackless(s, ray, tMin, tMax, false, hit, c);
+}
+
+inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
+  MeshHit hit;
+  return traverseStackless(s, ray, tMin, tMax, true, hit, c);
+}
+
+}  // namespace bvhlab::glsl::stackless

@@ -1,0 +1,58 @@
+// storage.hpp — C++ mirror of storage_tbo.glsl and storage_tex2d.glsl. Both GLSL storage kinds
+// return texel i of a stream; the mirror reads the PackedBvh's streams directly. A texel out of
+// range throws std::out_of_range here (a kernel bug), where GLSL would read an undefined texel.
+#pragma once
+#include <array>
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "layout/layout.hpp"
+#include "shaders/common.hpp"
+
+namespace bvhlab {
+int stackSizeFor(uint32_t treeDepth);  // traversal/kernels.hpp
+}
+
+namespace bvhlab::glsl {
+
+// What the GLSL reads from its uniforms and #defines, passed explicitly: the three streams and
+// BVH_STACK_SIZE.
+struct Storage {
+  const PackedBvh* bvh;
+  int stackSize;  // BVH_STACK_SIZE
+
+  // Implicit on purpose: a PackedBvh passes for a Storage, with the stack size the shader
+  // assembler defines for it.
+  Storage(const PackedBvh& packed) : Storage(packed, stackSizeFor(packed.depth)) {}
+  Storage(const PackedBvh& packed, int stackSize_) : bvh(&packed), stackSize(stackSize_) {
+    // GLSL refuses an array of size 0; the stack kernels push the root unconditionally.
+    if (stackSize < 1) throw std::invalid_argument("BVH_STACK_SIZE must be >= 1, got " + std::to_string(stackSize));
+  }
+};
+
+inline uvec4 fetchNode(const Storage& s, int texel) { return s.bvh->nodes.at(size_t(texel)); }
+inline uvec4 fetchTriangle(const Storage& s, int texel) { return s.bvh->triangles.at(size_t(texel)); }
+inline uvec4 fetchAttribute(const Storage& s, int texel) { return s.bvh->attributes.at(size_t(texel)); }
+
+// GLSL `T stack[BVH_STACK_SIZE];`: a fixed-size local array, its size known only at run time
+// here. Up to kInline entries live on the C++ stack (no allocation per ray); more go to the heap.
+template <class T>
+class StackArray {
+ public:
+  explicit StackArray(int size) : size_(size) {
+    if (size > kInline) heap_.resize(size_t(size));
+  }
+  StackArray(const StackArray&) = delete;
+  StackArray& operator=(const StackArray&) = delete;
+  T& operator[](int i) { return size_ > kInline ? heap_[size_t(i)] : inline_[size_t(i)]; }
+
+ private:
+  static constexpr int kInline = 64;
+  int size_;
+  std::array<T, kInline> inline_;
+  std::vector<T> heap_;
+};
+
+}  // namespace bvhlab::glsl
