@@ -15,6 +15,7 @@ namespace bvhlab {
 // Defined in builders/<name>.cpp.
 Bvh buildMedianBvh(const BuildInput&, const BuildOptions&);
 Bvh buildSahBinnedBvh(const BuildInput&, const BuildOptions&);
+Bvh buildSahSweepBvh(const BuildInput&, const BuildOptions&);
 Bvh buildEmbreeBvh(const BuildInput&, const BuildOptions&);
 Bvh buildEmbreeLowBvh(const BuildInput&, const BuildOptions&);
 
@@ -23,6 +24,7 @@ const std::vector<BuilderInfo>& builders() {
       {"median", "complete binary tree, object-median splits on the longest axis, full leaves",
        buildMedianBvh},
       {"sah-binned", "binned SAH (options.bins bins per axis), median fallback", buildSahBinnedBvh},
+      {"sah-sweep", "full-sweep SAH: exact best object split over centroids sorted on all axes", buildSahSweepBvh},
       {"embree", "Embree 3 rtcBuildBVH, quality MEDIUM (the reference)", buildEmbreeBvh},
       {"embree-low", "Embree 3 rtcBuildBVH, quality LOW (Morton codes)", buildEmbreeLowBvh},
   };

@@ -1,14 +1,21 @@
 // Binned SAH builder (Wald 2007, "On fast Construction of SAH-based Bounding Volume Hierarchies"):
 // at each node the centroids are dropped into equal-width bins on each axis in one pass, the SAH is
-// evaluated at every bin boundary, and the references are partitioned in place. Nodes hold their
-// box; the children's boxes come out of the bins, their centroid bounds out of the partition pass,
-// so no node rescans its primitives. Top levels run sequentially, subtrees below the fixed cut
-// (build_util.hpp) on threads; the tree does not depend on the thread count.
+// evaluated at every bin boundary, and the references are partitioned in place. A node's children
+// get their boxes from the bins and their centroid bounds from the partition pass, so no node
+// rescans its primitives, and nothing is allocated per node. Top levels run sequentially, subtrees
+// below the fixed cut (build_util.hpp) on threads; the tree does not depend on the thread count.
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "builders/build_util.hpp"
 
@@ -16,63 +23,123 @@ namespace bvhlab {
 
 namespace {
 
-using detail::PrimRef;
-
 // Bin count default, measured on bunny00 (75,408 triangles, leaf 4, Ct = Ci = 1; single thread):
 //    bins   SAH cost   build ms
 //       8     TODO
 //      16
 //      32
 //      64
-constexpr uint32_t kDefaultBins = 16;
+constexpr uint32_t kDefaultBins = 32;
 constexpr uint32_t kMaxBins = 256;
+constexpr float kInf = std::numeric_limits<float>::infinity();
 
-struct Bin {
-  Aabb box;
-  uint32_t count = 0;
+// Four floats with the handful of operations binning needs: SSE where the target has it, a plain
+// loop elsewhere. (GCC does not vectorise the loop form itself: std::min/max on floats are not
+// min/max instructions to it without -ffinite-math-only.) No NaN ever reaches these: inputs are
+// validated finite, and lane 3 holds 0 or +-inf padding that no decision reads.
+struct alignas(16) F4 {
+#if defined(__SSE2__)
+  __m128 v;
+  static F4 load(const float* p) { return {_mm_load_ps(p)}; }
+  static F4 set(float x, float y, float z, float w) { return {_mm_setr_ps(x, y, z, w)}; }
+  void store(float* p) const { _mm_store_ps(p, v); }
+  friend F4 min(F4 a, F4 b) { return {_mm_min_ps(a.v, b.v)}; }
+  friend F4 max(F4 a, F4 b) { return {_mm_max_ps(a.v, b.v)}; }
+  friend F4 operator-(F4 a, F4 b) { return {_mm_sub_ps(a.v, b.v)}; }
+  friend F4 operator*(F4 a, F4 b) { return {_mm_mul_ps(a.v, b.v)}; }
+  // Truncation toward zero of values in [0, 2^31).
+  void truncate(int32_t* out) const { _mm_store_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(v)); }
+#else
+  float v[4];
+  static F4 load(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
+  static F4 set(float x, float y, float z, float w) { return {{x, y, z, w}}; }
+  void store(float* p) const { std::memcpy(p, v, sizeof v); }
+  template <class Op>
+  static F4 map(F4 a, F4 b, Op op) { return {{op(a.v[0], b.v[0]), op(a.v[1], b.v[1]), op(a.v[2], b.v[2]), op(a.v[3], b.v[3])}}; }
+  friend F4 min(F4 a, F4 b) { return map(a, b, [](float x, float y) { return x < y ? x : y; }); }
+  friend F4 max(F4 a, F4 b) { return map(a, b, [](float x, float y) { return x > y ? x : y; }); }
+  friend F4 operator-(F4 a, F4 b) { return map(a, b, [](float x, float y) { return x - y; }); }
+  friend F4 operator*(F4 a, F4 b) { return map(a, b, [](float x, float y) { return x * y; }); }
+  void truncate(int32_t* out) const { for (int k = 0; k < 4; ++k) out[k] = int32_t(v[k]); }
+#endif
+  float operator[](int k) const {
+    alignas(16) float f[4];
+    store(f);
+    return f[k];
+  }
+};
+
+F4 point(const glm::vec3& p) { return F4::set(p.x, p.y, p.z, 0.0f); }
+glm::vec3 vec3(F4 a) {
+  alignas(16) float f[4];
+  a.store(f);
+  return {f[0], f[1], f[2]};
+}
+
+// A box as two F4 corners; starts empty (+inf/-inf).
+struct Box4 {
+  F4 lo = F4::set(kInf, kInf, kInf, kInf);
+  F4 hi = F4::set(-kInf, -kInf, -kInf, -kInf);
+
+  void grow(F4 l, F4 h) { lo = min(lo, l), hi = max(hi, h); }
+  void grow(const Box4& b) { grow(b.lo, b.hi); }
+  float halfArea() const {  // only on non-empty boxes
+    const glm::vec3 e = vec3(hi - lo);
+    return e.x * e.y + e.y * e.z + e.z * e.x;
+  }
+  Aabb aabb() const { return {vec3(lo), vec3(hi)}; }
+};
+
+// The reference the builder moves: box corners and centroid as F4 (lane 3 is 0), input index.
+struct Ref {
+  F4 lo, hi, centroid;
+  uint32_t id;
 };
 
 // Work item: a node whose box is set, its reference range and the bounds of its centroids.
 struct Task {
   uint32_t node, begin, end;
-  Aabb centroids;
+  Box4 centroids;
 };
 
 struct Split {
   int axis = -1;     // -1: no SAH split (all centroids in one bin on every axis)
   uint32_t bin = 0;  // left side = bins 0..bin
   double cost = 0;   // Ci * (A_L N_L + A_R N_R), without the node's own traversal term
-  Aabb left, right;
-  uint32_t leftCount = 0;
+  Box4 left, right;
 };
 
-// Maps centroids to bins over [origin, origin + extent). An axis whose extent is zero (or so small
-// that bins / extent overflows) cannot be binned and is skipped; that is the zero-extent guard.
+// Maps centroids to bins over [origin, origin + extent): bin = min((c - origin) * scale, bins - 1),
+// truncated. An axis whose extent is zero (or so small that bins / extent overflows) cannot be binned
+// and is skipped (its scale is 0: everything lands in bin 0); that is the zero-extent guard. Inputs
+// are finite and c >= origin, so the value is finite and in [0, bins - 1] before truncation. Binning
+// and partitioning both go through binsOf(), so they always agree on a reference's bin.
 struct BinMapping {
-  glm::vec3 origin, scale;
+  F4 origin, scale, last;
   std::array<bool, 3> usable;
-  uint32_t bins;
 
-  BinMapping(const Aabb& centroids, uint32_t binCount) : origin(centroids.min), bins(binCount) {
-    const glm::vec3 extent = centroids.extent();
+  BinMapping(const Box4& centroids, uint32_t bins) : origin(centroids.lo) {
+    const glm::vec3 extent = vec3(centroids.hi - centroids.lo);
+    float s[3];
     for (int a = 0; a < 3; ++a) {
-      const float s = float(bins) / extent[a];
-      usable[a] = extent[a] > 0.0f && std::isfinite(s);
-      scale[a] = usable[a] ? s : 0.0f;
+      s[a] = float(bins) / extent[a];
+      usable[a] = extent[a] > 0.0f && std::isfinite(s[a]);
+      if (!usable[a]) s[a] = 0.0f;
     }
+    scale = F4::set(s[0], s[1], s[2], 0.0f);
+    const float lastBin = float(bins - 1);
+    last = F4::set(lastBin, lastBin, lastBin, lastBin);
   }
   bool anyUsable() const { return usable[0] || usable[1] || usable[2]; }
-  // Inputs are finite (validated) and c >= origin, so the product is finite and >= 0; the maximum
-  // centroid lands at ~bins and is clamped into the last bin.
-  uint32_t binOf(const glm::vec3& c, int axis) const {
-    return std::min(uint32_t((c[axis] - origin[axis]) * scale[axis]), bins - 1);
-  }
+  void binsOf(F4 centroid, int32_t* bin) const { min((centroid - origin) * scale, last).truncate(bin); }
 };
 
 class BinnedBuilder {
  public:
-  BinnedBuilder(std::vector<PrimRef>& refs, const BuildOptions& options, uint32_t bins)
-      : refs_(refs), options_(options), bins_(bins) {}
+  BinnedBuilder(std::vector<Ref>& refs, const BuildOptions& options, uint32_t bins)
+      : refs_(refs), options_(options), bins_(bins) {
+    for (auto& counts : counts_) counts.fill(0);
+  }
 
   // Processes `root` and its descendants into `nodes`. Nodes whose range size lies in
   // (deferMin, deferMax] are not processed but appended to `deferred` (deferMax = 0: none).
@@ -98,7 +165,6 @@ class BinnedBuilder {
   // Makes nodes[task.node] a leaf or splits it, filling `children`. Returns false for a leaf.
   bool splitNode(std::vector<BvhNode>& nodes, const Task& task, Task children[2]) {
     const uint32_t n = task.end - task.begin;
-    const Aabb box = nodes[task.node].bounds;
     if (n == 1) return makeLeaf(nodes[task.node], task);
 
     const BinMapping mapping(task.centroids, bins_);
@@ -106,12 +172,12 @@ class BinnedBuilder {
     if (mapping.anyUsable()) split = findSplit(task, mapping);
 
     const CostModel& c = options_.cost;
-    const double area = box.halfArea();
+    const double area = nodes[task.node].bounds.halfArea();
     const bool splitWins = split.axis >= 0 && c.traversalCost * area + split.cost < c.intersectionCost * area * n;
     if (!splitWins && n <= options_.maxLeafSize) return makeLeaf(nodes[task.node], task);
 
     uint32_t mid;
-    Aabb leftBox, rightBox, leftCentroids, rightCentroids;
+    Box4 leftBox, rightBox, leftCentroids, rightCentroids;
     if (splitWins) {
       mid = partition(task, mapping, split, leftCentroids, rightCentroids);
       leftBox = split.left;
@@ -120,16 +186,14 @@ class BinnedBuilder {
       // Median fallback: no SAH split beats a leaf (or none exists: all centroids equal), but the
       // node is over the leaf size limit. Halving bounds the depth by log2(n) from here.
       mid = task.begin + n / 2;
-      std::span<PrimRef> range(refs_.data() + task.begin, n);
-      detail::objectMedianSplit(range, n / 2, detail::longestAxis(task.centroids.extent()));
-      const detail::RangeBounds l = detail::rangeBounds(range.first(n / 2));
-      const detail::RangeBounds r = detail::rangeBounds(range.subspan(n / 2));
-      leftBox = l.box, rightBox = r.box, leftCentroids = l.centroids, rightCentroids = r.centroids;
+      medianSplit(task, detail::longestAxis(vec3(task.centroids.hi - task.centroids.lo)));
+      bounds(task.begin, mid, leftBox, leftCentroids);
+      bounds(mid, task.end, rightBox, rightCentroids);
     }
 
     const uint32_t left = uint32_t(nodes.size());
-    nodes.push_back({leftBox});
-    nodes.push_back({rightBox});
+    nodes.push_back({leftBox.aabb()});
+    nodes.push_back({rightBox.aabb()});
     BvhNode& node = nodes[task.node];
     node.left = left;
     node.right = left + 1;
@@ -149,66 +213,98 @@ class BinnedBuilder {
   // over its non-empty bins only (a boundary between empty bins repeats its neighbour's split, and
   // near the leaves most bins are empty). Bins are left cleared for the next node.
   Split findSplit(const Task& task, const BinMapping& mapping) {
+    alignas(16) int32_t bin[4];
     for (uint32_t i = task.begin; i < task.end; ++i) {
-      const PrimRef& r = refs_[i];
+      const Ref& r = refs_[i];
+      mapping.binsOf(r.centroid, bin);
       for (int a = 0; a < 3; ++a) {
-        Bin& bin = binsByAxis_[a][mapping.binOf(r.centroid, a)];
-        bin.box.grow(r.box);
-        ++bin.count;
+        boxes_[a][bin[a]].grow(r.lo, r.hi);
+        ++counts_[a][bin[a]];
       }
     }
     const double ci = options_.cost.intersectionCost;
     Split best;
     for (int a = 0; a < 3; ++a) {
-      Bin* bins = binsByAxis_[a].data();
+      Box4* boxes = boxes_[a].data();
+      uint32_t* counts = counts_[a].data();
       uint32_t used = 0;  // non-empty bins, in order, in occupied_[0, used)
-      for (uint32_t b = 0; b < bins_; ++b)
-        if (bins[b].count) occupied_[used++] = b;
+      for (uint32_t b = 0; b < bins_; ++b) {
+        occupied_[used] = b;
+        used += counts[b] != 0;
+      }
       if (mapping.usable[a]) {
         // Right sweep: cost and box of the right side starting at occupied bin k.
-        Aabb right;
+        Box4 right;
         uint32_t rightCount = 0;
         for (uint32_t k = used - 1; k > 0; --k) {
-          right.grow(bins[occupied_[k]].box);
-          rightCount += bins[occupied_[k]].count;
+          right.grow(boxes[occupied_[k]]);
+          rightCount += counts[occupied_[k]];
           rightCost_[k] = double(right.halfArea()) * rightCount;
           rightBox_[k] = right;
         }
-        Aabb left;
+        Box4 left;
         uint32_t leftCount = 0;
         for (uint32_t k = 0; k + 1 < used; ++k) {
-          left.grow(bins[occupied_[k]].box);
-          leftCount += bins[occupied_[k]].count;
+          left.grow(boxes[occupied_[k]]);
+          leftCount += counts[occupied_[k]];
           const double cost = ci * (double(left.halfArea()) * leftCount + rightCost_[k + 1]);
-          if (best.axis < 0 || cost < best.cost) best = {a, occupied_[k], cost, left, rightBox_[k + 1], leftCount};
+          if (best.axis < 0 || cost < best.cost) best = {a, occupied_[k], cost, left, rightBox_[k + 1]};
         }
       }
-      for (uint32_t k = 0; k < used; ++k) bins[occupied_[k]] = Bin{};
+      for (uint32_t k = 0; k < used; ++k) {
+        boxes[occupied_[k]] = Box4{};
+        counts[occupied_[k]] = 0;
+      }
     }
     return best;
   }
 
   // In-place two-sided partition by bin; collects the centroid bounds of both sides on the way.
-  uint32_t partition(const Task& task, const BinMapping& mapping, const Split& split, Aabb& leftCentroids,
-                     Aabb& rightCentroids) {
-    uint32_t i = task.begin, j = task.end;
+  uint32_t partition(const Task& task, const BinMapping& mapping, const Split& split, Box4& leftCentroids,
+                     Box4& rightCentroids) {
+    alignas(16) int32_t bin[4];
     const int axis = split.axis;
+    const int32_t last = int32_t(split.bin);
+    auto isLeft = [&](const Ref& r) {
+      mapping.binsOf(r.centroid, bin);
+      return bin[axis] <= last;
+    };
+    uint32_t i = task.begin, j = task.end;
     while (true) {
-      while (i < j && mapping.binOf(refs_[i].centroid, axis) <= split.bin) leftCentroids.grow(refs_[i++].centroid);
-      while (i < j && mapping.binOf(refs_[j - 1].centroid, axis) > split.bin) rightCentroids.grow(refs_[--j].centroid);
+      for (; i < j && isLeft(refs_[i]); ++i) leftCentroids.grow(refs_[i].centroid, refs_[i].centroid);
+      for (; i < j && !isLeft(refs_[j - 1]); --j) rightCentroids.grow(refs_[j - 1].centroid, refs_[j - 1].centroid);
       if (i >= j) break;
       std::swap(refs_[i], refs_[j - 1]);
     }
-    return i;  // == task.begin + split.leftCount
+    return i;
   }
 
-  std::vector<PrimRef>& refs_;
+  // The n/2 smallest references by (centroid on `axis`, input index) first: a total order, so the
+  // split does not depend on where equal centroids happen to sit.
+  void medianSplit(const Task& task, int axis) {
+    const uint32_t n = task.end - task.begin;
+    auto first = refs_.begin() + task.begin;
+    std::nth_element(first, first + n / 2, first + n, [axis](const Ref& a, const Ref& b) {
+      const float ca = a.centroid[axis], cb = b.centroid[axis];
+      return ca < cb || (ca == cb && a.id < b.id);
+    });
+  }
+
+  void bounds(uint32_t begin, uint32_t end, Box4& box, Box4& centroids) const {
+    for (uint32_t i = begin; i < end; ++i) {
+      box.grow(refs_[i].lo, refs_[i].hi);
+      centroids.grow(refs_[i].centroid, refs_[i].centroid);
+    }
+  }
+
+  std::vector<Ref>& refs_;
   const BuildOptions& options_;
   uint32_t bins_;
-  std::array<std::array<Bin, kMaxBins>, 3> binsByAxis_;  // all empty between nodes
+  std::array<std::array<Box4, kMaxBins>, 3> boxes_;      // all empty between nodes
+  std::array<std::array<uint32_t, kMaxBins>, 3> counts_;  // all zero between nodes
   std::array<uint32_t, kMaxBins> occupied_;
   std::array<double, kMaxBins> rightCost_;
-  std::array<Aabb, kMaxBins> rightBox_;
+  std::array<Box4, kMaxBins> rightBox_;
 };
 
 }  // namespace
@@ -218,19 +314,24 @@ Bvh buildSahBinnedBvh(const BuildInput& input, const BuildOptions& options) {
   if (bins < 2 || bins > kMaxBins)
     throw std::invalid_argument("sah-binned: bins = " + std::to_string(bins) + " is outside 2.." +
                                 std::to_string(kMaxBins));
-  std::vector<PrimRef> refs = detail::makePrimRefs(input);
-  const uint32_t n = uint32_t(refs.size());
-  const detail::RangeBounds all = detail::rangeBounds(refs);
+  const uint32_t n = uint32_t(input.boxes.size());
+  std::vector<Ref> refs(n);
+  Box4 box, centroids;
+  for (uint32_t i = 0; i < n; ++i) {
+    Ref& r = refs[i];
+    r = {point(input.boxes[i].min), point(input.boxes[i].max), point(input.centroids[i]), i};
+    box.grow(r.lo, r.hi);
+    centroids.grow(r.centroid, r.centroid);
+  }
 
   Bvh bvh;
   bvh.nodes.reserve(2 * size_t(n) - 1);
-  bvh.nodes.push_back({all.box});
+  bvh.nodes.push_back({box.aabb()});
 
   // Top levels: sequential, stopping at the fixed cut. Subtrees below it: one job each.
   std::vector<Task> deferred;
   BinnedBuilder(refs, options, bins)
-      .build(bvh.nodes, {0, 0, n, all.centroids}, detail::kParallelMinSubtree - 1, detail::parallelCutSize(n),
-             &deferred);
+      .build(bvh.nodes, {0, 0, n, centroids}, detail::kParallelMinSubtree - 1, detail::parallelCutSize(n), &deferred);
   std::vector<std::vector<BvhNode>> subtrees(deferred.size());
   detail::runJobs(deferred.size(), detail::resolveThreads(options.threads), [&](size_t k) {
     const Task& t = deferred[k];

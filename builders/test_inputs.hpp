@@ -1,0 +1,139 @@
+// Builder inputs for the builder tests and benchmarks (tests/test_builders.cpp,
+// experiments/bench/bench_builders.cpp): generated triangle soups and the bunny, as boxes + centroids.
+// Header-only and not used by the library itself: the mesh loader needs datasets/OpenMesh, which the
+// test and benchmark executables link.
+#pragma once
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "builders/bvh.hpp"
+
+#if __has_include("datasets/mesh_io.hpp")
+#include "datasets/mesh_io.hpp"
+#define BVHLAB_TEST_INPUTS_MESH_IO 1
+#else
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#endif
+
+namespace bvhlab::testing {
+
+// Triangles reduced to what a builder sees.
+struct PrimitiveSet {
+  std::string name;
+  std::vector<Aabb> boxes;
+  std::vector<glm::vec3> centroids;
+
+  void addTriangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
+    Aabb box;
+    box.grow(a);
+    box.grow(b);
+    box.grow(c);
+    boxes.push_back(box);
+    centroids.push_back((a + b + c) / 3.0f);
+  }
+  void addBox(const Aabb& box, const glm::vec3& centroid) {
+    boxes.push_back(box);
+    centroids.push_back(centroid);
+  }
+  size_t size() const { return boxes.size(); }
+  BuildInput input() const { return {boxes, centroids}; }
+};
+
+// `count` triangles of random orientation, centres uniform in the unit cube, edge lengths spread over
+// two orders of magnitude (0.002..0.2), so boxes overlap and vary in size.
+inline PrimitiveSet randomSoup(size_t count, uint32_t seed = 1) {
+  PrimitiveSet set{"random" + std::to_string(count)};
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f), signedUnit(-1.0f, 1.0f);
+  for (size_t i = 0; i < count; ++i) {
+    const glm::vec3 c(unit(rng), unit(rng), unit(rng));
+    const float size = 0.002f * std::pow(100.0f, unit(rng));
+    auto corner = [&] { return c + size * glm::vec3(signedUnit(rng), signedUnit(rng), signedUnit(rng)); };
+    const glm::vec3 a = corner(), b = corner(), d = corner();
+    set.addTriangle(a, b, d);
+  }
+  return set;
+}
+
+// A height field of nx * nz quads (2 triangles each) over [0,1]^2 with smooth bumps: the
+// well-behaved case, every triangle about the same size.
+inline PrimitiveSet gridSoup(uint32_t nx, uint32_t nz) {
+  PrimitiveSet set{"grid" + std::to_string(2 * nx * nz)};
+  auto p = [&](uint32_t i, uint32_t k) {
+    const float x = float(i) / float(nx), z = float(k) / float(nz);
+    return glm::vec3(x, 0.1f * std::sin(12.0f * x) * std::cos(9.0f * z), z);
+  };
+  for (uint32_t k = 0; k < nz; ++k)
+    for (uint32_t i = 0; i < nx; ++i) {
+      set.addTriangle(p(i, k), p(i + 1, k), p(i + 1, k + 1));
+      set.addTriangle(p(i, k), p(i + 1, k + 1), p(i, k + 1));
+    }
+  return set;
+}
+
+// A UV sphere of radius 1 with nu * nv quads (2 triangles each), its radius modulated by `bumps` so
+// it is "sphere-like" rather than a sphere. The pole rows have degenerate (zero-area) triangles.
+inline PrimitiveSet sphereSoup(uint32_t nu, uint32_t nv, float bumps = 0.0f) {
+  PrimitiveSet set{"sphere" + std::to_string(2 * nu * nv)};
+  const float pi = 3.14159265358979f;
+  auto p = [&](uint32_t i, uint32_t k) {
+    const float phi = 2.0f * pi * float(i % nu) / float(nu), theta = pi * float(k) / float(nv);
+    const float r = 1.0f + bumps * std::sin(7.0f * phi) * std::sin(5.0f * theta);
+    return r * glm::vec3(std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi));
+  };
+  for (uint32_t k = 0; k < nv; ++k)
+    for (uint32_t i = 0; i < nu; ++i) {
+      set.addTriangle(p(i, k), p(i + 1, k), p(i + 1, k + 1));
+      set.addTriangle(p(i, k), p(i + 1, k + 1), p(i, k + 1));
+    }
+  return set;
+}
+
+// `count` small triangles scattered on the plane y = 0 (the boxes have zero extent in y).
+inline PrimitiveSet planeSoup(size_t count, uint32_t seed = 2) {
+  PrimitiveSet set{"plane" + std::to_string(count)};
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f), small(-0.001f, 0.001f);
+  for (size_t i = 0; i < count; ++i) {
+    const glm::vec3 c(unit(rng), 0.0f, unit(rng));
+    set.addTriangle(c + glm::vec3(small(rng), 0.0f, small(rng)), c + glm::vec3(small(rng), 0.0f, small(rng)),
+                    c + glm::vec3(small(rng), 0.0f, small(rng)));
+  }
+  return set;
+}
+
+// The report's mesh. Returns an empty set when the file is missing (run `bash datasets/fetch.sh`).
+inline std::filesystem::path bunnyPath() {
+  return std::filesystem::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes/bunny00.off";
+}
+
+inline PrimitiveSet loadTriangles(const std::filesystem::path& path) {
+  PrimitiveSet set{path.stem().string()};
+  if (!std::filesystem::exists(path)) return set;
+#ifdef BVHLAB_TEST_INPUTS_MESH_IO
+  const Mesh mesh = loadMesh(path);
+  for (const glm::uvec3& t : mesh.triangles)
+    set.addTriangle(mesh.positions[t.x], mesh.positions[t.y], mesh.positions[t.z]);
+#else
+  OpenMesh::TriMesh_ArrayKernelT<> mesh;
+  if (!OpenMesh::IO::read_mesh(mesh, path.string())) throw std::runtime_error("cannot read " + path.string());
+  for (const auto& face : mesh.faces()) {
+    glm::vec3 v[3];
+    int k = 0;
+    for (const auto& vh : face.vertices()) {
+      const auto& q = mesh.point(vh);
+      v[k++] = glm::vec3(q[0], q[1], q[2]);
+    }
+    set.addTriangle(v[0], v[1], v[2]);
+  }
+#endif
+  return set;
+}
+
+}  // namespace bvhlab::testing
