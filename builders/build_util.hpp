@@ -1,6 +1,6 @@
-// Small pieces the top-down builders share: primitive references, range bounds, the object-median
-// split, and the fixed top-level task split that lets a builder run subtrees on threads while the
-// tree stays identical for any thread count.
+// What the top-down builders share: primitive references, range bounds, the object-median split, and
+// the driver (buildTopDown) that runs a builder's per-node step over the whole tree, on threads at the
+// top levels and for the subtrees below them, with a tree that is identical for any thread count.
 #pragma once
 #include <algorithm>
 #include <atomic>
@@ -59,35 +59,20 @@ inline void objectMedianSplit(std::span<PrimRef> refs, size_t mid, int axis) {
   });
 }
 
-// A node whose subtree is built as one unit: its index in Bvh::nodes (already holding its bounds) and
-// its primitive range [begin, end) in the builder's reference array.
-struct SubtreeTask {
-  uint32_t node = 0;
-  uint32_t begin = 0, end = 0;
-  uint32_t size() const { return end - begin; }
-};
-
-// Builders split their top levels sequentially and defer every node with at most this many primitives
-// (and more than kParallelMinSubtree) as an independent subtree. The cut depends on the input size
-// only, never on the thread count, so the tree and its node order are the same for any thread count.
-inline uint32_t parallelCutSize(size_t primitives) {
-  return uint32_t(std::max<size_t>(primitives / 16, 1));
-}
-constexpr uint32_t kParallelMinSubtree = 1024;  // below this a thread costs more than it saves
-
 inline unsigned resolveThreads(uint32_t requested) {
   if (requested) return requested;
   return std::max(1u, std::thread::hardware_concurrency());
 }
 
-// Runs job(i) for i in [0, count) on up to `threads` threads (the caller's included). Jobs are claimed
-// in index order; which thread runs which job never affects the results, which each job writes to its
-// own slot. The first exception thrown by a job is rethrown here.
+// Runs job(i) for i in [0, count) on up to `threads` threads (the caller's included), claiming jobs
+// in the order `order` gives (all indices when empty). Which thread runs which job never affects the
+// results: each job writes only its own slot. The first exception thrown by a job is rethrown here.
 template <class Job>
-void runJobs(size_t count, unsigned threads, Job&& job) {
+void runJobs(size_t count, unsigned threads, Job&& job, const std::vector<uint32_t>& order = {}) {
+  auto jobAt = [&](size_t i) { job(order.empty() ? i : order[i]); };
   threads = unsigned(std::min<size_t>(threads, count));
   if (threads <= 1) {
-    for (size_t i = 0; i < count; ++i) job(i);
+    for (size_t i = 0; i < count; ++i) jobAt(i);
     return;
   }
   std::atomic<size_t> next{0};
@@ -96,7 +81,7 @@ void runJobs(size_t count, unsigned threads, Job&& job) {
   auto worker = [&] {
     for (size_t i; !failed.load() && (i = next.fetch_add(1)) < count;) {
       try {
-        job(i);
+        jobAt(i);
       } catch (...) {
         if (!failed.exchange(true)) error = std::current_exception();
       }
@@ -109,19 +94,124 @@ void runJobs(size_t count, unsigned threads, Job&& job) {
   if (error) std::rethrow_exception(error);
 }
 
-// Appends a subtree built into its own node array (its root at local index 0) to `nodes`: the local
-// root replaces nodes[at], the rest go to the end with their child indices shifted.
-inline void spliceSubtree(std::vector<BvhNode>& nodes, uint32_t at, const std::vector<BvhNode>& local) {
-  const uint32_t shift = uint32_t(nodes.size()) - 1;  // local index k >= 1 lands at nodes.size() + k - 1
-  auto fix = [shift](BvhNode n) {
-    if (!n.isLeaf()) {
-      n.left += shift;
-      n.right += shift;
+// ---- the top-down driver the builders share ------------------------------------------------------
+//
+// A builder supplies a Task type (with uint32_t members node, begin, end: the node's index and its
+// primitive range in the builder's own reference order, plus whatever the builder carries down, e.g.
+// centroid bounds) and a stepper: `NodeStep<Task> step(const Task& task, const Aabb& box)` decides
+// leaf or split for a node whose box is `box`, partitions the task's range in place, and returns the
+// children's boxes and tasks (their `node` is filled in by the driver). Steppers of different tasks
+// may run concurrently (their ranges are disjoint); each thread gets its own stepper.
+
+template <class Task>
+struct NodeStep {
+  bool leaf = true;
+  Aabb childBox[2];
+  Task child[2];  // child[0] takes [task.begin, mid), child[1] [mid, task.end)
+};
+
+// Inputs below this size are built sequentially (threads cost more than they save). Above it, the
+// nodes bigger than n / kSubtreeFraction are processed level by level (each level's nodes as parallel
+// jobs), and every smaller node becomes an independent subtree job. Both thresholds depend on the
+// input size only, never on the thread count, so the tree and its node order are the same for any
+// thread count.
+constexpr uint32_t kParallelMinInput = 16384;
+constexpr uint32_t kSubtreeFraction = 16;
+
+template <class Task>
+void applyStep(std::vector<BvhNode>& nodes, Task& task, NodeStep<Task>& step) {
+  BvhNode& node = nodes[task.node];
+  if (step.leaf) {
+    node.first = task.begin;
+    node.count = task.end - task.begin;
+    return;
+  }
+  const uint32_t left = uint32_t(nodes.size());
+  node.left = left;
+  node.right = left + 1;
+  node.count = 0;
+  nodes.push_back({step.childBox[0]});
+  nodes.push_back({step.childBox[1]});
+  step.child[0].node = left;
+  step.child[1].node = left + 1;
+}
+
+// Depth-first, with an explicit stack (degenerate trees can be as deep as they have primitives).
+template <class Task, class Stepper>
+void buildSubtree(std::vector<BvhNode>& nodes, const Task& root, Stepper& stepper) {
+  std::vector<Task> stack{root};
+  while (!stack.empty()) {
+    Task task = stack.back();
+    stack.pop_back();
+    NodeStep<Task> step = stepper.step(task, nodes[task.node].bounds);
+    applyStep(nodes, task, step);
+    if (step.leaf) continue;
+    stack.push_back(step.child[1]);
+    stack.push_back(step.child[0]);
+  }
+}
+
+// Builds the whole tree over [root.begin, root.end) (root.begin == 0) and returns its nodes (root
+// first). `makeStepper()` makes one stepper per job.
+template <class Task, class MakeStepper>
+std::vector<BvhNode> buildTopDown(const Aabb& rootBox, Task root, unsigned threads, MakeStepper&& makeStepper) {
+  const uint32_t n = root.end - root.begin;
+  std::vector<BvhNode> nodes;
+  nodes.reserve(2 * size_t(n) - 1);
+  nodes.push_back({rootBox});
+  root.node = 0;
+  if (n < kParallelMinInput) {
+    auto stepper = makeStepper();
+    buildSubtree(nodes, root, stepper);
+    return nodes;
+  }
+
+  const uint32_t cut = n / kSubtreeFraction;
+  std::vector<Task> level{root}, subtrees;
+  while (!level.empty()) {
+    std::vector<NodeStep<Task>> steps(level.size());
+    runJobs(level.size(), threads, [&](size_t k) {
+      auto stepper = makeStepper();
+      steps[k] = stepper.step(level[k], nodes[level[k].node].bounds);
+    });
+    std::vector<Task> next;
+    for (size_t k = 0; k < level.size(); ++k) {
+      applyStep(nodes, level[k], steps[k]);
+      if (steps[k].leaf) continue;
+      for (const Task& child : steps[k].child) (child.end - child.begin <= cut ? subtrees : next).push_back(child);
     }
-    return n;
-  };
-  nodes[at] = fix(local[0]);
-  for (size_t k = 1; k < local.size(); ++k) nodes.push_back(fix(local[k]));
+    level = std::move(next);
+  }
+
+  // Subtrees into their own arrays, biggest first (load balance), then spliced in creation order.
+  std::vector<std::vector<BvhNode>> local(subtrees.size());
+  std::vector<uint32_t> order(subtrees.size());
+  for (uint32_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    return subtrees[a].end - subtrees[a].begin > subtrees[b].end - subtrees[b].begin;
+  });
+  runJobs(
+      subtrees.size(), threads,
+      [&](size_t k) {
+        Task task = subtrees[k];
+        local[k].reserve(2 * size_t(task.end - task.begin) - 1);
+        local[k].push_back(nodes[task.node]);
+        task.node = 0;
+        auto stepper = makeStepper();
+        buildSubtree(local[k], task, stepper);
+      },
+      order);
+  for (size_t k = 0; k < subtrees.size(); ++k) {
+    // Local index j >= 1 lands at nodes.size() + j - 1; the local root replaces its placeholder.
+    const uint32_t shift = uint32_t(nodes.size()) - 1;
+    auto moved = [shift](BvhNode node) {
+      if (!node.isLeaf()) node.left += shift, node.right += shift;
+      return node;
+    };
+    nodes[subtrees[k].node] = moved(local[k][0]);
+    for (size_t j = 1; j < local[k].size(); ++j) nodes.push_back(moved(local[k][j]));
+  }
+  return nodes;
 }
 
 }  // namespace bvhlab::detail

@@ -16,8 +16,8 @@ namespace {
 using detail::PrimRef;
 
 // Leaves of the left subtree of a complete binary tree with `leaves` >= 2 leaves. With
-// h = floor(log2 leaves), the level-h nodes of which the leftmost (leaves - 2^h) are split once more:
-// half of the 2^h level-h positions are on the left, and the split ones fill from the left.
+// h = floor(log2 leaves), the leftmost (leaves - 2^h) of the 2^h level-h positions are split once
+// more; half of the level-h positions are in the left subtree, and the split ones fill from the left.
 uint64_t leftLeaves(uint64_t leaves) {
   const uint64_t full = std::bit_floor(leaves);  // 2^h
   const uint64_t half = full / 2;                // level-h positions in the left subtree
@@ -27,7 +27,34 @@ uint64_t leftLeaves(uint64_t leaves) {
 
 struct Task {
   uint32_t node, begin, end;
-  uint64_t leaves;
+  uint64_t leaves;  // leaves of this subtree
+  Aabb centroids;
+};
+
+class MedianStepper {
+ public:
+  MedianStepper(std::vector<PrimRef>& refs, uint32_t leafSize) : refs_(refs), leafSize_(leafSize) {}
+
+  detail::NodeStep<Task> step(const Task& task, const Aabb&) {
+    detail::NodeStep<Task> step;
+    if (task.leaves == 1) return step;
+    const uint64_t leftLeafCount = leftLeaves(task.leaves);
+    const uint32_t mid = uint32_t(leftLeafCount * leafSize_);  // < range size: the right side has >= 1 leaf
+    std::span<PrimRef> range(refs_.data() + task.begin, task.end - task.begin);
+    detail::objectMedianSplit(range, mid, detail::longestAxis(task.centroids.extent()));
+    const detail::RangeBounds left = detail::rangeBounds(range.first(mid));
+    const detail::RangeBounds right = detail::rangeBounds(range.subspan(mid));
+    step.leaf = false;
+    step.childBox[0] = left.box;
+    step.childBox[1] = right.box;
+    step.child[0] = {0, task.begin, task.begin + mid, leftLeafCount, left.centroids};
+    step.child[1] = {0, task.begin + mid, task.end, task.leaves - leftLeafCount, right.centroids};
+    return step;
+  }
+
+ private:
+  std::vector<PrimRef>& refs_;
+  uint32_t leafSize_;
 };
 
 }  // namespace
@@ -35,37 +62,13 @@ struct Task {
 Bvh buildMedianBvh(const BuildInput& input, const BuildOptions& options) {
   std::vector<PrimRef> refs = detail::makePrimRefs(input);
   const uint32_t n = uint32_t(refs.size());
-  const uint64_t leafSize = options.maxLeafSize;
+  const uint32_t leafSize = options.maxLeafSize;
+  const detail::RangeBounds all = detail::rangeBounds(refs);
 
   Bvh bvh;
-  bvh.nodes.reserve(2 * size_t(n) - 1);
-  bvh.nodes.push_back({});
-  std::vector<Task> stack{{0, 0, n, (n + leafSize - 1) / leafSize}};
-  while (!stack.empty()) {
-    const Task task = stack.back();
-    stack.pop_back();
-    std::span<PrimRef> range(refs.data() + task.begin, task.end - task.begin);
-    const detail::RangeBounds bounds = detail::rangeBounds(range);
-    BvhNode& node = bvh.nodes[task.node];
-    node.bounds = bounds.box;
-    if (task.leaves == 1) {
-      node.first = task.begin;
-      node.count = task.end - task.begin;
-      continue;
-    }
-    const uint64_t leftLeafCount = leftLeaves(task.leaves);
-    const uint32_t mid = uint32_t(leftLeafCount * leafSize);  // < range.size(): the right side has >= 1 leaf
-    detail::objectMedianSplit(range, mid, detail::longestAxis(bounds.centroids.extent()));
-    const uint32_t left = uint32_t(bvh.nodes.size());
-    node.left = left;
-    node.right = left + 1;
-    node.count = 0;
-    bvh.nodes.push_back({});
-    bvh.nodes.push_back({});
-    stack.push_back({left + 1, task.begin + mid, task.end, task.leaves - leftLeafCount});
-    stack.push_back({left, task.begin, task.begin + mid, leftLeafCount});
-  }
-
+  bvh.nodes = detail::buildTopDown(all.box, Task{0, 0, n, (uint64_t(n) + leafSize - 1) / leafSize, all.centroids},
+                                   detail::resolveThreads(options.threads),
+                                   [&] { return MedianStepper(refs, leafSize); });
   bvh.primIndices.resize(n);
   for (uint32_t i = 0; i < n; ++i) bvh.primIndices[i] = refs[i].id;
   return bvh;

@@ -2,10 +2,11 @@
 // at each node the centroids are dropped into equal-width bins on each axis in one pass, the SAH is
 // evaluated at every bin boundary, and the references are partitioned in place. A node's children
 // get their boxes from the bins and their centroid bounds from the partition pass, so no node
-// rescans its primitives, and nothing is allocated per node. Top levels run sequentially, subtrees
-// below the fixed cut (build_util.hpp) on threads; the tree does not depend on the thread count.
+// rescans its primitives, and nothing is allocated per node. Threads: build_util.hpp's driver (the
+// tree does not depend on the thread count).
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -134,47 +135,27 @@ struct BinMapping {
   void binsOf(F4 centroid, int32_t* bin) const { min((centroid - origin) * scale, last).truncate(bin); }
 };
 
-class BinnedBuilder {
+class BinnedStepper {
  public:
-  BinnedBuilder(std::vector<Ref>& refs, const BuildOptions& options, uint32_t bins)
+  BinnedStepper(std::vector<Ref>& refs, const BuildOptions& options, uint32_t bins)
       : refs_(refs), options_(options), bins_(bins) {
     for (auto& counts : counts_) counts.fill(0);
   }
 
-  // Processes `root` and its descendants into `nodes`. Nodes whose range size lies in
-  // (deferMin, deferMax] are not processed but appended to `deferred` (deferMax = 0: none).
-  void build(std::vector<BvhNode>& nodes, const Task& root, uint32_t deferMin, uint32_t deferMax,
-             std::vector<Task>* deferred) {
-    std::vector<Task> stack{root};
-    while (!stack.empty()) {
-      Task task = stack.back();
-      stack.pop_back();
-      const uint32_t n = task.end - task.begin;
-      if (task.node != root.node && n > deferMin && n <= deferMax) {
-        deferred->push_back(task);
-        continue;
-      }
-      Task children[2];
-      if (!splitNode(nodes, task, children)) continue;
-      stack.push_back(children[1]);
-      stack.push_back(children[0]);
-    }
-  }
-
- private:
-  // Makes nodes[task.node] a leaf or splits it, filling `children`. Returns false for a leaf.
-  bool splitNode(std::vector<BvhNode>& nodes, const Task& task, Task children[2]) {
+  // Leaf, or a split of the task's range (partitioned in place) with the children's boxes.
+  detail::NodeStep<Task> step(const Task& task, const Aabb& box) {
+    detail::NodeStep<Task> step;
     const uint32_t n = task.end - task.begin;
-    if (n == 1) return makeLeaf(nodes[task.node], task);
+    if (n == 1) return step;
 
     const BinMapping mapping(task.centroids, bins_);
     Split split;
     if (mapping.anyUsable()) split = findSplit(task, mapping);
 
     const CostModel& c = options_.cost;
-    const double area = nodes[task.node].bounds.halfArea();
+    const double area = box.halfArea();
     const bool splitWins = split.axis >= 0 && c.traversalCost * area + split.cost < c.intersectionCost * area * n;
-    if (!splitWins && n <= options_.maxLeafSize) return makeLeaf(nodes[task.node], task);
+    if (!splitWins && n <= options_.maxLeafSize) return step;
 
     uint32_t mid;
     Box4 leftBox, rightBox, leftCentroids, rightCentroids;
@@ -190,28 +171,19 @@ class BinnedBuilder {
       bounds(task.begin, mid, leftBox, leftCentroids);
       bounds(mid, task.end, rightBox, rightCentroids);
     }
-
-    const uint32_t left = uint32_t(nodes.size());
-    nodes.push_back({leftBox.aabb()});
-    nodes.push_back({rightBox.aabb()});
-    BvhNode& node = nodes[task.node];
-    node.left = left;
-    node.right = left + 1;
-    node.count = 0;
-    children[0] = {left, task.begin, mid, leftCentroids};
-    children[1] = {left + 1, mid, task.end, rightCentroids};
-    return true;
+    step.leaf = false;
+    step.childBox[0] = leftBox.aabb();
+    step.childBox[1] = rightBox.aabb();
+    step.child[0] = {0, task.begin, mid, leftCentroids};
+    step.child[1] = {0, mid, task.end, rightCentroids};
+    return step;
   }
 
-  static bool makeLeaf(BvhNode& node, const Task& task) {
-    node.first = task.begin;
-    node.count = task.end - task.begin;
-    return false;
-  }
-
-  // One pass over the references fills the bins of all three axes; then one sweep per usable axis
-  // over its non-empty bins only (a boundary between empty bins repeats its neighbour's split, and
-  // near the leaves most bins are empty). Bins are left cleared for the next node.
+ private:
+  // One pass over the references fills the bins of all three axes and marks the occupied ones; then
+  // one sweep per usable axis over its occupied bins only (a boundary between empty bins repeats its
+  // neighbour's split, and near the leaves most bins are empty). Bins are left cleared for the next
+  // node, so nothing here costs O(bins) per node except the occupancy words.
   Split findSplit(const Task& task, const BinMapping& mapping) {
     alignas(16) int32_t bin[4];
     for (uint32_t i = task.begin; i < task.end; ++i) {
@@ -220,6 +192,7 @@ class BinnedBuilder {
       for (int a = 0; a < 3; ++a) {
         boxes_[a][bin[a]].grow(r.lo, r.hi);
         ++counts_[a][bin[a]];
+        occupancy_[a][bin[a] >> 6] |= uint64_t(1) << (bin[a] & 63);
       }
     }
     const double ci = options_.cost.intersectionCost;
@@ -227,28 +200,32 @@ class BinnedBuilder {
     for (int a = 0; a < 3; ++a) {
       Box4* boxes = boxes_[a].data();
       uint32_t* counts = counts_[a].data();
-      uint32_t used = 0;  // non-empty bins, in order, in occupied_[0, used)
-      for (uint32_t b = 0; b < bins_; ++b) {
-        occupied_[used] = b;
-        used += counts[b] != 0;
+      uint32_t used = 0;  // occupied bins, in order, in occupied_[0, used)
+      for (uint32_t w = 0; w < (bins_ + 63) / 64; ++w) {
+        for (uint64_t bits = occupancy_[a][w]; bits; bits &= bits - 1)
+          occupied_[used++] = 64 * w + uint32_t(std::countr_zero(bits));
+        occupancy_[a][w] = 0;
       }
       if (mapping.usable[a]) {
-        // Right sweep: cost and box of the right side starting at occupied bin k.
+        // Right sweep: SAH term of the right side starting at occupied bin k.
         Box4 right;
         uint32_t rightCount = 0;
         for (uint32_t k = used - 1; k > 0; --k) {
           right.grow(boxes[occupied_[k]]);
           rightCount += counts[occupied_[k]];
           rightCost_[k] = double(right.halfArea()) * rightCount;
-          rightBox_[k] = right;
         }
         Box4 left;
-        uint32_t leftCount = 0;
+        uint32_t leftCount = 0, bestK = used;
         for (uint32_t k = 0; k + 1 < used; ++k) {
           left.grow(boxes[occupied_[k]]);
           leftCount += counts[occupied_[k]];
           const double cost = ci * (double(left.halfArea()) * leftCount + rightCost_[k + 1]);
-          if (best.axis < 0 || cost < best.cost) best = {a, occupied_[k], cost, left, rightBox_[k + 1]};
+          if (best.axis < 0 || cost < best.cost) best.axis = a, best.bin = occupied_[k], best.cost = cost, bestK = k;
+        }
+        if (bestK < used) {  // this axis holds the best split so far: keep its children's boxes
+          best.left = best.right = Box4{};
+          for (uint32_t k = 0; k < used; ++k) (k <= bestK ? best.left : best.right).grow(boxes[occupied_[k]]);
         }
       }
       for (uint32_t k = 0; k < used; ++k) {
@@ -302,9 +279,10 @@ class BinnedBuilder {
   uint32_t bins_;
   std::array<std::array<Box4, kMaxBins>, 3> boxes_;      // all empty between nodes
   std::array<std::array<uint32_t, kMaxBins>, 3> counts_;  // all zero between nodes
+  static constexpr uint32_t kOccupancyWords = kMaxBins / 64;
+  std::array<std::array<uint64_t, kOccupancyWords>, 3> occupancy_{};  // all zero between nodes
   std::array<uint32_t, kMaxBins> occupied_;
   std::array<double, kMaxBins> rightCost_;
-  std::array<Box4, kMaxBins> rightBox_;
 };
 
 }  // namespace
@@ -325,23 +303,8 @@ Bvh buildSahBinnedBvh(const BuildInput& input, const BuildOptions& options) {
   }
 
   Bvh bvh;
-  bvh.nodes.reserve(2 * size_t(n) - 1);
-  bvh.nodes.push_back({box.aabb()});
-
-  // Top levels: sequential, stopping at the fixed cut. Subtrees below it: one job each.
-  std::vector<Task> deferred;
-  BinnedBuilder(refs, options, bins)
-      .build(bvh.nodes, {0, 0, n, centroids}, detail::kParallelMinSubtree - 1, detail::parallelCutSize(n), &deferred);
-  std::vector<std::vector<BvhNode>> subtrees(deferred.size());
-  detail::runJobs(deferred.size(), detail::resolveThreads(options.threads), [&](size_t k) {
-    const Task& t = deferred[k];
-    auto& local = subtrees[k];
-    local.reserve(2 * size_t(t.end - t.begin) - 1);
-    local.push_back(bvh.nodes[t.node]);
-    BinnedBuilder(refs, options, bins).build(local, {0, t.begin, t.end, t.centroids}, 0, 0, nullptr);
-  });
-  for (size_t k = 0; k < deferred.size(); ++k) detail::spliceSubtree(bvh.nodes, deferred[k].node, subtrees[k]);
-
+  bvh.nodes = detail::buildTopDown(box.aabb(), Task{0, 0, n, centroids}, detail::resolveThreads(options.threads),
+                                   [&] { return BinnedStepper(refs, options, bins); });
   bvh.primIndices.resize(n);
   for (uint32_t i = 0; i < n; ++i) bvh.primIndices[i] = refs[i].id;
   return bvh;

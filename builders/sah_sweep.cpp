@@ -20,42 +20,19 @@ struct Task {
   uint32_t node, begin, end;
 };
 
-class SweepBuilder {
+class SweepStepper {
  public:
   // orders[a]: primitive indices sorted by centroid on axis a (ties by index). The scratch arrays have
-  // one slot per primitive and are touched only inside a task's own range, so subtrees over disjoint
-  // ranges may run concurrently.
-  SweepBuilder(const BuildInput& input, const BuildOptions& options, std::array<std::vector<uint32_t>, 3>& orders,
+  // one slot per primitive and are touched only inside a task's own range (isLeft: at the task's
+  // primitives), so steppers of disjoint ranges may run concurrently.
+  SweepStepper(const BuildInput& input, const BuildOptions& options, std::array<std::vector<uint32_t>, 3>& orders,
                std::vector<double>& rightCost, std::vector<uint8_t>& isLeft, std::vector<uint32_t>& temp)
       : input_(input), options_(options), orders_(orders), rightCost_(rightCost), isLeft_(isLeft), temp_(temp) {}
 
-  // Processes `root` and its descendants into `nodes`; nodes with a range size in (deferMin, deferMax]
-  // (other than the root) are appended to `deferred` instead.
-  void build(std::vector<BvhNode>& nodes, const Task& root, uint32_t deferMin, uint32_t deferMax,
-             std::vector<Task>* deferred) {
-    std::vector<Task> stack{root};
-    while (!stack.empty()) {
-      const Task task = stack.back();
-      stack.pop_back();
-      const uint32_t n = task.end - task.begin;
-      if (task.node != root.node && n > deferMin && n <= deferMax) {
-        deferred->push_back(task);
-        continue;
-      }
-      Task children[2];
-      if (!splitNode(nodes, task, children)) continue;
-      stack.push_back(children[1]);
-      stack.push_back(children[0]);
-    }
-  }
-
- private:
-  const glm::vec3& centroid(uint32_t prim) const { return input_.centroids[prim]; }
-
-  bool splitNode(std::vector<BvhNode>& nodes, const Task& task, Task children[2]) {
+  detail::NodeStep<Task> step(const Task& task, const Aabb& box) {
+    detail::NodeStep<Task> step;
     const uint32_t n = task.end - task.begin;
-    const Aabb box = nodes[task.node].bounds;
-    if (n == 1) return makeLeaf(nodes, task);
+    if (n == 1) return step;
 
     // Best object split over the three sorted orders.
     int bestAxis = -1;
@@ -84,7 +61,7 @@ class SweepBuilder {
     const double area = box.halfArea();
     const bool splitWins =
         bestAxis >= 0 && c.traversalCost * area + c.intersectionCost * bestCost < c.intersectionCost * area * n;
-    if (!splitWins && n <= options_.maxLeafSize) return makeLeaf(nodes, task);
+    if (!splitWins && n <= options_.maxLeafSize) return step;
     if (!splitWins) {
       // Median fallback on the longest centroid axis (its order is already sorted); with all
       // centroids equal, that is a split of the index order in half.
@@ -94,29 +71,24 @@ class SweepBuilder {
 
     const uint32_t mid = task.begin + bestCount;
     const uint32_t* chosen = orders_[bestAxis].data();
-    Aabb leftBox, rightBox;
     for (uint32_t k = task.begin; k < mid; ++k) {
       isLeft_[chosen[k]] = 1;
-      leftBox.grow(input_.boxes[chosen[k]]);
+      step.childBox[0].grow(input_.boxes[chosen[k]]);
     }
     for (uint32_t k = mid; k < task.end; ++k) {
       isLeft_[chosen[k]] = 0;
-      rightBox.grow(input_.boxes[chosen[k]]);
+      step.childBox[1].grow(input_.boxes[chosen[k]]);
     }
     for (int a = 0; a < 3; ++a)
       if (a != bestAxis) stablePartition(orders_[a], task, mid);
-
-    const uint32_t left = uint32_t(nodes.size());
-    nodes.push_back({leftBox});
-    nodes.push_back({rightBox});
-    BvhNode& node = nodes[task.node];
-    node.left = left;
-    node.right = left + 1;
-    node.count = 0;
-    children[0] = {left, task.begin, mid};
-    children[1] = {left + 1, mid, task.end};
-    return true;
+    step.leaf = false;
+    step.child[0] = {0, task.begin, mid};
+    step.child[1] = {0, mid, task.end};
+    return step;
   }
+
+ private:
+  const glm::vec3& centroid(uint32_t prim) const { return input_.centroids[prim]; }
 
   // Left-marked indices first, both groups keeping their sorted order.
   void stablePartition(std::vector<uint32_t>& order, const Task& task, uint32_t mid) {
@@ -126,12 +98,6 @@ class SweepBuilder {
       temp_[isLeft_[prim] ? l++ : r++] = prim;
     }
     std::copy(temp_.begin() + task.begin, temp_.begin() + task.end, order.begin() + task.begin);
-  }
-
-  bool makeLeaf(std::vector<BvhNode>& nodes, const Task& task) {
-    nodes[task.node].first = task.begin;
-    nodes[task.node].count = task.end - task.begin;
-    return false;
   }
 
   const BuildInput& input_;
@@ -160,23 +126,12 @@ Bvh buildSahSweepBvh(const BuildInput& input, const BuildOptions& options) {
   std::vector<uint8_t> isLeft(n);
   std::vector<uint32_t> temp(n);
 
-  Bvh bvh;
-  bvh.nodes.reserve(2 * size_t(n) - 1);
   Aabb all;
   for (const Aabb& b : input.boxes) all.grow(b);
-  bvh.nodes.push_back({all});
-
-  std::vector<Task> deferred;
-  SweepBuilder(input, options, orders, rightCost, isLeft, temp)
-      .build(bvh.nodes, {0, 0, n}, detail::kParallelMinSubtree - 1, detail::parallelCutSize(n), &deferred);
-  std::vector<std::vector<BvhNode>> subtrees(deferred.size());
-  detail::runJobs(deferred.size(), threads, [&](size_t k) {
-    const Task& t = deferred[k];
-    subtrees[k].reserve(2 * size_t(t.end - t.begin) - 1);
-    subtrees[k].push_back(bvh.nodes[t.node]);
-    SweepBuilder(input, options, orders, rightCost, isLeft, temp).build(subtrees[k], {0, t.begin, t.end}, 0, 0, nullptr);
+  Bvh bvh;
+  bvh.nodes = detail::buildTopDown(all, Task{0, 0, n}, threads, [&] {
+    return SweepStepper(input, options, orders, rightCost, isLeft, temp);
   });
-  for (size_t k = 0; k < deferred.size(); ++k) detail::spliceSubtree(bvh.nodes, deferred[k].node, subtrees[k]);
 
   // Every node's range holds the same primitives in all three orders; leaves read them from any one.
   bvh.primIndices = std::move(orders[0]);

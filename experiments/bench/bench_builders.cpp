@@ -166,13 +166,17 @@ class RatioReporter : public benchmark::ConsoleReporter {
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
+    // Names are "builder/mesh[/...]".
+    auto meshOf = [](const std::string& name) {
+      const size_t a = name.find('/') + 1, b = name.find('/', a);
+      return name.substr(a, b == std::string::npos ? std::string::npos : b - a);
+    };
     std::map<std::string, const Result*> reference;  // mesh -> embree-raw
     for (const Result& r : results_)
-      if (r.name.rfind("embree-raw/", 0) == 0) reference[r.name.substr(r.name.find('/') + 1)] = &r;
+      if (r.name.rfind("embree-raw/", 0) == 0) reference[meshOf(r.name)] = &r;
     std::printf("\n%-40s %10s %10s %10s %10s\n", "vs embree-raw (MEDIUM)", "time ms", "x time", "SAH", "x SAH");
     for (const Result& r : results_) {
-      const std::string mesh = r.name.substr(r.name.find('/') + 1, r.name.find('/', r.name.find('/') + 1) - r.name.find('/') - 1);
-      const auto ref = reference.find(mesh);
+      const auto ref = reference.find(meshOf(r.name));
       if (ref == reference.end()) continue;
       std::printf("%-40s %10.2f %10.2f %10.3f %10.4f\n", r.name.c_str(), r.time, r.time / ref->second->time, r.sah,
                   r.sah / ref->second->sah);
