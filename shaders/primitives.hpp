@@ -282,13 +282,30 @@ inline float torusPoly(float k4, vec4 k, float u, float& deriv) {
   return v;
 }
 
-inline float torusRefine(float k4, vec4 k, float lo, float hi, float valueLo) {
+inline float torusDistance(vec3 P, vec3 e, vec2 radii, float& deriv) {
+  float rho = length(vec2(P.x, P.z));
+  vec2 q = vec2(rho - radii.x, P.y);
+  float qLen = length(q);
+  deriv = (q.x * (P.x * e.x + P.z * e.z) / rho + q.y * e.y) / qLen;
+  return qLen - radii.y;
+}
+
+constexpr int TORUS_DERIVATIVE = 0;
+constexpr int TORUS_QUARTIC = 1;
+constexpr int TORUS_DISTANCE = 2;
+
+inline float torusEval(int mode, vec4 k, vec3 p, vec3 e, vec2 radii, float u, float& deriv) {
+  if (mode == TORUS_DISTANCE) return torusDistance(p + u * e, e, radii, deriv);
+  return torusPoly(mode == TORUS_QUARTIC ? 1.0f : 0.0f, k, u, deriv);
+}
+
+inline float torusRefine(int mode, vec4 k, vec3 p, vec3 e, vec2 radii, float lo, float hi, float valueLo) {
   bool negativeLo = valueLo < 0.0f;
   float u = 0.5f * (lo + hi);
   float stepOld = hi - lo;
   for (int i = 0; i < TORUS_MAX_STEPS; ++i) {
     float deriv;
-    float v = torusPoly(k4, k, u, deriv);
+    float v = torusEval(mode, k, p, e, radii, u, deriv);
     if (v == 0.0f) break;
     if ((v < 0.0f) == negativeLo) {
       lo = u;
@@ -310,6 +327,16 @@ inline float torusRefine(float k4, vec4 k, float lo, float hi, float valueLo) {
   return u;
 }
 
+inline float torusRoot(vec4 c, vec3 p, vec3 e, vec2 radii, float lo, float hi, float fLo) {
+  if (radii.x > radii.y) {
+    float unused;
+    float gLo = torusDistance(p + lo * e, e, radii, unused);
+    float gHi = torusDistance(p + hi * e, e, radii, unused);
+    if ((gLo < 0.0f) != (gHi < 0.0f)) return torusRefine(TORUS_DISTANCE, c, p, e, radii, lo, hi, gLo);
+  }
+  return torusRefine(TORUS_QUARTIC, c, p, e, radii, lo, hi, fLo);
+}
+
 inline bool intersectTorus(Ray ray, vec2 radii, float tMin, float tMax, float& t, vec3& normal, vec2& uv) {
   t = 0.0f;
   normal = vec3(0.0f, 1.0f, 0.0f);
@@ -327,12 +354,14 @@ inline bool intersectTorus(Ray ray, vec2 radii, float tMin, float tMax, float& t
   float uc = -dot(o, e);
   vec3 p = o + uc * e;
   float pp = dot(p, p);
+  float pe = dot(p, e);
   float bound = 1.0f + TORUS_CLIP_MARGIN;
-  if (!(pp <= bound * bound)) return false;
+  float miss2 = pp - pe * pe;
+  if (!(miss2 <= bound * bound)) return false;
   float tc = uc * k;
-  float h = sqrt(bound * bound - pp);
-  float lo = -h;
-  float hi = h;
+  float h = sqrt(bound * bound - miss2);
+  float lo = -pe - h;
+  float hi = -pe + h;
   if (e.y != 0.0f) {
     float s0 = (-r - TORUS_CLIP_MARGIN - p.y) / e.y;
     float s1 = (r + TORUS_CLIP_MARGIN - p.y) / e.y;
@@ -344,7 +373,6 @@ inline bool intersectTorus(Ray ray, vec2 radii, float tMin, float tMax, float& t
   lo = max(lo, (tMin - tc) / k);
   hi = min(hi, (tMax - tc) / k);
   if (!(lo < hi)) return false;
-  float pe = dot(p, e);
   float R2 = R * R;
   float K = pp + R2 - r * r;
   vec4 c = vec4(K * K - 4.0f * R2 * (p.x * p.x + p.z * p.z),
@@ -373,10 +401,10 @@ inline bool intersectTorus(Ray ray, vec2 radii, float tMin, float tMax, float& t
   for (int i = 1; i < 4 && !found; ++i) {
     float dCur = torusPoly(0.0f, dc, bounds[i], unused);
     if ((dPrev < 0.0f) != (dCur < 0.0f)) {
-      float crit = torusRefine(0.0f, dc, bounds[i - 1], bounds[i], dPrev);
+      float crit = torusRefine(TORUS_DERIVATIVE, dc, p, e, vec2(R, r), bounds[i - 1], bounds[i], dPrev);
       float fCrit = torusPoly(1.0f, c, crit, unused);
       if ((fPrev < 0.0f) != (fCrit < 0.0f)) {
-        root = torusRefine(1.0f, c, uPrev, crit, fPrev);
+        root = torusRoot(c, p, e, vec2(R, r), uPrev, crit, fPrev);
         found = true;
       }
       uPrev = crit;
@@ -387,7 +415,7 @@ inline bool intersectTorus(Ray ray, vec2 radii, float tMin, float tMax, float& t
   if (!found) {
     float fHi = torusPoly(1.0f, c, hi, unused);
     if ((fPrev < 0.0f) != (fHi < 0.0f)) {
-      root = torusRefine(1.0f, c, uPrev, hi, fPrev);
+      root = torusRoot(c, p, e, vec2(R, r), uPrev, hi, fPrev);
       found = true;
     }
   }
