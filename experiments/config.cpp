@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <limits>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -11,6 +12,11 @@
 
 #include "builders/builder.hpp"
 #include "datasets/scene.hpp"  // InputError
+#include "experiments/generated_scenes.hpp"
+#if __has_include("traversal/kernels.hpp")
+#include "traversal/kernels.hpp"
+#define BVHLAB_HAVE_KERNEL_REGISTRY 1
+#endif
 
 namespace bvhlab {
 
@@ -122,8 +128,9 @@ RunSpec RunSpec::fromJson(const json& j) {
 KnownNames registeredNames() {
   KnownNames names;
   for (const BuilderInfo& b : builders()) names.builders.push_back(b.name);
-  // Kernel names are not checked up front yet: there is no kernel registry to ask (a bad kernel
-  // name fails its runs, which are recorded with the renderer's error).
+#ifdef BVHLAB_HAVE_KERNEL_REGISTRY
+  for (const KernelInfo& k : kernels()) names.kernels.push_back(k.name);
+#endif
   return names;
 }
 
@@ -238,6 +245,7 @@ class ConfigReader {
   AxisValue sceneValue(const toml::node& node, const std::string& key) const {
     AxisValue out;
     const toml::node* fileNode = &node;
+    const toml::node* generateNode = nullptr;
     std::string label;
     json value = json::object();
     if (node.is_table()) {
@@ -246,6 +254,13 @@ class ConfigReader {
       for (auto&& [k, v] : t) {
         const std::string sub = key + "." + std::string(k.str());
         if (k == "file") fileNode = &v;
+        else if (k == "generate") {
+          generateNode = &v;
+          value["generate"] = oneOf(v, sub, generatedMeshKinds(), "generator");
+        } else if (k == "triangles") {
+          // makeLargeMesh needs >= 100; the layout addresses at most 2^28 - 1 triangles.
+          value["triangles"] = integer(v, sub, 100, (int64_t(1) << 28) - 1);
+        } else if (k == "seed") value["seed"] = integer(v, sub, 0, std::numeric_limits<int64_t>::max());
         else if (k == "name") label = string(v, sub);
         else if (k == "eye" || k == "target" || k == "up") value[std::string(k.str())] = vec3(v, sub);
         else if (k == "fov") {
@@ -253,9 +268,22 @@ class ConfigReader {
           if (!(fov > 0.0 && fov < 180.0)) fail(v.source(), sub, "field of view must be in (0, 180) degrees");
           value["fov"] = fov;
         } else
-          fail(k.source(), sub, "unknown key; a scene table has file, name, eye, target, up, fov");
+          fail(k.source(), sub, "unknown key; a scene table has file or generate (+ triangles, seed), name, eye, "
+                                "target, up, fov");
       }
-      if (!fileNode) fail(node.source(), key, "a scene table needs `file`");
+      if (generateNode) {
+        if (fileNode) fail(fileNode->source(), key, "a scene has `file` or `generate`, not both");
+        if (!value.contains("triangles")) fail(generateNode->source(), key, "`generate` needs `triangles`");
+        if (!value.contains("seed")) value["seed"] = 1;
+        out.label = label.empty() ? value["generate"].get<std::string>() + "-" +
+                                        std::to_string(value["triangles"].get<int64_t>())
+                                  : label;
+        out.value = value;
+        return out;  // the file is written by the runner (generated_scenes.hpp)
+      }
+      if (value.contains("triangles") || value.contains("seed"))
+        fail(node.source(), key, "`triangles` and `seed` go with `generate`");
+      if (!fileNode) fail(node.source(), key, "a scene table needs `file` (or `generate`)");
     } else if (!node.is_string()) {
       fail(node.source(), key, "expected a scene/mesh file path or a table {file = ..., ...}, got " + typeName(node));
     }

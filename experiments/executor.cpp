@@ -40,7 +40,8 @@ std::string lastLine(const std::string& text) {
 std::vector<std::string> renderCommandLine(const fs::path& binary, const RunRequest& request) {
   const RunSpec& spec = request.spec;
   const AxisValue* scene = spec.axis("scene");
-  if (!scene) throw std::invalid_argument("run " + spec.key + " has no scene");
+  if (!scene || scene->file.empty())
+    throw std::invalid_argument("run " + spec.key + " has no scene file (a generated scene not written yet?)");
   const RunRender& r = spec.render;
   std::vector<std::string> argv = {binary.string(),
                                    "render",

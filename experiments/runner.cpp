@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "datasets/scene.hpp"  // InputError
+#include "experiments/generated_scenes.hpp"
 #include "experiments/process.hpp"
 #include "experiments/provenance.hpp"
 #include "experiments/sweep_dir.hpp"
@@ -80,11 +81,12 @@ class Progress {
 SweepOutcome runSweep(const RunOptions& options) {
   if (options.shardCount < 1 || options.shardIndex < 0 || options.shardIndex >= options.shardCount)
     throw InputError("--shard: need 0 <= I < N");
-  const ExperimentConfig config = options.names ? loadExperimentConfig(options.config, *options.names)
-                                                : loadExperimentConfig(options.config);
+  ExperimentConfig config = options.names ? loadExperimentConfig(options.config, *options.names)
+                                          : loadExperimentConfig(options.config);
   SweepDir dir{options.outDir.empty() ? fs::path("results") / config.name : options.outDir};
   fs::create_directories(dir.runs());
   fs::create_directories(dir.images());
+  materializeGeneratedScenes(config, dir.root);
 
   // The plan is rewritten on every invocation: an edited config keeps the runs whose keys survive.
   if (fs::exists(dir.plan())) {
@@ -93,7 +95,8 @@ SweepOutcome runSweep(const RunOptions& options) {
       std::cerr << "bvhlab run: note: " << config.file.string() << " changed since " << dir.plan().string()
                 << " was written; finished runs whose parameters are unchanged are kept\n";
   }
-  writePlan(dir, makePlan(config));
+  const json plan = makePlan(config);
+  writePlan(dir, plan);
 
   const std::optional<fs::path> sourceDir = findSourceDir();
   const std::string commit = gitCommit(sourceDir);
@@ -169,10 +172,10 @@ SweepOutcome runSweep(const RunOptions& options) {
       std::cerr << "bvhlab run: run " << run->index << " (" << run->describe() << ") failed: "
                 << record["error"].get<std::string>() << "\n";
     }
-    outcome.summary = writeResults(dir, &cache);
+    outcome.summary = writeResults(dir, plan, records, &cache);
   }
   progress.finish();
-  outcome.summary = writeResults(dir, &cache);
+  outcome.summary = writeResults(dir, plan, records, &cache);
   return outcome;
 }
 

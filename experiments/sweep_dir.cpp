@@ -18,7 +18,7 @@ namespace bvhlab {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-void writeFileAtomic(const fs::path& file, std::string_view contents) {
+void writeFileAtomic(const fs::path& file, std::string_view contents, bool durable) {
   if (file.has_parent_path()) fs::create_directories(file.parent_path());
   static std::atomic<unsigned> counter{0};
   const fs::path tmp = file.parent_path() / ("." + file.filename().string() + ".tmp." + std::to_string(::getpid()) +
@@ -37,8 +37,7 @@ void writeFileAtomic(const fs::path& file, std::string_view contents) {
     }
     done += size_t(n);
   }
-  // fsync before rename: otherwise a power cut could leave the new name pointing at an empty file.
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+  if ((durable && ::fsync(fd) != 0) || ::close(fd) != 0) {
     ::unlink(tmp.c_str());
     throw std::runtime_error("cannot flush " + tmp.string() + ": " + std::strerror(errno));
   }
@@ -67,7 +66,7 @@ json makePlan(const ExperimentConfig& config) {
   return plan;
 }
 
-void writePlan(const SweepDir& dir, const json& plan) { writeFileAtomic(dir.plan(), plan.dump(1) + "\n"); }
+void writePlan(const SweepDir& dir, const json& plan) { writeFileAtomic(dir.plan(), plan.dump(1) + "\n", false); }
 
 namespace {
 
@@ -103,7 +102,8 @@ std::map<std::string, json> readRecords(const SweepDir& dir) {
       json record = readJson(p);
       if (!record.is_object() || !record.contains("key") || !record.contains("status"))
         throw InputError(p.string() + ": not a run record");
-      records[record["key"].get<std::string>()] = std::move(record);
+      const std::string key = record["key"].get<std::string>();  // before the move below
+      records[key] = std::move(record);
     } catch (const std::exception& ex) {
       std::cerr << "bvhlab: warning: ignoring " << ex.what() << " (the run will be redone)\n";
     }
@@ -153,7 +153,8 @@ json flattenRecord(const json& record) {
     const std::string axis = a.at("axis");
     if (axis == "scene") {
       row["scene"] = a.at("label");
-      row["scene_file"] = a.at("value").at("file");
+      // As written in the config; a generated scene names the file the runner wrote.
+      row["scene_file"] = a.at("value").contains("file") ? a["value"]["file"] : a.value("file", json());
     } else if (axis == "builder") {
       row["builder"] = a.at("label");
       if (a.at("value").contains("bins")) row["bins"] = a["value"]["bins"];
@@ -244,9 +245,11 @@ void addImageError(const SweepDir& dir, json& row, const std::map<std::string, j
 }  // namespace
 
 json writeResults(const SweepDir& dir, ImageErrorCache* cache) {
-  const json plan = readPlan(dir);
-  const std::map<std::string, json> records = readRecords(dir);
+  return writeResults(dir, readPlan(dir), readRecords(dir), cache);
+}
 
+json writeResults(const SweepDir& dir, const json& plan, const std::map<std::string, json>& records,
+                  ImageErrorCache* cache) {
   std::set<std::string> planned;
   json rows = json::array();
   size_t ok = 0, failed = 0;
@@ -298,7 +301,7 @@ json writeResults(const SweepDir& dir, ImageErrorCache* cache) {
                     {"config_hashes", configHashes}}},
                   {"columns", columns},
                   {"rows", rows}};
-  writeFileAtomic(dir.root / "results.json", results.dump(1) + "\n");
+  writeFileAtomic(dir.root / "results.json", results.dump(1) + "\n", false);
 
   std::ostringstream csv;
   for (size_t i = 0; i < columns.size(); ++i) csv << (i ? "," : "") << columns[i];
@@ -310,7 +313,7 @@ json writeResults(const SweepDir& dir, ImageErrorCache* cache) {
     }
     csv << "\n";
   }
-  writeFileAtomic(dir.root / "results.csv", csv.str());
+  writeFileAtomic(dir.root / "results.csv", csv.str(), false);
   return summary;
 }
 

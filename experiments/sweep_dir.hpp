@@ -30,9 +30,11 @@ struct SweepDir {
   std::filesystem::path visitsImage(const std::string& key) const { return images() / (key + ".visits.png"); }
 };
 
-// Writes a temporary file beside `file`, flushes it to disk and renames it over `file`: a reader
-// (or a run after a kill) sees the old contents or the new, never a partial file.
-void writeFileAtomic(const std::filesystem::path& file, std::string_view contents);
+// Writes a temporary file beside `file` and renames it over `file`: a reader (or a run after a
+// kill) sees the old contents or the new, never a partial file. `durable` also fsyncs the data
+// before the rename, so a power cut cannot leave the new name on an empty file (run records need
+// it; derived files do not).
+void writeFileAtomic(const std::filesystem::path& file, std::string_view contents, bool durable = true);
 
 // plan.json: written by `run` before the first run starts.
 nlohmann::json makePlan(const ExperimentConfig& config);
@@ -49,6 +51,9 @@ using ImageErrorCache = std::map<std::pair<std::string, std::string>, nlohmann::
 // Regenerates results.json and results.csv from plan.json and runs/. Returns the summary object
 // (planned, ok, failed, pending, stale).
 nlohmann::json writeResults(const SweepDir& dir, ImageErrorCache* cache = nullptr);
+// The same from a plan and records already in memory (the runner calls this after every run).
+nlohmann::json writeResults(const SweepDir& dir, const nlohmann::json& plan,
+                            const std::map<std::string, nlohmann::json>& records, ImageErrorCache* cache);
 
 // results.csv columns, in order (renderer keys not listed here follow, sorted).
 const std::vector<std::string>& resultColumns();
