@@ -1,4 +1,5 @@
 // packBvh: any builder's Bvh -> the texel streams described in layout/layout.hpp.
+#include <bit>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -9,7 +10,13 @@ namespace bvhlab {
 
 namespace {
 
-uint32_t bits(float f) { return glm::floatBitsToUint(f); }
+// std::bit_cast, component by component: GLM's vector floatBitsToUint/uintBitsToFloat
+// reinterpret_cast between vector types, which breaks strict aliasing (GCC -O2 miscompiled them in
+// tests/test_layout.cpp).
+uint32_t bits(float f) { return std::bit_cast<uint32_t>(f); }
+glm::vec3 floats(const glm::uvec4& t) {
+  return {std::bit_cast<float>(t.x), std::bit_cast<float>(t.y), std::bit_cast<float>(t.z)};
+}
 
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error("packBvh: " + what); }
 
@@ -135,8 +142,8 @@ NodeRecord unpackNode(const PackedBvh& packed, uint32_t index) {
   const glm::uvec4 lo = packed.nodes[kNodeTexels * index + 0];
   const glm::uvec4 hi = packed.nodes[kNodeTexels * index + 1];
   NodeRecord r;
-  r.bmin = glm::uintBitsToFloat(glm::uvec3(lo));
-  r.bmax = glm::uintBitsToFloat(glm::uvec3(hi));
+  r.bmin = floats(lo);
+  r.bmax = floats(hi);
   r.a = lo.w & kIndexMask;
   r.escape = hi.w & kIndexMask;
   r.count = (lo.w >> 28) | ((hi.w >> 28) << 4);

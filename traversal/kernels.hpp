@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "shaders/common.hpp"
-#include "traversal/storage.hpp"
+#include "traversal/layout.hpp"  // the decoding mirrors (loadTriangle, loadAttributes, ...) for CPU tracers
 
 namespace bvhlab {
 

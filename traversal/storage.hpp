@@ -3,6 +3,7 @@
 // range throws std::out_of_range here (a kernel bug), where GLSL would read an undefined texel.
 #pragma once
 #include <array>
+#include <bit>
 #include <cstddef>
 #include <stdexcept>
 #include <string>
@@ -31,6 +32,16 @@ struct Storage {
     if (stackSize < 1) throw std::invalid_argument("BVH_STACK_SIZE must be >= 1, got " + std::to_string(stackSize));
   }
 };
+
+// GLSL's uintBitsToFloat / floatBitsToUint. GLM's vector versions reinterpret_cast between vector
+// types, which breaks strict aliasing: GCC -O2 miscompiled them (tests/test_layout.cpp). These
+// component-wise std::bit_cast overloads are found first in this namespace and win overload
+// resolution against GLM's templates.
+inline float uintBitsToFloat(uint v) { return std::bit_cast<float>(v); }
+inline vec2 uintBitsToFloat(uvec2 v) { return vec2(uintBitsToFloat(v.x), uintBitsToFloat(v.y)); }
+inline vec3 uintBitsToFloat(uvec3 v) { return vec3(uintBitsToFloat(v.x), uintBitsToFloat(v.y), uintBitsToFloat(v.z)); }
+inline uint floatBitsToUint(float v) { return std::bit_cast<uint>(v); }
+inline uvec3 floatBitsToUint(vec3 v) { return uvec3(floatBitsToUint(v.x), floatBitsToUint(v.y), floatBitsToUint(v.z)); }
 
 inline uvec4 fetchNode(const Storage& s, int texel) { return s.bvh->nodes.at(size_t(texel)); }
 inline uvec4 fetchTriangle(const Storage& s, int texel) { return s.bvh->triangles.at(size_t(texel)); }
