@@ -291,8 +291,9 @@ class ConfigReader {
     fs::path resolved = fs::path(written).is_absolute() ? fs::path(written) : dir_ / written;
     std::error_code ec;
     if (!fs::is_regular_file(resolved, ec))
-      fail(fileNode->source(), key, "scene/mesh file '" + written + "' not found (looked at " +
-                                        resolved.lexically_normal().string() + ")");
+      fail(fileNode->source(), key,
+           "scene/mesh file '" + written + "' not found (looked at " + resolved.lexically_normal().string() + ")" +
+               (written.find("datasets/cache") != std::string::npos ? "; run `bash datasets/fetch.sh` first" : ""));
     value["file"] = written;
     out.label = label.empty() ? fs::path(written).stem().string() : label;
     out.value = value;
