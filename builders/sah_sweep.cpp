@@ -38,7 +38,7 @@ class SweepStepper {
     int bestAxis = -1;
     uint32_t bestCount = 0;  // primitives on the left
     double bestCost = 0.0;
-    glm::vec3 centroidExtent;
+    glm::vec3 centroidExtent(0.0f);
     for (int a = 0; a < 3; ++a) {
       const uint32_t* order = orders_[a].data();
       centroidExtent[a] = centroid(order[task.end - 1])[a] - centroid(order[task.begin])[a];

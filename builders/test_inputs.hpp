@@ -48,7 +48,8 @@ struct PrimitiveSet {
 // `count` triangles of random orientation, centres uniform in the unit cube, edge lengths spread over
 // two orders of magnitude (0.002..0.2), so boxes overlap and vary in size.
 inline PrimitiveSet randomSoup(size_t count, uint32_t seed = 1) {
-  PrimitiveSet set{"random" + std::to_string(count)};
+  PrimitiveSet set;
+  set.name = "random" + std::to_string(count);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), signedUnit(-1.0f, 1.0f);
   for (size_t i = 0; i < count; ++i) {
@@ -64,7 +65,8 @@ inline PrimitiveSet randomSoup(size_t count, uint32_t seed = 1) {
 // A height field of nx * nz quads (2 triangles each) over [0,1]^2 with smooth bumps: the
 // well-behaved case, every triangle about the same size.
 inline PrimitiveSet gridSoup(uint32_t nx, uint32_t nz) {
-  PrimitiveSet set{"grid" + std::to_string(2 * nx * nz)};
+  PrimitiveSet set;
+  set.name = "grid" + std::to_string(2 * nx * nz);
   auto p = [&](uint32_t i, uint32_t k) {
     const float x = float(i) / float(nx), z = float(k) / float(nz);
     return glm::vec3(x, 0.1f * std::sin(12.0f * x) * std::cos(9.0f * z), z);
@@ -80,7 +82,8 @@ inline PrimitiveSet gridSoup(uint32_t nx, uint32_t nz) {
 // A UV sphere of radius 1 with nu * nv quads (2 triangles each), its radius modulated by `bumps` so
 // it is "sphere-like" rather than a sphere. The pole rows have degenerate (zero-area) triangles.
 inline PrimitiveSet sphereSoup(uint32_t nu, uint32_t nv, float bumps = 0.0f) {
-  PrimitiveSet set{"sphere" + std::to_string(2 * nu * nv)};
+  PrimitiveSet set;
+  set.name = "sphere" + std::to_string(2 * nu * nv);
   const float pi = 3.14159265358979f;
   auto p = [&](uint32_t i, uint32_t k) {
     const float phi = 2.0f * pi * float(i % nu) / float(nu), theta = pi * float(k) / float(nv);
@@ -97,7 +100,8 @@ inline PrimitiveSet sphereSoup(uint32_t nu, uint32_t nv, float bumps = 0.0f) {
 
 // `count` small triangles scattered on the plane y = 0 (the boxes have zero extent in y).
 inline PrimitiveSet planeSoup(size_t count, uint32_t seed = 2) {
-  PrimitiveSet set{"plane" + std::to_string(count)};
+  PrimitiveSet set;
+  set.name = "plane" + std::to_string(count);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), small(-0.001f, 0.001f);
   for (size_t i = 0; i < count; ++i) {
@@ -114,7 +118,8 @@ inline std::filesystem::path bunnyPath() {
 }
 
 inline PrimitiveSet loadTriangles(const std::filesystem::path& path) {
-  PrimitiveSet set{path.stem().string()};
+  PrimitiveSet set;
+  set.name = path.stem().string();
   if (!std::filesystem::exists(path)) return set;
 #ifdef BVHLAB_TEST_INPUTS_MESH_IO
   const Mesh mesh = loadMesh(path);

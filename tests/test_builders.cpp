@@ -342,10 +342,15 @@ TEST(Median, CompleteTreeWithFullLeaves) {
       const uint32_t deepest = uint32_t(std::ceil(std::log2(double(leaves))));
       bool shallowSeen = false;
       for (size_t k = 0; k < order.size(); ++k) {
-        if (k + 1 < order.size()) EXPECT_EQ(order[k].first, leafSize) << "n " << n << " leaf " << k;
+        if (k + 1 < order.size()) {
+          EXPECT_EQ(order[k].first, leafSize) << "n " << n << " leaf " << k;
+        }
         EXPECT_TRUE(order[k].second == deepest || order[k].second + 1 == deepest) << "n " << n;
-        if (order[k].second != deepest) shallowSeen = true;
-        else EXPECT_FALSE(shallowSeen) << "n " << n << ": the deepest level is not filled from the left";
+        if (order[k].second != deepest) {
+          shallowSeen = true;
+        } else {
+          EXPECT_FALSE(shallowSeen) << "n " << n << ": the deepest level is not filled from the left";
+        }
       }
     }
   }
