@@ -16,6 +16,7 @@ namespace bvhlab {
 Bvh buildMedianBvh(const BuildInput&, const BuildOptions&);
 Bvh buildSahBinnedBvh(const BuildInput&, const BuildOptions&);
 Bvh buildSahSweepBvh(const BuildInput&, const BuildOptions&);
+Bvh buildLbvh(const BuildInput&, const BuildOptions&);
 Bvh buildEmbreeBvh(const BuildInput&, const BuildOptions&);
 Bvh buildEmbreeLowBvh(const BuildInput&, const BuildOptions&);
 
@@ -25,6 +26,7 @@ const std::vector<BuilderInfo>& builders() {
        buildMedianBvh},
       {"sah-binned", "binned SAH (options.bins bins per axis), median fallback", buildSahBinnedBvh},
       {"sah-sweep", "full-sweep SAH: exact best object split over centroids sorted on all axes", buildSahSweepBvh},
+      {"lbvh", "Morton-code radix tree (LBVH), SAH-collapsed leaves", buildLbvh},
       {"embree", "Embree 3 rtcBuildBVH, quality MEDIUM (the reference)", buildEmbreeBvh},
       {"embree-low", "Embree 3 rtcBuildBVH, quality LOW (Morton codes)", buildEmbreeLowBvh},
   };
