@@ -48,7 +48,9 @@ bool intersectSphere(Ray ray, float tMin, float tMax, out float t, out vec3 norm
   // Longitude from +Z towards +X (u grows to the right seen from outside, seam at -Z), latitude from -Y.
   // atan(0, 0) is undefined in GLSL: guard the poles.
   float phi = (hit.x != 0.0 || hit.z != 0.0) ? atan(hit.x, hit.z) : 0.0;
-  float theta = asin(clamp(hit.y / length(hit), -1.0, 1.0));
+  // Latitude as atan(y, rho), not asin(y): better conditioned near the poles and more accurate on GPUs
+  // (llvmpipe's asin put v off by up to 1.2e-4, its atan by 1e-5). rho and y are never both 0 here.
+  float theta = atan(hit.y, length(hit.xz));
   uv = clamp(vec2(0.5 + phi / (2.0 * PI), 0.5 + theta / PI), 0.0, 1.0);
   return true;
 }

@@ -41,7 +41,7 @@ inline bool intersectSphere(Ray ray, float tMin, float tMax, float& t, vec3& nor
   vec3 hit = p + s * ray.dir;
   normal = hit;
   float phi = (hit.x != 0.0f || hit.z != 0.0f) ? atan(hit.x, hit.z) : 0.0f;
-  float theta = asin(clamp(hit.y / length(hit), -1.0f, 1.0f));
+  float theta = atan(hit.y, length(vec2(hit.x, hit.z)));
   uv = clamp(vec2(0.5f + phi / (2.0f * PI), 0.5f + theta / PI), 0.0f, 1.0f);
   return true;
 }
