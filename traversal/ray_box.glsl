@@ -2,11 +2,16 @@
 // 2005). A replacement box test (e.g. Ize's robust slabs) is a file providing the same two
 // functions. C++ mirror: ray_box.hpp.
 
-// Direction components smaller than this are replaced by it (keeping their sign) before inverting.
-// An infinite inverse would turn (plane - origin) = 0 into 0 * inf = NaN, and NaN would decide the
-// test. 1e-30 has a finite inverse (anything above 1 / FLT_MAX ~ 2.9e-39 does) and is far below any
-// component of a direction a renderer traces, other than an exact (or flushed) zero.
+// Direction components smaller than this in magnitude are treated as exactly 0: the ray is then
+// parallel to that slab and inside it for every t or for none. rayInverseDirection replaces them by
+// this value (negative ones keep their sign) so that invDir stays finite: an infinite inverse would
+// make (plane - origin) = 0 into 0 * inf = NaN. 1e-30 has a finite inverse (anything above
+// 1 / FLT_MAX ~ 2.9e-39 does) and lies far below any component of a direction a renderer traces,
+// other than an exact (or flushed) zero.
 const float kMinDirectionComponent = 1e-30;
+// invDir components at least this large come from such a component (or from one below 2e-30, as
+// negligible): the factor 0.5 keeps the test independent of how a compiler rounds the constant.
+const float kParallelInverse = 0.5 / kMinDirectionComponent;
 
 // The invDir every intersectAabb call of one ray shares: finite, never NaN.
 vec3 rayInverseDirection(vec3 dir) {
@@ -21,6 +26,12 @@ bool intersectAabb(vec3 origin, vec3 invDir, vec3 bmin, vec3 bmax, float tMin, f
   vec3 t1 = (bmax - origin) * invDir;
   vec3 tNear = min(t0, t1);
   vec3 tFar = max(t0, t1);
+  // Parallel to a slab, the products above would turn an origin lying exactly on the slab's far
+  // plane into an exit at t = 0; the ray is in the (closed) slab for all t or for none instead.
+  bvec3 parallel = greaterThanEqual(abs(invDir), vec3(kParallelInverse));
+  bvec3 inSlab = equal(clamp(origin, bmin, bmax), origin);
+  tNear = mix(tNear, mix(vec3(INF), vec3(-INF), inSlab), parallel);
+  tFar = mix(tFar, mix(vec3(-INF), vec3(INF), inSlab), parallel);
   tEnter = max(max(tNear.x, tNear.y), max(tNear.z, tMin));
   float tExit = min(min(tFar.x, tFar.y), min(tFar.z, tMax));
   return tEnter <= tExit;
