@@ -142,6 +142,10 @@ def describe(row, axes):
     return " ".join(parts)
 
 
+def plural(n, word):
+    return "%d %s%s" % (n, word, "" if n == 1 else "s")
+
+
 def group(rows, key):
     out = {}
     for r in rows:
@@ -264,9 +268,18 @@ def scatter_visits_vs_sah(data, rows):
     fig, axs = facet_axes(len(scenes))
     for ax, scene in zip(axs, scenes):
         srows = [r for r in rows if label(r, "scene") == scene]
-        for b in data.values(srows, "builder"):
+        kernels = data.values(srows, "kernel")
+        markers = dict(zip(kernels, "o^sDv<>pH*")) if len(kernels) > 1 else {}
+        for i, b in enumerate(data.values(srows, "builder")):
             br = [r for r in srows if label(r, "builder") == b]
-            ax.scatter([num(r["sah_cost"]) for r in br], [num(r["node_visits_per_ray"]) for r in br], s=14, label=b)
+            for k in kernels or [None]:
+                kr = [r for r in br if label(r, "kernel") == k] if markers else br
+                if kr:
+                    ax.scatter([num(r["sah_cost"]) for r in kr], [num(r["node_visits_per_ray"]) for r in kr], s=16,
+                               color="C%d" % (i % 10), marker=markers.get(k, "o"),
+                               label=b + (" / " + k if markers else ""))
+                if not markers:
+                    break
             for r in br:
                 if label(r, "leaf_size") is not None:
                     ax.annotate(label(r, "leaf_size"), (num(r["sah_cost"]), num(r["node_visits_per_ray"])),
@@ -275,7 +288,7 @@ def scatter_visits_vs_sah(data, rows):
         ax.set_xlabel("SAH cost (Ct = Ci = 1, normalised by root area)")
         ax.set_ylabel("node visits / ray")
         ax.grid(alpha=0.3)
-        outside_legend(ax, len(data.values(srows, "builder")))
+        outside_legend(ax, len(data.values(srows, "builder")) * max(1, len(markers)))
     fig.tight_layout()
     return fig, None
 
@@ -465,26 +478,27 @@ def section_findings(page, data, knobs, fronts):
     items += best_builders(data)
     items += leaf_size_findings(data)
     for axis, base, v, n, g, lo, hi, d_err in knobs:
-        s = "<b>%s = %s</b> costs %s× the frame time of %s = %s (geometric mean over %d matched pairs, range %s–%s)" % (
-            axis, html.escape(v), fmt(g), axis, html.escape(base), n, fmt(lo), fmt(hi))
+        s = "<b>%s = %s</b> costs %s× the frame time of %s = %s (geometric mean over %s, range %s–%s)" % (
+            axis, html.escape(v), fmt(g), axis, html.escape(base), plural(n, "matched pair"), fmt(lo), fmt(hi))
         if d_err is not None:
             s += " and changes the image error by %s (8-bit mean abs)" % fmt(d_err)
         items.append(s + ".")
-    for scene in data.values(data.sweep, "scene"):
-        pts = [(num(r.get("sah_cost")), num(r.get("node_visits_per_ray"))) for r in data.sweep
-               if label(r, "scene") == scene]
+    # Per scene and kernel: kernels visit different node counts for the same tree.
+    for (scene, kernel), members in group(data.sweep, lambda r: (label(r, "scene"), label(r, "kernel"))).items():
+        pts = [(num(r.get("sah_cost")), num(r.get("node_visits_per_ray"))) for r in members]
         pts = [p for p in pts if p[0] is not None and p[1] is not None]
         r = correlation([p[0] for p in pts], [p[1] for p in pts])
         if r is not None:
-            items.append("<b>%s</b>: SAH cost and node visits per ray correlate with Pearson r = %s over %d runs."
-                         % (html.escape(scene), fmt(r), len(pts)))
+            items.append("<b>%s</b>%s: SAH cost and node visits per ray correlate with Pearson r = %s over %s."
+                         % (html.escape(scene), (" / " + html.escape(kernel)) if kernel else "", fmt(r),
+                            plural(len(pts), "run")))
     for scene, front in fronts:
         if len(front) >= 1:
-            items.append("<b>%s</b>: the accuracy/time Pareto front has %d runs: %s." % (
-                html.escape(scene), len(front),
+            items.append("<b>%s</b>: the accuracy/time Pareto front has %s: %s." % (
+                html.escape(scene), plural(len(front), "run"),
                 "; ".join("%s ms → error %s" % (fmt(t), fmt(e)) for t, e, _ in front)))
     if data.failed:
-        items.append("%d runs failed (listed below with their errors)." % len(data.failed))
+        items.append("%s failed (listed below with their errors)." % plural(len(data.failed), "run"))
     if not items:
         page.note("Not enough finished runs for any finding.")
         return
@@ -500,12 +514,21 @@ def section_plot(page, sid, title, result, caption):
         page.figure(fig, caption)
 
 
-def representative(data, rows):
-    """The run closest to the config's baseline (first value of every axis), lowest index on ties."""
-    def score(r):
-        return (-sum(1 for a in AXES if data.baseline(a) is not None and label(r, a) == data.baseline(a)),
-                r.get("index", 0))
-    return min(rows, key=score)
+def typical_values(data, rows):
+    """Each axis's most frequent value among rows (config order breaks ties): the setting the
+    per-builder images are shown at, so that builders are compared like for like."""
+    out = {}
+    for a in AXES:
+        values = data.values(rows, a)
+        if values:
+            counts = {v: sum(1 for r in rows if label(r, a) == v) for v in values}
+            out[a] = max(values, key=lambda v: (counts[v], -values.index(v)))
+    return out
+
+
+def representative(rows, typical):
+    """The run matching the typical values on the most axes, lowest index on ties."""
+    return min(rows, key=lambda r: (-sum(1 for a, v in typical.items() if label(r, a) == v), r.get("index", 0)))
 
 
 def section_images(page, data):
@@ -514,15 +537,17 @@ def section_images(page, data):
     if not rows:
         page.note("No images: no finished run wrote one.")
         return
+    shown = data.varying(rows, exclude=("scene", "builder"))
     for scene in data.values(rows, "scene"):
         page.add("<h3>%s</h3>" % html.escape(scene))
         srows = [r for r in rows if label(r, "scene") == scene]
+        typical = typical_values(data, srows)
         cells = []
         for b in data.values(srows, "builder") or [None]:
-            r = representative(data, [x for x in srows if label(x, "builder") == b] if b else srows)
+            r = representative([x for x in srows if label(x, "builder") == b] if b else srows, typical)
             img, heat = data.image_uri(r.get("image")), data.image_uri(r.get("visits_image"))
-            cap = "%s<br>%s ms, %s visits/ray" % (html.escape(describe(r, AXES)), fmt(r.get("frame_ms")),
-                                                  fmt(r.get("node_visits_per_ray")))
+            cap = "%s<br>%s ms, %s visits/ray" % (html.escape(describe(r, shown) or "the only run"),
+                                                  fmt(r.get("frame_ms")), fmt(r.get("node_visits_per_ray")))
             cells.append(["<b>%s</b>" % html.escape(b or "–"),
                           '<img class="render" src="%s">' % img if img else "–",
                           '<img class="render" src="%s">' % heat if heat else "no heatmap",
