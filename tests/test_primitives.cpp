@@ -26,6 +26,7 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -973,6 +974,46 @@ void main() {
   const int rc = std::system(command.c_str());
   EXPECT_EQ(rc, 0) << readText(log);
   fs::remove_all(dir);
+}
+
+// The mirror reads like the GLSL: with comments dropped and the purely syntactic differences normalised
+// (float suffixes, `inline`/`constexpr`, out parameters as references, swizzles as constructors, array
+// initialisers), primitives.hpp holds the prim_*.glsl statements in the same order.
+TEST(Glsl, MirrorMatchesTheGlslStatementByStatement) {
+  const std::filesystem::path shaders = std::filesystem::path(BVHLAB_SOURCE_DIR) / "shaders";
+  auto normalise = [](std::string line) {
+    line = std::regex_replace(line, std::regex("//.*"), "");
+    line = std::regex_replace(line, std::regex("(\\d)f\\b"), "$1");
+    line = std::regex_replace(line, std::regex("\\binline "), "");
+    line = std::regex_replace(line, std::regex("\\bconstexpr "), "const ");
+    line = std::regex_replace(line, std::regex("(float|vec2|vec3)& (\\w+)"), "out $1 $2");
+    line = std::regex_replace(line, std::regex("([\\w.]+)\\.xz\\b"), "vec2($1.x, $1.z)");
+    line = std::regex_replace(line, std::regex("float\\[4\\]\\((.*)\\);"), "{$1};");
+    line = std::regex_replace(line, std::regex("^\\s+|\\s+$"), "");
+    return line;
+  };
+  auto statements = [&](const std::string& text, const std::string& from) {
+    std::vector<std::string> out;
+    std::istringstream in(text);
+    bool started = from.empty();
+    for (std::string line; std::getline(in, line);) {
+      if (line.find("// namespace") != std::string::npos) continue;
+      line = normalise(line);
+      if (!started && line.rfind(from, 0) == 0) started = true;
+      if (started && !line.empty()) out.push_back(line);
+    }
+    return out;
+  };
+  std::vector<std::string> glsl;
+  for (const char* name : kPrimitiveModules) {
+    std::vector<std::string> module = statements(readText(shaders / name), "");
+    glsl.insert(glsl.end(), module.begin(), module.end());
+  }
+  std::vector<std::string> cpp = statements(readText(shaders / "primitives.hpp"), "bool intersectSphere(");
+  ASSERT_GT(glsl.size(), 300u);
+  for (size_t i = 0; i < std::min(glsl.size(), cpp.size()); ++i)
+    ASSERT_EQ(cpp[i], glsl[i]) << "statement " << i << " differs (GLSL first, then the mirror)";
+  EXPECT_EQ(cpp.size(), glsl.size());
 }
 
 // One compute-shader invocation per ray: in, 3 vec4 (origin + tMin, dir + tMax, kind + radii + infinite);
