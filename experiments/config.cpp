@@ -1,6 +1,7 @@
 #include "experiments/config.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <limits>
 #include <optional>
@@ -194,7 +195,9 @@ class ConfigReader {
   double number(const toml::node& node, const std::string& key) const {
     if (node.is_integer()) return double(node.as_integer()->get());
     if (!node.is_floating_point()) fail(node.source(), key, "expected a number, got " + typeName(node));
-    return node.as_floating_point()->get();
+    const double v = node.as_floating_point()->get();
+    if (!std::isfinite(v)) fail(node.source(), key, "expected a finite number, got " + std::to_string(v));
+    return v;
   }
   const toml::table& table(const toml::node& node, const std::string& key) const {
     if (!node.is_table()) fail(node.source(), key, "expected a table, got " + typeName(node));

@@ -302,6 +302,8 @@ TEST_F(Experiments, ValidationErrorsNameTheFileLineAndKey) {
       {"[axes]\nscenes = { generate = 'large' }\n", {"cfg.toml:2", "axes.scenes", "needs `triangles`"}},
       {"[axes]\nscenes = { generate = 'cube', triangles = 500 }\n", {"cfg.toml:2", "unknown generator 'cube'"}},
       {"[axes]\nscenes = { generate = 'large', triangles = 10 }\n", {"cfg.toml:2", "triangles", "outside"}},
+      {"[axes]\nscenes = { file = 'm.off', eye = [0, nan, 1] }\n", {"cfg.toml:2", "axes.scenes.eye", "finite"}},
+      {"[render]\ntimeout_s = inf\n[axes]\nscenes = 'm.off'\n", {"cfg.toml:2", "render.timeout_s", "finite"}},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.text);
