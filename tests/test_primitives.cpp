@@ -1,19 +1,23 @@
-// Tests of the analytic ray–primitive intersections (shaders/prim_*.glsl through their C++ mirrors in
-// shaders/primitives.hpp) against hand-computed cases and a double-precision reference written here
-// independently (per-surface candidates for the quadrics and box, dense sign sampling + bisection for the
-// torus), plus an offline compile of the GLSL with glslangValidator.
+// Tests of the analytic ray–primitive intersections: the C++ mirrors (shaders/primitives.hpp) against
+// hand-computed cases and a double-precision reference written here independently (per-surface candidates
+// for the quadrics and box, dense sign sampling + bisection for the torus); the GLSL (shaders/prim_*.glsl)
+// compiled offline by glslangValidator, checked statement by statement against the mirror, and run on the
+// GL device (a compute shader; llvmpipe here) through the same random property test.
 //
 // Error model (what the bounds below are stated in). Positions are float, so the hit point cannot be
 // better than a few ulps of the largest of the object's size S (bounding radius), the origin's distance |o|
 // and the hit's distance: L = max(S, |o|, t |d|). With eps = 2^-23 (float epsilon):
-//   position error  |t - t_ref| |d|              <= kPositionBound * eps * L / max(|cos i|, kMinCos)
-//   normal error    angle(n, n_ref) * rho        <= kNormalBound   * eps * L / max(|cos i|, kMinCos)
+//   position error  |t - t_ref| |d|        <= kPositionBound * eps * L / max(|cos i|, kMinCos)
+//   normal error    angle(n, n_ref) * rho  <= kNormalBound   * eps * L / max(|cos i|, kMinCos)
 // where i is the angle of incidence (error grows as 1/cos i for grazing hits, and is only checked for
 // |cos i| >= kMinCos, i.e. incidence below ~87 degrees) and rho the smallest radius of curvature (the
-// torus's minor radius, else 1). Near the cone's apex see kApexZone. Hit/miss (and which root) may differ from the
-// reference only for GRAZING rays: the ray passes within kGrazeBand * eps * L of touching the surface
-// without crossing it (a tangent or an edge), or its hit lies within that distance of tMin/tMax.
-// These constants were set from the measured maxima (printed by the tests) with a margin of ~4x.
+// torus's minor radius, else 1). Near the cone's apex see kApexZone. Hit/miss (and which root) may differ
+// from the reference only for GRAZING rays: the ray passes within kGrazeBand * eps * L of touching the
+// surface without crossing it (a tangent, an edge, a spindle torus's pinch), or its hit lies within that
+// distance of tMin/tMax.
+// Measured (random rays, all kinds, origins at 2-4 S, inside, and at 1e4 S; |d| from 5e-4 to 2e3): position
+// error <= 2.2 (15.7 for a torus with r = R/100 seen from 1e4), normal error <= 12, disagreements explained
+// by grazing within 0.1 eps*L, <= 0.4% of rays. The bounds leave a margin of >= 4x.
 #include <gtest/gtest.h>
 
 #include <algorithm>
