@@ -243,17 +243,24 @@ def line_plot(data, rows, x, y, ylabel, title, logx=False):
         return None, "no series with two or more values of %s" % x
     fig, axs = facet_axes(len(panels))
     for ax, (scene, lines) in zip(axs, panels):
-        for k, members in sorted(lines.items(), key=lambda kv: [str(v) for v in kv[0]]):
+        palette = plt.cm.tab10.colors if len(lines) <= 10 else plt.cm.tab20.colors
+        for i, (k, members) in enumerate(sorted(lines.items(), key=lambda kv: [str(v) for v in kv[0]])):
             by_x = group(members, lambda r: num(r.get(x)))
             xs = sorted(by_x)
             ys = [statistics.median(num(r.get(y)) for r in by_x[v]) for v in xs]
             name = " ".join(describe(members[0], series_axes).split()) or "runs"
-            ax.plot(xs, ys, marker="o", markersize=3, linewidth=1.2, label=name[:MAX_SERIES_LABEL])
+            line, = ax.plot(xs, ys, marker="o", markersize=3, linewidth=1.2, label=name[:MAX_SERIES_LABEL],
+                            color=palette[i % len(palette)], linestyle=("-", "--", ":")[(i // len(palette)) % 3])
+            if y == "frame_ms":  # the fastest and slowest timed frame of each run, as a band
+                lo = [min(num(r.get("frame_ms_min")) or num(r[y]) for r in by_x[v]) for v in xs]
+                hi = [max(num(r.get("frame_ms_max")) or num(r[y]) for r in by_x[v]) for v in xs]
+                ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.12, linewidth=0)
         if logx:
             log2_ticks(ax, {num(r.get(x)) for r in rows})
         ax.set_title("%s — %s" % (title, scene), fontsize=10)
         ax.set_xlabel(x)
         ax.set_ylabel(ylabel)
+        ax.set_ylim(bottom=0)  # ratios read true from a zero baseline
         ax.grid(alpha=0.3)
         outside_legend(ax, len(lines))
     fig.tight_layout()
@@ -323,6 +330,7 @@ def builder_costs(data, rows):
                 ax.set_xticks(range(len(builders)))
                 ax.set_xticklabels(builders, rotation=20, fontsize=8)
             ax.set_ylabel(ylab)
+            ax.set_ylim(bottom=0)
             ax.set_title("%s per builder — %s" % (ylab, scene), fontsize=10)
             ax.grid(alpha=0.3)
             if len(leaves) >= 2:
@@ -808,6 +816,7 @@ def seed_fps_plot(page, data, rows, axis, xlabel, tid, sweep):
         log2_ticks(ax, {num(r[axis]) for r in rows})
     ax.set_xlabel(xlabel)
     ax.set_ylabel("frames per second")
+    ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     page.figure(fig, "Measured counterpart of the seed's plot.")
