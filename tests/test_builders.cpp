@@ -167,6 +167,14 @@ TEST_P(EveryBuilder, IsDeterministic) {
   EXPECT_TRUE(identical(a, c)) << "the tree depends on the thread count";
 }
 
+TEST_P(EveryBuilder, LargestLeafSize) {
+  BuildOptions options;
+  options.maxLeafSize = kMaxLeafSize;  // Embree caps its leaves at 32, which honours the limit too
+  BuildStats stats;
+  buildChecked(GetParam(), testing::sphereSoup(40, 30), options, &stats);
+  EXPECT_GT(stats.leaves, 1u);
+}
+
 TEST_P(EveryBuilder, OnePrimitive) {
   PrimitiveSet set;
   set.addTriangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
