@@ -1,6 +1,8 @@
 #include "experiments/executor.hpp"
 
+#include <cctype>
 #include <charconv>
+#include <sstream>
 
 #include "experiments/process.hpp"
 
@@ -27,12 +29,21 @@ std::string scalarFlag(const json& v) {
   return v.dump();
 }
 
-// The last non-empty line of a log: usually the renderer's "bvhlab: error: ..." line.
-std::string lastLine(const std::string& text) {
-  size_t end = text.find_last_not_of("\r\n \t");
-  if (end == std::string::npos) return "";
-  const size_t start = text.rfind('\n', end);
-  return text.substr(start == std::string::npos ? 0 : start + 1, end - (start == std::string::npos ? 0 : start + 1) + 1);
+// The line of a log that says what went wrong: the last one mentioning "error" (the renderer's
+// "bvhlab: error: ..." or a GLSL compiler's "0:12(3): error: ..."), else the first non-empty one
+// (CLI11 puts its complaint first and "Run with --help" last).
+std::string summaryLine(const std::string& text) {
+  std::istringstream in(text);
+  std::string first, lastError;
+  for (std::string line; std::getline(in, line);) {
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+    if (line.empty()) continue;
+    if (first.empty()) first = line;
+    std::string lower = line;
+    for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (lower.find("error") != std::string::npos) lastError = line;
+  }
+  return lastError.empty() ? first : lastError;
 }
 
 }  // namespace
@@ -101,7 +112,7 @@ RunExecutor subprocessExecutor(fs::path binary) {
     if (p.timedOut)
       throw RunFailure("renderer timed out after " + number(request.spec.render.timeoutSeconds) + " s", result);
     if (!p.ok()) {
-      const std::string why = lastLine(p.err);
+      const std::string why = summaryLine(p.err);
       throw RunFailure("renderer " + p.status() + (why.empty() ? "" : ": " + why),
                        result.is_object() ? result : json());
     }

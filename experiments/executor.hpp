@@ -38,7 +38,7 @@ std::vector<std::string> renderCommandLine(const std::filesystem::path& binary, 
 
 // Runs renderCommandLine() as a child process with the run's env and timeout. A non-zero exit, a
 // signal, a timeout or stdout that is not one JSON object throws RunFailure (message: the status
-// and the last line of stderr). `binary` empty = this executable (/proc/self/exe).
+// and the telling line of stderr: the last mentioning "error", else the first). `binary` empty = this executable (/proc/self/exe).
 RunExecutor subprocessExecutor(std::filesystem::path binary = {});
 
 }  // namespace bvhlab

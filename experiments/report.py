@@ -400,15 +400,17 @@ def best_builders(data):
 
 def leaf_size_findings(data):
     """Per scene and builder: the best leaf size and the range within SAME_TIME of it, on the series
-    (other axes fixed) that holds that builder's fastest run."""
+    (other axes fixed) with the most leaf sizes; among those, the one holding the fastest run."""
     out = []
     rows = [r for r in data.sweep if num(r.get("leaf_size")) is not None]
     if len(data.values(rows, "leaf_size")) < 3:
         return out
     others = data.varying(rows, exclude=("leaf_size", "scene", "builder"))
     for (scene, builder), members in group(rows, lambda r: (label(r, "scene"), label(r, "builder"))).items():
-        best_run = min(members, key=lambda r: num(r["frame_ms"]))
-        series = [r for r in members if all(label(r, a) == label(best_run, a) for a in others)]
+        candidates = group(members, lambda r: tuple(label(r, a) for a in others)).values()
+        series = max(candidates, key=lambda c: (len({label(r, "leaf_size") for r in c}),
+                                                -min(num(r["frame_ms"]) for r in c)))
+        best_run = min(series, key=lambda r: num(r["frame_ms"]))
         by_leaf = {num(r["leaf_size"]): num(r["frame_ms"]) for r in series}
         if len(by_leaf) < 3:
             continue

@@ -351,7 +351,7 @@ leaf_sizes = [1, 4]
 TEST(ShippedConfigs, AreValidAgainstTheRegistries) {
   const fs::path dir = fs::path(BVHLAB_SOURCE_DIR) / "experiments" / "configs";
   const std::map<std::string, size_t> expectedRuns = {
-      {"quick.toml", 40}, {"seed-figures.toml", 17}, {"builders.toml", 910}, {"accuracy-vs-time.toml", 98}};
+      {"quick.toml", 40}, {"seed-figures.toml", 18}, {"builders.toml", 910}, {"accuracy-vs-time.toml", 98}};
   std::vector<std::string> skipped;
   for (const auto& [name, runs] : expectedRuns) {
     SCOPED_TRACE(name);
@@ -599,7 +599,7 @@ TEST_F(Experiments, SubprocessExecutorRecordsOutputCrashesAndTimeouts) {
   writeText(root / "m.off", "OFF\n0 0 0\n");
   writeText(root / "cfg.toml",
             "[render]\nwidth = 8\nheight = 4\ntimeout_s = 1.0\nenv = { FAKE_RENDER_PNG = '" + png.string() +
-                "' }\n[axes]\nscenes = 'm.off'\nkernels = ['good', 'crash', 'bad-json', 'hang', 'exit4']\n");
+                "' }\n[axes]\nscenes = 'm.off'\nkernels = ['good', 'crash', 'bad-json', 'hang', 'exit4', 'badflag']\n");
   RunOptions o;
   o.config = root / "cfg.toml";
   o.outDir = root / "out";
@@ -608,12 +608,12 @@ TEST_F(Experiments, SubprocessExecutorRecordsOutputCrashesAndTimeouts) {
   o.names = KnownNames{};  // the fake's kernel names are not real ones
   o.binary = kFixtures / "fake_render.sh";
   const SweepOutcome outcome = runSweep(o);
-  EXPECT_EQ(outcome.executed, 5u);
-  EXPECT_EQ(outcome.failed, 4u);
+  EXPECT_EQ(outcome.executed, 6u);
+  EXPECT_EQ(outcome.failed, 5u);
   std::map<std::string, json> byKernel;
   for (const auto& [key, record] : readRecords(SweepDir{root / "out"}))
     byKernel[record["params"]["axes"][1]["label"]] = record;
-  ASSERT_EQ(byKernel.size(), 5u);
+  ASSERT_EQ(byKernel.size(), 6u);
 
   const json& good = byKernel["good"];
   EXPECT_EQ(good["status"], "ok");
@@ -633,7 +633,9 @@ TEST_F(Experiments, SubprocessExecutorRecordsOutputCrashesAndTimeouts) {
   EXPECT_LT(byKernel["hang"]["wall_s"].get<double>(), 10.0);
   EXPECT_NE(error("exit4").find("exit code 4"), std::string::npos) << error("exit4");
   EXPECT_NE(error("exit4").find("kernel does not compile"), std::string::npos) << error("exit4");
-  for (const char* k : {"crash", "bad-json", "hang", "exit4"}) EXPECT_TRUE(byKernel[k]["image"].is_null()) << k;
+  EXPECT_NE(error("badflag").find("exit code 109: The following arguments were not expected"), std::string::npos)
+      << error("badflag");
+  for (const char* k : {"crash", "bad-json", "hang", "exit4", "badflag"}) EXPECT_TRUE(byKernel[k]["image"].is_null()) << k;
 }
 
 bool reportToolsAvailable() {
