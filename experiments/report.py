@@ -45,6 +45,7 @@ KNOBS = ["aa", "robust", "depth", "storage", "branching", "uber", "kernel", "vie
 # spread measured in this sweep next to it.
 SAME_TIME = 0.05
 MAX_SERIES_LABEL = 60
+THUMBNAIL_WIDTH = 400  # per-builder images wider than this are shown downscaled (full size in DIR/images)
 
 
 # ---------------------------------------------------------------- data helpers
@@ -116,12 +117,25 @@ class Data:
         vals = self.order.get(axis, [])
         return vals[0] if vals else None
 
-    def image_uri(self, rel):
+    def image_uri(self, rel, max_width=None):
+        """The PNG as a data: URI; wider than max_width -> box-filtered down by an integer factor
+        (keeps a report over hundreds of runs small enough to open)."""
         if not rel:
             return None
         path = os.path.join(self.root, rel)
         if not os.path.isfile(path):
             return None
+        if max_width:
+            img = mpimg.imread(path)
+            factor = -(-img.shape[1] // max_width)
+            if factor > 1:
+                h, w = img.shape[0] // factor * factor, img.shape[1] // factor * factor
+                small = img[:h, :w].reshape(h // factor, factor, w // factor, factor, -1).mean(axis=(1, 3))
+                if small.shape[-1] == 1:  # grey PNG
+                    small = small[..., 0]
+                buf = io.BytesIO()
+                plt.imsave(buf, np.clip(small, 0.0, 1.0), format="png")
+                return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
         with open(path, "rb") as f:
             return "data:image/png;base64," + base64.b64encode(f.read()).decode("ascii")
 
@@ -555,7 +569,8 @@ def section_images(page, data):
         cells = []
         for b in data.values(srows, "builder") or [None]:
             r = representative([x for x in srows if label(x, "builder") == b] if b else srows, typical)
-            img, heat = data.image_uri(r.get("image")), data.image_uri(r.get("visits_image"))
+            img = data.image_uri(r.get("image"), max_width=THUMBNAIL_WIDTH)
+            heat = data.image_uri(r.get("visits_image"), max_width=THUMBNAIL_WIDTH)
             cap = "%s<br>%s ms, %s visits/ray" % (html.escape(describe(r, shown) or "the only run"),
                                                   fmt(r.get("frame_ms")), fmt(r.get("node_visits_per_ray")))
             cells.append(["<b>%s</b>" % html.escape(b or "–"),
