@@ -1,5 +1,6 @@
 // Tree statistics recomputed from a built Bvh: nothing here trusts what a builder says about itself.
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -37,6 +38,8 @@ void walkNodes(const Bvh& bvh, Visit&& visit) {
 double sahCost(const Bvh& bvh, const CostModel& cost) {
   if (bvh.nodes.empty()) return 0.0;
   const double rootArea = bvh.nodes[0].bounds.halfArea();
+  if (!std::isfinite(rootArea))  // builders reject such input; a hand-made tree must not turn NaN into a cost
+    throw std::runtime_error("sahCost: the root box is not finite");
   double inner = 0.0, leaf = 0.0;
   walkNodes(bvh, [&](const BvhNode& node, uint32_t) {
     const double area = node.bounds.halfArea();
