@@ -24,7 +24,7 @@ const std::vector<BuilderInfo>& builders() {
   static const std::vector<BuilderInfo> table = {
       {"median", "complete binary tree, object-median splits on the longest axis, full leaves",
        buildMedianBvh},
-      {"sah-binned", "binned SAH (options.bins bins per axis), median fallback", buildSahBinnedBvh},
+      {"sah-binned", "binned SAH (options.bins bins per axis, 64 by default), median fallback", buildSahBinnedBvh},
       {"sah-sweep", "full-sweep SAH: exact best object split over centroids sorted on all axes", buildSahSweepBvh},
       {"lbvh", "Morton-code radix tree (LBVH), SAH-collapsed leaves", buildLbvh},
       {"embree", "Embree 3 rtcBuildBVH, quality MEDIUM (the reference)", buildEmbreeBvh},
