@@ -10,6 +10,7 @@
 #include "builders/builder.hpp"
 #include "datasets/scene.hpp"
 #include "datasets/scene_io.hpp"
+#include "experiments/runner.hpp"
 #include "layout/layout.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/render_command.hpp"
@@ -106,6 +107,27 @@ int main(int argc, char** argv) {
   build->add_option("--bins", bins, "bins for sah-binned (0 = default)");
   build->add_flag("--json", buildJson, "print JSON");
 
+  RunOptions ro;
+  std::string config, outDir, shard, binary;
+  bool noRetry = false, noReport = false;
+  auto* runCmd = app.add_subcommand("run", "run an experiment config (a sweep) and write its report");
+  runCmd->add_option("config", config, "experiment config .toml (see experiments/README.md)")->required();
+  runCmd->add_option("--out", outDir, "output directory (default results/<experiment name>)");
+  runCmd->add_option("--shard", shard, "run only slice I of N: I/N");
+  runCmd->add_flag("--no-retry", noRetry, "keep failed runs as failed instead of retrying them");
+  runCmd->add_flag("--no-report", noReport, "do not write report.html at the end");
+  runCmd->add_option("--binary", binary, "renderer executable (default: this bvhlab)");
+
+  std::vector<std::string> mergeDirs;
+  std::string mergeOut;
+  auto* mergeCmd = app.add_subcommand("merge", "combine shard output directories and regenerate the report");
+  mergeCmd->add_option("dirs", mergeDirs, "shard output directories")->required();
+  mergeCmd->add_option("--out", mergeOut, "merged output directory")->required();
+
+  std::string reportDir;
+  auto* reportCmd = app.add_subcommand("report", "regenerate DIR/report.html from DIR/results.json");
+  reportCmd->add_option("dir", reportDir, "experiment output directory")->required();
+
   auto* listBuilders = app.add_subcommand("builders", "list the BVH builders");
   auto* listKernels = app.add_subcommand("kernels", "list the traversal kernels");
 
@@ -117,6 +139,18 @@ int main(int argc, char** argv) {
       if (!up.empty()) rc.up = parseVec3(up, "--up");
       return runRender(rc);
     }
+    if (runCmd->parsed()) {
+      ro.config = config;
+      ro.outDir = outDir;
+      if (!shard.empty()) std::tie(ro.shardIndex, ro.shardCount) = parseShard(shard);
+      ro.retryFailed = !noRetry;
+      ro.report = !noReport;
+      ro.binary = binary;
+      return runCommand(ro);
+    }
+    if (mergeCmd->parsed())
+      return mergeCommand(std::vector<std::filesystem::path>(mergeDirs.begin(), mergeDirs.end()), mergeOut);
+    if (reportCmd->parsed()) return reportCommand(reportDir);
     if (build->parsed()) return buildCommand(mesh, builder, leafSize, bins, buildJson);
     if (listBuilders->parsed()) {
       for (const BuilderInfo& b : builders()) std::printf("%-12s %s\n", b.name.c_str(), b.description.c_str());

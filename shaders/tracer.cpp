@@ -67,6 +67,7 @@ struct Tracer {
   const PackedBvh& bvh;
   const ShaderOptions& options;
   const KernelInfo& kernel;
+  Storage storage;  // the BVH streams and BVH_STACK_SIZE
   int MAX_DEPTH;
   int NUM_OBJECTS;
   int NUM_LIGHTS;
@@ -130,13 +131,13 @@ struct Tracer {
     if (MESH_PRESENT) {
       counters.meshRays++;
       MeshHit mh;
-      if (kernel.traceClosest(bvh, ray, 0.0f, hit.t, mh, counters)) {
+      if (kernel.traceClosest(storage, ray, 0.0f, hit.t, mh, counters)) {
         found = true;
         vec3 v0, v1, v2;
-        loadTriangle(bvh, mh.tri, v0, v1, v2);
+        loadTriangle(storage, mh.tri, v0, v1, v2);
         vec3 shadingNormal;
         vec2 uv;
-        loadAttributes(bvh, mh.tri, mh.bary, shadingNormal, uv);
+        loadAttributes(storage, mh.tri, mh.bary, shadingNormal, uv);
         vec3 geomNormal = normalize(cross(v1 - v0, v2 - v0));
         hit.t = mh.t;
         hit.geomNormal = geomNormal;
@@ -160,7 +161,7 @@ struct Tracer {
     }
     if (MESH_PRESENT) {
       counters.meshRays++;
-      if (kernel.traceAny(bvh, ray, 0.0f, tMax, counters)) return true;
+      if (kernel.traceAny(storage, ray, 0.0f, tMax, counters)) return true;
     }
     return false;
   }
@@ -398,7 +399,7 @@ ReferenceImage renderReference(const Scene& scene, const SceneData& data, const 
   const KernelInfo& kernel = findKernel(options.kernel);
 
   auto worker = [&](int first, int step) {
-    Tracer tr{scene, data, bvh, options, kernel, effectiveDepth(features, options.maxDepth, options.uber),
+    Tracer tr{scene, data, bvh, options, kernel, glsl::Storage(bvh, std::max(1, options.bvhStackSize)), effectiveDepth(features, options.maxDepth, options.uber),
               features.numObjects, features.numLights, !bvh.triangles.empty(), {}};
     const vec2 resolution(float(frame.width), float(frame.height));
     for (int y = first; y < frame.height; y += step)

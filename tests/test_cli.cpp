@@ -1,0 +1,126 @@
+// The command line as a user meets it: JSON contract, backends, and bad input (one clear line,
+// non-zero exit, no partial output file).
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+Result run(const std::string& args) {
+  fs::path dir = fs::temp_directory_path() / "bvhlab_cli_test";
+  fs::create_directories(dir);
+  fs::path out = dir / "stdout", err = dir / "stderr";
+  std::string cmd = std::string(BVHLAB_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
+  int status = std::system(cmd.c_str());
+  auto slurp = [](const fs::path& p) {
+    std::ifstream in(p);
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  };
+  return {WEXITSTATUS(status), slurp(out), slurp(err)};
+}
+
+fs::path scene(const std::string& name) { return fs::path(BVHLAB_SOURCE_DIR) / "datasets/scenes" / name; }
+
+fs::path writeTemp(const std::string& name, const std::string& text) {
+  fs::path p = fs::temp_directory_path() / "bvhlab_cli_test" / name;
+  fs::create_directories(p.parent_path());
+  std::ofstream(p) << text;
+  return p;
+}
+
+TEST(Cli, RenderJsonHasTheContractKeys) {
+  fs::path png = fs::temp_directory_path() / "bvhlab_cli_test/sphere.png";
+  fs::remove(png);
+  Result r = run("render " + scene("sphere.toml").string() + " -o " + png.string() +
+                 " --json --width 64 --height 36 --frames 2 --warmup 1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  for (const char* key : {"frame_ms", "frame_ms_min", "frames", "width", "height", "depth", "backend", "renderer",
+                          "builder", "kernel", "leaf_size", "build_ms", "sah_cost", "node_visits_per_ray",
+                          "triangle_tests_per_ray"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["frames"], 2);
+  EXPECT_EQ(j["width"], 64);
+  EXPECT_TRUE(fs::exists(png));
+}
+
+TEST(Cli, EglAndOsmesaGiveTheSameImage) {
+  fs::path a = fs::temp_directory_path() / "bvhlab_cli_test/osmesa.png";
+  fs::path b = fs::temp_directory_path() / "bvhlab_cli_test/egl.png";
+  Result ra = run("render " + scene("shadows.toml").string() + " -o " + a.string() + " --width 64 --height 36 --frames 1 --warmup 0");
+  ASSERT_EQ(ra.code, 0) << ra.err;
+  Result rb = run("render " + scene("shadows.toml").string() + " -o " + b.string() +
+                  " --width 64 --height 36 --frames 1 --warmup 0 --backend egl");
+  if (rb.code != 0 && rb.err.find("egl:") != std::string::npos) GTEST_SKIP() << "no EGL here: " << rb.err;
+  ASSERT_EQ(rb.code, 0) << rb.err;
+  std::ifstream fa(a, std::ios::binary), fb(b, std::ios::binary);
+  std::string da((std::istreambuf_iterator<char>(fa)), {}), db((std::istreambuf_iterator<char>(fb)), {});
+  EXPECT_EQ(da, db);
+}
+
+TEST(Cli, UnknownNamesListTheValidOnes) {
+  Result r = run("render " + scene("sphere.toml").string() + " --builder nope");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("sah-binned"), std::string::npos) << r.err;
+  r = run("render " + scene("sphere.toml").string() + " --kernel nope");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("stackless"), std::string::npos) << r.err;
+  r = run("render " + scene("sphere.toml").string() + " --backend nope");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("osmesa"), std::string::npos) << r.err;
+}
+
+struct BadInput {
+  std::string name, text, expect;
+};
+
+class CliBadInput : public ::testing::TestWithParam<BadInput> {};
+
+TEST_P(CliBadInput, OneLineErrorNonZeroExitNoOutputFile) {
+  const BadInput& b = GetParam();
+  fs::path input = writeTemp(b.name, b.text);
+  fs::path png = fs::temp_directory_path() / "bvhlab_cli_test/should_not_exist.png";
+  fs::remove(png);
+  Result r = run("render " + input.string() + " -o " + png.string() + " --width 32 --height 18");
+  EXPECT_NE(r.code, 0);
+  EXPECT_LT(r.code, 128) << "crashed: " << r.err;
+  EXPECT_FALSE(fs::exists(png));
+  EXPECT_NE(r.err.find(b.expect), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, CliBadInput,
+    ::testing::Values(BadInput{"unknown_key.toml", "[camera]\neye = [0,0,5]\nfocus = 3\n", "focus"},
+                      BadInput{"wrong_type.toml", "[camera]\nfov = \"wide\"\n", "fov"},
+                      BadInput{"truncated.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n", "truncated.off"},
+                      BadInput{"nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "nan.obj"},
+                      BadInput{"range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "range.obj"},
+                      BadInput{"empty.obj", "# nothing\n", "empty.obj"},
+                      BadInput{"mesh.xyz", "1 2 3\n", "mesh.xyz"}),
+    [](const auto& info) {
+      std::string s = info.param.name;
+      for (char& c : s)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      return s;
+    });
+
+TEST(Cli, MissingInputNamesThePath) {
+  Result r = run("render /nonexistent/scene.toml");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("/nonexistent/scene.toml"), std::string::npos) << r.err;
+}
+
+}  // namespace

@@ -1,0 +1,161 @@
+// The GLSL tracer: specialisation is invisible in the image, unused modules are absent from the
+// source, the GLSL image matches the C++ mirror, and shader errors name module and line.
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "render_fixture.hpp"
+
+namespace bvhlab::test {
+namespace {
+
+constexpr int kW = 128, kH = 72;  // small: every shipped scene twice on llvmpipe in seconds
+
+class SceneTest : public ::testing::TestWithParam<std::filesystem::path> {};
+
+std::string sceneName(const ::testing::TestParamInfo<std::filesystem::path>& info) {
+  std::string s = info.param.stem().string();
+  for (char& c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return s;
+}
+
+std::unique_ptr<PreparedScene> prepare(const std::filesystem::path& path) {
+  return prepareScene(loadScene(path), "sah-binned", BuildOptions{});
+}
+
+ShaderOptions optionsFor(const PreparedScene& p) {
+  ShaderOptions o;
+  o.maxDepth = p.scene.settings.maxDepth;
+  o.bvhStackSize = stackSizeFor(std::max<uint32_t>(1, p.packed.depth));
+  return o;
+}
+
+bool needsData(const std::filesystem::path& scene) {
+  std::ifstream in(scene);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  return text.find("cache/") != std::string::npos;
+}
+
+TEST_P(SceneTest, SpecialisedImageEqualsUberImage) {
+  if (needsData(GetParam())) BVHLAB_REQUIRE_DATASETS();
+  auto p = prepare(GetParam());
+  ShaderOptions o = optionsFor(*p);
+  FrameOptions f = smallFrame(p->scene, kW, kH);
+  Rendered special = renderGpu(*p, o, f);
+  o.uber = true;
+  Rendered uber = renderGpu(*p, o, f);
+  ImageDiff d = compareRgba(special.rgba, uber.rgba);
+  EXPECT_EQ(d.maxDiff, 0) << "mean " << d.meanAbs << ", within 3: " << d.within3;
+}
+
+TEST_P(SceneTest, SpecialisedSourceLacksUnusedModules) {
+  if (needsData(GetParam())) BVHLAB_REQUIRE_DATASETS();
+  auto p = prepare(GetParam());
+  SceneFeatures f = analyzeScene(p->scene);
+  AssembledShader s = assembleTracer(f, optionsFor(*p));
+  const char* kindModules[6] = {"prim_sphere.glsl", "prim_box.glsl", "prim_cylinder.glsl",
+                                "prim_cone.glsl", "prim_torus.glsl", "prim_plane.glsl"};
+  const char* kindFunctions[6] = {"bool intersectSphere(", "bool intersectBox(", "bool intersectCylinder(",
+                                  "bool intersectCone(", "bool intersectTorus(", "bool intersectPlane("};
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_EQ(s.hasModule(kindModules[k]), f.kinds[k]) << kindModules[k];
+    EXPECT_EQ(s.source.find(kindFunctions[k]) != std::string::npos, f.kinds[k]) << kindFunctions[k];
+  }
+  EXPECT_EQ(s.hasModule("ray_triangle.glsl"), f.mesh);
+  EXPECT_EQ(s.source.find("bool traceClosest(") != std::string::npos, f.mesh);
+  EXPECT_EQ(s.hasModule("textures.glsl"), f.textures);
+  EXPECT_EQ(s.hasModule("world_map.glsl"), f.world == WorldKind::Map);
+  EXPECT_EQ(s.hasModule("world_sky.glsl"), f.world == WorldKind::Sky);
+  EXPECT_EQ(s.source.find("#define HAS_REFRACTION") != std::string::npos, f.refraction);
+  EXPECT_EQ(s.source.find("#define HAS_SHADOWS") != std::string::npos, f.shadows);
+  if (!f.reflection && !f.refraction) EXPECT_NE(s.source.find("#define MAX_DEPTH 1\n"), std::string::npos);
+  AssembledShader uber = assembleTracer(f, [&] { ShaderOptions o = optionsFor(*p); o.uber = true; return o; }());
+  EXPECT_GE(uber.source.size(), s.source.size());
+}
+
+// GLSL vs the C++ mirror. Tolerance: mean |diff| < 0.5/255 and >= 99% of pixels within 3/255.
+// Pixels may differ where float results differ in the last bits (transcendentals, FMA contraction)
+// and flip a decision: a silhouette pixel, a shadow boundary, a texture seam.
+TEST_P(SceneTest, GlslImageMatchesCppMirror) {
+  if (needsData(GetParam())) BVHLAB_REQUIRE_DATASETS();
+  auto p = prepare(GetParam());
+  ShaderOptions o = optionsFor(*p);
+  FrameOptions f = smallFrame(p->scene, kW, kH);
+  Rendered gpu = renderGpu(*p, o, f);
+  ReferenceImage cpu = renderReference(p->scene, p->data, p->packed, o, f);
+  ImageDiff d = compareRgba(gpu.rgba, cpu.rgba);
+  EXPECT_LT(d.meanAbs, 0.5) << GetParam();
+  EXPECT_GE(d.within3, 0.99) << GetParam() << " max diff " << d.maxDiff;
+}
+
+INSTANTIATE_TEST_SUITE_P(Shipped, SceneTest, ::testing::ValuesIn(shippedScenes()), sceneName);
+
+TEST(Render, ReportBranchingDiffersFromFullOnlyWhereGlassIs) {
+  auto p = prepare(sourceDir() / "datasets/scenes/refraction.toml");
+  ShaderOptions o = optionsFor(*p);
+  FrameOptions f = smallFrame(p->scene, kW, kH);
+  Rendered full = renderGpu(*p, o, f);
+  o.branching = Branching::Report;
+  Rendered report = renderGpu(*p, o, f);
+  ImageDiff d = compareRgba(full.rgba, report.rgba);
+  EXPECT_GT(d.maxDiff, 0) << "a scene with glass must show the compromise";
+  ReferenceImage cpu = renderReference(p->scene, p->data, p->packed, o, f);
+  EXPECT_LT(compareRgba(report.rgba, cpu.rgba).meanAbs, 0.5);
+}
+
+TEST(Render, DebugViewsBlackOnMissNeverBlackOnHit) {
+  auto p = prepare(sourceDir() / "datasets/scenes/sphere.toml");
+  ShaderOptions o = optionsFor(*p);
+  FrameOptions f = smallFrame(p->scene, kW, kH);
+  o.view = View::PrimId;
+  o.countStats = true;
+  Rendered ids = renderGpu(*p, o, f);
+  for (View v : {View::Normal, View::Depth, View::PrimId}) {
+    o.view = v;
+    o.countStats = false;
+    Rendered r = renderGpu(*p, o, f);
+    size_t hits = 0;
+    for (size_t i = 0; i < ids.stats.size(); ++i) {
+      bool hit = ids.stats[i].w != 0;
+      hits += hit;
+      int sum = r.rgba[4 * i] + r.rgba[4 * i + 1] + r.rgba[4 * i + 2];
+      if (hit) EXPECT_GT(sum, 0) << viewName(v) << " pixel " << i;
+      else EXPECT_EQ(sum, 0) << viewName(v) << " pixel " << i;
+    }
+    EXPECT_GT(hits, 0u);
+  }
+}
+
+TEST(Render, CompileErrorNamesModuleAndLine) {
+  glContext();
+  auto p = prepare(sourceDir() / "datasets/scenes/sphere.toml");
+  AssembledShader s = assembleTracer(analyzeScene(p->scene), optionsFor(*p));
+  // Break line 3 of shade.glsl.
+  int target = 0;
+  for (const ShaderModule& m : s.modules)
+    if (m.name == "shade.glsl") target = m.firstLine + 2;
+  ASSERT_GT(target, 0);
+  std::string broken;
+  std::istringstream in(s.source);
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) broken += (n == target ? "this is not glsl;" : line) + "\n";
+  s.source = broken;
+  try {
+    compileTracerProgram(s);
+    FAIL() << "a broken shader compiled";
+  } catch (const ShaderError& e) {
+    EXPECT_NE(std::string(e.what()).find("shade.glsl:3"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Render, LogMappingHandlesMesaAndNvidiaFormats) {
+  AssembledShader s;
+  s.modules = {{"<defines>", 1, 3}, {"a.glsl", 4, 10}, {"b.glsl", 14, 5}};
+  EXPECT_EQ(s.mapLog("0:15(7): error: bad\n"), "b.glsl:2: error: bad\n");
+  EXPECT_EQ(s.mapLog("0(4) : error C0000: x\n"), "a.glsl:1: error C0000: x\n");
+  EXPECT_EQ(s.mapLog("plain\n"), "plain\n");
+}
+
+}  // namespace
+}  // namespace bvhlab::test
