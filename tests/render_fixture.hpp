@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <map>
 #include <vector>
 
 #include <gtest/gtest.h>

@@ -104,7 +104,7 @@ TEST_P(CliBadInput, OneLineErrorNonZeroExitNoOutputFile) {
 INSTANTIATE_TEST_SUITE_P(
     Cases, CliBadInput,
     ::testing::Values(BadInput{"unknown_key.toml", "[camera]\neye = [0,0,5]\nfocus = 3\n", "focus"},
-                      BadInput{"wrong_type.toml", "[camera]\nfov = \"wide\"\n", "fov"},
+                      BadInput{"wrong_type.toml", "[camera]\neye = [0,0,5]\ntarget = [0,0,0]\nfov = \"wide\"\n", "fov"},
                       BadInput{"truncated.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n", "truncated.off"},
                       BadInput{"nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "nan.obj"},
                       BadInput{"range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "range.obj"},
