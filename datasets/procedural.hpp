@@ -1,0 +1,58 @@
+// Procedural data: the project's logo and a checker texture, and meshes for tests and benchmarks.
+// Everything is a pure function of its arguments (our own SplitMix64 generator and integer hashing,
+// never std:: distributions, whose output differs between standard libraries), so the same call gives
+// bit-identical data on every machine.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include <glm/glm.hpp>
+
+#include "datasets/scene.hpp"
+
+namespace bvhlab {
+
+// The bvhlab emblem: a BVH drawn as a binary tree of boxes (root, two inner nodes, four leaves each
+// holding a triangle) on a dark rounded tile. size x size, linear RGBA, opaque, 4x4 supersampled.
+Image makeLogoTexture(int size = 512);
+
+// squares x squares checkerboard, (0,0) corner in colour `a`. Linear RGBA, opaque.
+Image makeCheckerTexture(int size = 512, int squares = 8, glm::vec3 a = glm::vec3(0.8f),
+                         glm::vec3 b = glm::vec3(0.1f));
+
+// Unit-radius UV sphere about the origin: `segments` around +Y (>= 3), `rings` pole to pole (>= 2).
+// Per-vertex normals and UVs (u around, v = 0 at the south pole); a seam column of duplicated vertices.
+// 2 * segments * (rings - 1) triangles (one per segment at each pole).
+Mesh makeUvSphere(int segments, int rings);
+
+// The closed cube [-1,1]^3, each face an n x n grid of quads (n >= 1): 12 n^2 triangles, outward
+// winding, flat per-face normals, per-face UVs. Edge vertices are repeated per face with identical
+// coordinates, so the surface is geometrically watertight.
+Mesh makeCube(int n);
+
+// The square y = 0, |x|,|z| <= 1 as an nx x nz grid of quads: 2 nx nz triangles, normals +Y, UVs.
+Mesh makeGridPlane(int nx, int nz);
+
+// `count` random triangles: centres uniform in [0,1]^3, random orientation, sizes log-uniform over
+// [minSize, maxSize] (the corner offsets' half-extent). No normals or UVs.
+Mesh makeTriangleSoup(size_t count, uint64_t seed = 1, float minSize = 0.002f, float maxSize = 0.2f);
+
+// Exactly `triangles` triangles (>= 100) of something a BVH finds hard: a bumpy, noise-displaced
+// sphere (radius ~1, 3/4 of the budget, fine and uniform) inside a clustered cloud of small
+// tetrahedra of log-uniform sizes (the rest, shell 1.4..3.5, 48 Gaussian clusters): dense and sparse
+// regions, long thin gaps and many overlapping boxes. No normals (flat shading), no UVs.
+// Deterministic in (triangles, seed).
+Mesh makeLargeMesh(size_t triangles, uint64_t seed = 1);
+
+// SplitMix64 (Steele, Lea, Flood 2014): the generator behind every random choice above.
+struct SplitMix64 {
+  uint64_t state;
+  explicit SplitMix64(uint64_t seed) : state(seed) {}
+  uint64_t next();
+  float uniform();                       // [0, 1), 24 random bits
+  float uniform(float lo, float hi) { return lo + (hi - lo) * uniform(); }
+  float normal();                        // standard normal (Box-Muller)
+  glm::vec3 unitVector();                // uniform on the unit sphere
+};
+
+}  // namespace bvhlab
