@@ -1,0 +1,45 @@
+// `bvhlab view`: an interactive first-person viewer (GLFW window, Dear ImGui overlay) over the same
+// GpuRenderer that `bvhlab render` uses, with live switching of builder, kernel, leaf size, depth
+// and view. Keys, script format and camera-path format: docs/viewer.md.
+#pragma once
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include <glm/glm.hpp>
+
+namespace bvhlab {
+
+struct ViewerOptions {
+  std::string input;                  // scene .toml or mesh file
+  std::optional<int> width, height;   // window size (default: the scene's image size)
+  std::string builder = "sah-binned";
+  std::string kernel = "stack-ordered";
+  int leafSize = 4;
+  std::optional<int> depth;
+  std::string view = "shaded";        // shaded | normal | depth | primid | visits
+  float resolutionScale = 1.0f;       // render at this fraction of the window, upscaled (0.05..1)
+  std::optional<glm::vec3> eye, target, up;
+  std::optional<float> fov;
+  std::string script;      // scripted input (docs/viewer.md); '' = interactive
+  int frames = 0;          // stop after this many frames (0 = when the window closes / the script ends)
+  std::string screenshot;  // write the last frame's image here (the render, without the overlay)
+  std::string record;      // record the camera path here (one pose per frame; R toggles)
+  std::string replay;      // replay a recorded camera path from the first frame
+  bool json = false;       // print the final state and every switch as one JSON object on stdout
+  bool overlay = true;
+};
+
+// No display to open a window on. The message says what to do instead.
+struct NoDisplayError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Opens the window and runs until it closes (or the script / --frames ends). Returns the exit code.
+// Throws NoDisplayError without a display, InputError / std::invalid_argument for bad options.
+int runViewer(const ViewerOptions& options);
+
+// False when this binary was built without GLFW and Dear ImGui (runViewer then throws).
+bool viewerAvailable();
+
+}  // namespace bvhlab
