@@ -1,0 +1,64 @@
+// SMAA 1x as a post-process of the ray-traced frame (Jimenez et al., "SMAA: Enhanced Subpixel
+// Morphological Antialiasing", CGF 31(2), 2012): edge detection, blending weights, neighbourhood
+// blending, three full-screen passes into this object's own FBOs (shaders/smaa_*.glsl; textures from
+// shaders/smaa_textures.hpp). Diagonal pattern detection is not implemented (see the report).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace bvhlab {
+
+enum class SmaaPreset { Low, Medium, High, Ultra };
+enum class SmaaEdgeMode { Luma, Color };
+
+SmaaPreset parseSmaaPreset(const std::string& name);  // throws std::invalid_argument naming the valid ones
+const char* smaaPresetName(SmaaPreset preset);
+
+struct SmaaSettings {
+  float threshold = 0.1f;        // minimum contrast of an edge (gamma-space luma or colour, 0..1)
+  int maxSearchSteps = 16;       // bilinear fetches per search direction (2 pixels each)
+  int cornerRounding = 25;       // percent of the area kept at sharp corners; 100 disables the test
+  SmaaEdgeMode edgeMode = SmaaEdgeMode::Luma;
+  // The SMAA reference presets (threshold, search steps, corner rounding): low 0.15/4/off,
+  // medium 0.1/8/off, high 0.1/16/25, ultra 0.05/32/25.
+  static SmaaSettings preset(SmaaPreset preset);
+};
+
+class SmaaPass {
+ public:
+  // Needs a current GL 4.5 context. Compiles the three passes and creates the area/search textures
+  // and the edges/weights/output targets for a width x height frame. Throws std::invalid_argument for a
+  // bad size or setting, std::runtime_error (with the driver log) if a pass fails to compile.
+  SmaaPass(int width, int height, const SmaaSettings& settings = SmaaSettings::preset(SmaaPreset::High));
+  ~SmaaPass();
+  SmaaPass(const SmaaPass&) = delete;
+  SmaaPass& operator=(const SmaaPass&) = delete;
+
+  // Runs the three passes on `colorTexture` (a GL_TEXTURE_2D, RGBA8 holding sRGB-encoded values, of
+  // this pass's size, e.g. the tracer's colour attachment). Clears its targets first. Returns the
+  // output texture (RGBA8, sRGB-encoded values), owned by this object. Does not wait for the GPU.
+  unsigned apply(unsigned colorTexture);
+  // Convenience: uploads RGBA8 bytes (bottom-up, 4*w*h), applies, waits and reads the result back.
+  std::vector<uint8_t> apply(const std::vector<uint8_t>& rgbaBottomUp);
+
+  std::vector<uint8_t> readOutput() const;      // RGBA8, bottom-up
+  std::vector<glm::vec2> readEdges() const;     // per pixel (left edge, bottom edge) in {0, 1}
+  std::vector<glm::vec4> readWeights() const;   // per pixel, layout in smaa_weights.glsl
+  unsigned outputTexture() const { return outputTex_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  const SmaaSettings& settings() const { return settings_; }
+
+ private:
+  int width_, height_;
+  SmaaSettings settings_;
+  unsigned edgesProgram_ = 0, weightsProgram_ = 0, blendProgram_ = 0, vao_ = 0;
+  unsigned edgesTex_ = 0, weightsTex_ = 0, outputTex_ = 0, areaTex_ = 0, searchTex_ = 0, uploadTex_ = 0;
+  unsigned edgesFbo_ = 0, weightsFbo_ = 0, outputFbo_ = 0;
+  unsigned linearClamp_ = 0;  // sampler: bilinear, clamped (edges and area fetches)
+};
+
+}  // namespace bvhlab

@@ -1,0 +1,90 @@
+// SMAA 1x, pass 2: blending weight calculation (Jimenez et al. 2012): for each edge stored at this
+// pixel, search both ends of its line (two pixels per bilinear fetch, decoded by the search texture),
+// read the crossing edges at the ends, look the pattern's area up in the area texture and attenuate
+// sharp corners. Prefixed with #version 450 core and: SMAA_MAX_SEARCH_STEPS (int),
+// SMAA_CORNER_ROUNDING (percent of the area kept at a detected sharp corner; 100 = no detection).
+// Conventions (edges, line frame, crossing codes, texture layouts): shaders/smaa_textures.hpp.
+// Output: rg = the bottom edge's (owner takes from below, below takes from owner),
+//         ba = the left edge's   (owner takes from the left, left takes from owner).
+
+layout(binding = 0) uniform sampler2D u_edges;    // RG8, linear filtering, clamped: bilinear search
+layout(binding = 1) uniform sampler2D u_area;     // RG32F, linear filtering, clamped
+layout(binding = 2) uniform usampler2D u_search;  // R8UI, texelFetch only
+layout(location = 0) out vec4 o_weights;
+
+#define SMAA_AREA_TILE 16
+#define SMAA_SEARCH_CODES 33
+#define SMAA_SEARCH_CONTINUE 3u
+
+// (cross, line) channels of the edges texture for a line along `along`: a horizontal line (along x)
+// is made of g edges and crossed by r edges; a vertical one the other way round.
+vec2 smaaCrossLine(vec2 e, ivec2 along) { return along.x != 0 ? e.rg : e.gr; }
+
+float smaaCrossAt(ivec2 p, ivec2 along) {
+  ivec2 size = textureSize(u_edges, 0);
+  return smaaCrossLine(texelFetch(u_edges, clamp(p, ivec2(0), size - 1), 0).rg, along).x;
+}
+
+// Distance (pixels) from p to the end of its line in `direction` (0: backward, 1: forward).
+int smaaSearch(ivec2 p, ivec2 along, ivec2 toNeighbour, int direction) {
+  vec2 invSize = 1.0 / vec2(textureSize(u_edges, 0));
+  ivec2 step = direction == 0 ? -along : along;
+  ivec2 q = direction == 0 ? p : p + along;  // first pixel of the first pair
+  for (int k = 0; k < SMAA_MAX_SEARCH_STEPS; ++k) {
+    // First pixel weighs 3/4 and second 1/4 along the line; owner row 7/8, neighbour row 1/8 across.
+    vec2 texel = vec2(q) + 0.5 + 0.25 * vec2(step) + 0.125 * vec2(toNeighbour);
+    vec2 code = round(32.0 * smaaCrossLine(textureLod(u_edges, texel * invSize, 0.0).rg, along));
+    uint s = texelFetch(u_search, ivec2(direction * SMAA_SEARCH_CODES + int(code.x), int(code.y)), 0).r;
+    if (s != SMAA_SEARCH_CONTINUE)
+      return direction == 0 ? max(2 * k - 1 + int(s), 0) : 2 * k + int(s);
+    q += 2 * step;
+  }
+  return direction == 0 ? 2 * SMAA_MAX_SEARCH_STEPS - 1 : 2 * SMAA_MAX_SEARCH_STEPS;
+}
+
+// Crossing code at the near boundary of pixel `end`: 2 = owner side, 1 = neighbour side, 3 = both.
+int smaaCrossing(ivec2 end, ivec2 along, ivec2 toNeighbour) {
+  return 2 * int(smaaCrossAt(end, along) > 0.5) + int(smaaCrossAt(end + toNeighbour, along) > 0.5);
+}
+
+vec2 smaaArea(int e1, int e2, int d1, int d2) {
+  vec2 coord = min(sqrt(vec2(d1, d2)), vec2(SMAA_AREA_TILE - 1));  // quadratic distance compression
+  vec2 texel = vec2(e1, e2) * float(SMAA_AREA_TILE) + coord + 0.5;
+  return textureLod(u_area, texel / vec2(textureSize(u_area, 0)), 0.0).rg;
+}
+
+// Sharp-corner test at one end (near boundary of pixel `end`): a crossing edge that goes on for more than
+// one pixel on a side marks a real corner, whose area is kept at SMAA_CORNER_ROUNDING percent.
+vec2 smaaCornerFactor(ivec2 end, ivec2 along, ivec2 toNeighbour, float rounding) {
+  float owner = smaaCrossAt(end, along) * smaaCrossAt(end - toNeighbour, along);
+  float other = smaaCrossAt(end + toNeighbour, along) * smaaCrossAt(end + 2 * toNeighbour, along);
+  return rounding * vec2(owner, other);
+}
+
+vec2 smaaLineWeights(ivec2 p, ivec2 along, ivec2 toNeighbour) {
+  int d1 = smaaSearch(p, along, toNeighbour, 0);
+  int d2 = smaaSearch(p, along, toNeighbour, 1);
+  ivec2 nearEnd = p - d1 * along, farEnd = p + (d2 + 1) * along;
+  int e1 = smaaCrossing(nearEnd, along, toNeighbour);
+  int e2 = smaaCrossing(farEnd, along, toNeighbour);
+  vec2 area = smaaArea(e1, e2, d1, d2);
+#if SMAA_CORNER_ROUNDING < 100
+  // The area comes from the nearer end (both when equally near).
+  float rounding = 1.0 - float(SMAA_CORNER_ROUNDING) / 100.0;
+  vec2 factor = vec2(1.0);
+  float share = d1 == d2 ? 0.5 : 1.0;
+  if (d1 <= d2) factor -= share * smaaCornerFactor(nearEnd, along, toNeighbour, rounding);
+  if (d2 <= d1) factor -= share * smaaCornerFactor(farEnd, along, toNeighbour, rounding);
+  area *= clamp(factor, 0.0, 1.0);
+#endif
+  return area;
+}
+
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  vec2 e = texelFetch(u_edges, p, 0).rg;
+  vec4 w = vec4(0.0);
+  if (e.g > 0.5) w.rg = smaaLineWeights(p, ivec2(1, 0), ivec2(0, -1));  // bottom edge: horizontal line
+  if (e.r > 0.5) w.ba = smaaLineWeights(p, ivec2(0, 1), ivec2(-1, 0));  // left edge: vertical line
+  o_weights = w;
+}
