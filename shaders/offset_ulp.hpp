@@ -1,0 +1,21 @@
+// offset_ulp.hpp — C++ mirror of offset_ulp.glsl (Wächter & Binder 2019, Ray Tracing Gems ch. 6;
+// the reasoning and the domain are there). glm's floatBitsToInt / intBitsToFloat are GLSL's: a bit
+// copy, no conversion.
+#pragma once
+#include "shaders/common.hpp"
+
+namespace bvhlab::glsl {
+
+constexpr float kOffsetUlpOrigin = 1.0f / 32.0f;
+constexpr float kOffsetUlpFloatScale = 1.0f / 65536.0f;
+constexpr float kOffsetUlpIntScale = 256.0f;
+
+inline vec3 offsetRayOriginUlp(vec3 p, vec3 n) {
+  ivec3 ulps = ivec3(kOffsetUlpIntScale * n);
+  ivec3 bitsOffset = mix(ulps, -ulps, lessThan(p, vec3(0.0f)));
+  vec3 pUlp = intBitsToFloat(floatBitsToInt(p) + bitsOffset);
+  vec3 pAbsolute = p + kOffsetUlpFloatScale * n;
+  return mix(pUlp, pAbsolute, lessThan(abs(p), vec3(kOffsetUlpOrigin)));
+}
+
+}  // namespace bvhlab::glsl
