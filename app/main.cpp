@@ -14,6 +14,7 @@
 #include "layout/layout.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/render_command.hpp"
+#include "render/viewer.hpp"
 #include "traversal/kernels.hpp"
 
 using namespace bvhlab;
@@ -128,6 +129,31 @@ int main(int argc, char** argv) {
   auto* reportCmd = app.add_subcommand("report", "regenerate DIR/report.html from DIR/results.json");
   reportCmd->add_option("dir", reportDir, "experiment output directory")->required();
 
+  ViewerOptions vo;
+  std::string viewEye, viewTarget, viewUp;
+  auto* viewCmd = app.add_subcommand("view", "interactive first-person viewer (needs a display; docs/viewer.md)");
+  viewCmd->add_option("input", vo.input, "scene .toml or mesh file")->required();
+  viewCmd->add_option("--width", vo.width, "window width");
+  viewCmd->add_option("--height", vo.height, "window height");
+  viewCmd->add_option("--builder", vo.builder, "initial BVH builder (B cycles)");
+  viewCmd->add_option("--kernel", vo.kernel, "initial traversal kernel (K cycles)");
+  viewCmd->add_option("--leaf-size", vo.leafSize, "initial max triangles per leaf (L / Shift+L)");
+  viewCmd->add_option("--depth", vo.depth, "initial max path depth ([ and ])");
+  viewCmd->add_option("--view", vo.view, "shaded | normal | depth | primid | visits (V cycles)");
+  viewCmd->add_option("--scale", vo.resolutionScale, "render at this fraction of the window (0.05..1)");
+  viewCmd->add_option("--eye", viewEye, "camera position x,y,z");
+  viewCmd->add_option("--target", viewTarget, "camera target x,y,z");
+  viewCmd->add_option("--up", viewUp, "camera up x,y,z");
+  viewCmd->add_option("--fov", vo.fov, "vertical field of view in degrees");
+  viewCmd->add_option("--script", vo.script, "scripted input file (frame-numbered key presses / poses)");
+  viewCmd->add_option("--frames", vo.frames, "stop after N frames (0 = when closed / the script ends)");
+  viewCmd->add_option("--screenshot", vo.screenshot, "write the last frame (without overlay) here");
+  viewCmd->add_option("--record", vo.record, "record the camera path to this JSON file");
+  viewCmd->add_option("--replay", vo.replay, "replay a recorded camera path");
+  viewCmd->add_flag("--json", vo.json, "print the final state and every switch as JSON");
+  viewCmd->add_flag("!--no-overlay", vo.overlay, "hide the ImGui overlay");
+
+
   auto* listBuilders = app.add_subcommand("builders", "list the BVH builders");
   auto* listKernels = app.add_subcommand("kernels", "list the traversal kernels");
 
@@ -138,6 +164,12 @@ int main(int argc, char** argv) {
       if (!target.empty()) rc.target = parseVec3(target, "--target");
       if (!up.empty()) rc.up = parseVec3(up, "--up");
       return runRender(rc);
+    }
+    if (viewCmd->parsed()) {
+      if (!viewEye.empty()) vo.eye = parseVec3(viewEye, "--eye");
+      if (!viewTarget.empty()) vo.target = parseVec3(viewTarget, "--target");
+      if (!viewUp.empty()) vo.up = parseVec3(viewUp, "--up");
+      return runViewer(vo);
     }
     if (runCmd->parsed()) {
       ro.config = config;

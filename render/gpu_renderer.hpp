@@ -34,6 +34,7 @@ class GpuRenderer {
   std::vector<uint8_t> readColor() const;      // RGBA8, rows bottom-up
   std::vector<glm::uvec4> readStats() const;   // needs ShaderOptions::countStats
   const AssembledShader& shader() const { return shader_; }
+  unsigned colorTexture() const { return colorTex_; }  // RGBA8 result, for post passes and viewers
   void setCamera(const Camera& camera);
 
  private:
