@@ -109,7 +109,12 @@ INSTANTIATE_TEST_SUITE_P(
                       BadInput{"nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "nan.obj"},
                       BadInput{"range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "range.obj"},
                       BadInput{"empty.obj", "# nothing\n", "empty.obj"},
-                      BadInput{"mesh.xyz", "1 2 3\n", "mesh.xyz"}),
+                      BadInput{"mesh.xyz", "1 2 3\n", "mesh.xyz"},
+                      BadInput{"radius.toml", "[camera]\neye = [0,0,5]\ntarget = [0,0,0]\n[[object]]\nkind = \"torus\"\nminor_radius = -1\n", "minor_radius"},
+                      BadInput{"ior.toml", "[camera]\neye = [0,0,5]\ntarget = [0,0,0]\n[[material]]\nname = \"g\"\nior = 0\n", "ior"},
+                      BadInput{"nan.toml", "[camera]\neye = [0,nan,5]\ntarget = [0,0,0]\n", "NaN"},
+                      BadInput{"nomat.toml", "[camera]\neye = [0,0,5]\ntarget = [0,0,0]\n[[object]]\nkind = \"sphere\"\nmaterial = \"x\"\n", "unknown material"},
+                      BadInput{"nofile.toml", "[camera]\neye = [0,0,5]\ntarget = [0,0,0]\n[[object]]\nkind = \"mesh\"\nmesh = \"missing.obj\"\n", "missing.obj"}),
     [](const auto& info) {
       std::string s = info.param.name;
       for (char& c : s)
