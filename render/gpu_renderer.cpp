@@ -54,7 +54,7 @@ GpuRenderer::~GpuRenderer() {
   glDeleteBuffers(1, &ubo_);
 }
 
-unsigned compileTracerProgram(const AssembledShader& shader) {
+unsigned compileFullscreenProgram(const AssembledShader& shader) {
   GLuint vs = compileStage(GL_VERTEX_SHADER, fullscreenVertexShader(), nullptr);
   GLuint fs = 0;
   try {
@@ -86,7 +86,7 @@ void GpuRenderer::compile() {
   SceneFeatures features = analyzeScene(scene_.scene);
   if (options_.bvhStackSize < 1) options_.bvhStackSize = 1;
   shader_ = assembleTracer(features, options_);
-  program_ = compileTracerProgram(shader_);
+  program_ = compileFullscreenProgram(shader_);
   glCreateVertexArrays(1, &vao_);
 }
 

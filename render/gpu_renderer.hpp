@@ -18,9 +18,10 @@ struct ShaderError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Compiles and links the full-screen vertex shader with an assembled tracer; returns the program.
+// Compiles and links the full-screen vertex shader with an assembled fragment shader (the tracer or
+// a post pass); returns the program.
 // Throws ShaderError whose message names module:line for every driver message.
-unsigned compileTracerProgram(const AssembledShader& shader);
+unsigned compileFullscreenProgram(const AssembledShader& shader);
 
 class GpuRenderer {
  public:

@@ -17,50 +17,8 @@ namespace {
 // Texture units of the passes (each pass declares its bindings).
 enum Unit { kUnit0 = 0, kUnit1 = 1, kUnit2 = 2 };
 
-GLuint compileSmaaStage(GLenum stage, const std::string& source, const std::string& name) {
-  GLuint s = glCreateShader(stage);
-  const char* text = source.c_str();
-  glShaderSource(s, 1, &text, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    glGetShaderiv(s, GL_INFO_LOG_LENGTH, &len);
-    std::string log(std::max(len, 1), '\0');
-    glGetShaderInfoLog(s, len, nullptr, log.data());
-    glDeleteShader(s);
-    throw ShaderError(name + " failed to compile (line numbers count the preset preamble):\n" + log);
-  }
-  return s;
-}
-
 GLuint linkSmaaProgram(const std::string& module, const std::string& defines) {
-  GLuint vs = compileSmaaStage(GL_VERTEX_SHADER, fullscreenVertexShader(), "full-screen vertex shader");
-  GLuint fs = 0;
-  try {
-    fs = compileSmaaStage(GL_FRAGMENT_SHADER, "#version 450 core\n" + defines + glslModule(module), module);
-  } catch (...) {
-    glDeleteShader(vs);
-    throw;
-  }
-  GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &len);
-    std::string log(std::max(len, 1), '\0');
-    glGetProgramInfoLog(program, len, nullptr, log.data());
-    glDeleteProgram(program);
-    throw ShaderError(module + " failed to link:\n" + log);
-  }
-  return program;
+  return compileFullscreenProgram(assembleModule(defines, module));
 }
 
 GLuint makeTarget(GLenum format, int width, int height, GLuint* fbo) {

@@ -157,6 +157,13 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   return s;
 }
 
+AssembledShader assembleModule(const std::string& defines, const std::string& module) {
+  Assembler a;
+  a.raw("<defines>", "#version 450 core\n" + defines);
+  a.module(module);
+  return a.take();
+}
+
 bool AssembledShader::hasModule(const std::string& name) const {
   for (const ShaderModule& m : modules)
     if (m.name == name) return true;

@@ -68,6 +68,8 @@ struct AssembledShader {
 // Effective max depth: lowered to 1 when nothing reflects or refracts (uber keeps the request).
 int effectiveDepth(const SceneFeatures& features, int requested, bool uber);
 AssembledShader assembleTracer(const SceneFeatures& features, const ShaderOptions& options);
+// A single-module full-screen pass (e.g. SMAA): `#version 450 core` + `defines` + the module.
+AssembledShader assembleModule(const std::string& defines, const std::string& module);
 std::string fullscreenVertexShader();
 
 // Name -> text of every embedded .glsl module (generated at build time from shaders/ and traversal/).

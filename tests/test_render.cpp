@@ -142,7 +142,7 @@ TEST(Render, CompileErrorNamesModuleAndLine) {
   for (int n = 1; std::getline(in, line); ++n) broken += (n == target ? "this is not glsl;" : line) + "\n";
   s.source = broken;
   try {
-    compileTracerProgram(s);
+    compileFullscreenProgram(s);
     FAIL() << "a broken shader compiled";
   } catch (const ShaderError& e) {
     EXPECT_NE(std::string(e.what()).find("shade.glsl:3"), std::string::npos) << e.what();
