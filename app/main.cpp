@@ -96,6 +96,8 @@ int main(int argc, char** argv) {
   render->add_option("--up", up, "camera up x,y,z");
   render->add_option("--fov", rc.fov, "vertical field of view in degrees");
   render->add_option("--exposure", rc.exposure, "exposure multiplier");
+  render->add_option("--aa", rc.aa, "anti-aliasing: none | smaa");
+  render->add_option("--smaa-preset", rc.smaaPreset, "SMAA quality: low | medium | high | ultra");
   render->add_flag("--cpu", rc.cpu, "render with the C++ mirror instead of OpenGL");
 
   std::string mesh, builder = "sah-binned";

@@ -4,6 +4,9 @@
 #include <cstdio>
 #include <iostream>
 
+#include <chrono>
+
+#include <glad/gl.h>
 #include <nlohmann/json.hpp>
 
 #include "datasets/image_io.hpp"
@@ -11,6 +14,7 @@
 #include "render/gl_context.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/heatmap.hpp"
+#include "render/smaa.hpp"
 #include "shaders/tracer.hpp"
 #include "traversal/kernels.hpp"
 
@@ -61,6 +65,11 @@ int runRender(const RenderCommand& cmd) {
   so.reinhard = s.reinhard;
   so.uber = cmd.uber;
   const Backend backend = parseBackend(cmd.backend);
+  if (cmd.aa != "none" && cmd.aa != "smaa")
+    throw std::invalid_argument("--aa '" + cmd.aa + "' is not available (valid now: none, smaa; ssaa4/ssaa16 are not implemented yet)");
+  const bool smaaOn = cmd.aa == "smaa";
+  const SmaaSettings smaaSettings = SmaaSettings::preset(parseSmaaPreset(cmd.smaaPreset));
+  if (smaaOn && cmd.cpu) throw std::invalid_argument("--aa smaa runs on the GPU only (no --cpu)");
 
   BuildOptions bo;
   bo.maxLeafSize = uint32_t(cmd.leafSize);
@@ -78,7 +87,7 @@ int runRender(const RenderCommand& cmd) {
   nlohmann::json out;
   std::vector<uint8_t> image;
   std::vector<glm::uvec4> stats;
-  std::vector<double> times;
+  std::vector<double> times, aaTimes;
   std::string renderer;
   const bool wantStats = cmd.json || visitsView || !cmd.visitsOutput.empty();
 
@@ -95,9 +104,23 @@ int runRender(const RenderCommand& cmd) {
     {
       // Timed frames run WITHOUT the statistics instrumentation; counts come from a separate frame.
       GpuRenderer gpu(*prepared, so, fo);
-      for (int i = 0; i < cmd.warmup; ++i) gpu.drawFrame();  // llvmpipe JIT-compiles at the first draw
-      for (int i = 0; i < cmd.frames; ++i) times.push_back(gpu.drawFrame());
-      image = gpu.readColor();
+      std::unique_ptr<SmaaPass> smaa;
+      if (smaaOn) smaa = std::make_unique<SmaaPass>(fo.width, fo.height, smaaSettings);
+      // One frame = the trace, plus the SMAA passes when on (each waited for with glFinish).
+      auto frame = [&] {
+        double ms = gpu.drawFrame();
+        if (!smaa) return ms;
+        auto start = std::chrono::steady_clock::now();
+        smaa->apply(gpu.colorTexture());
+        glFinish();
+        double aaMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        aaTimes.push_back(aaMs);
+        return ms + aaMs;
+      };
+      for (int i = 0; i < cmd.warmup; ++i) frame();  // llvmpipe JIT-compiles at the first draw
+      aaTimes.clear();
+      for (int i = 0; i < cmd.frames; ++i) times.push_back(frame());
+      image = smaa ? smaa->readOutput() : gpu.readColor();
     }
     if (wantStats) {
       ShaderOptions counted = so;
@@ -151,6 +174,11 @@ int runRender(const RenderCommand& cmd) {
     out["uber"] = so.uber;
     out["branching"] = branchingName(so.branching);
     out["storage"] = storageName(so.storage);
+    out["aa"] = cmd.aa;
+    if (smaaOn) {
+      out["smaa_preset"] = cmd.smaaPreset;
+      out["aa_ms"] = median(aaTimes);
+    }
     out["builder"] = cmd.builder;
     out["kernel"] = so.kernel;
     out["leaf_size"] = cmd.leafSize;

@@ -26,6 +26,8 @@ struct RenderCommand {
   std::optional<glm::vec3> eye, target, up;
   std::optional<float> fov;
   std::optional<float> exposure;
+  std::string aa = "none";          // none | smaa (ssaa4/ssaa16: issue 5, not yet)
+  std::string smaaPreset = "high";  // low | medium | high | ultra
   bool cpu = false;  // render with the C++ mirror instead of GL
 };
 

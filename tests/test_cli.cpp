@@ -129,3 +129,24 @@ TEST(Cli, MissingInputNamesThePath) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Cli, SmaaIsTimedAndChangesOnlyEdgePixels) {
+  fs::path none = fs::temp_directory_path() / "bvhlab_cli_test/aa_none.png";
+  fs::path smaa = fs::temp_directory_path() / "bvhlab_cli_test/aa_smaa.png";
+  std::string common = " --width 96 --height 54 --frames 1 --warmup 1 --json";
+  Result a = run("render " + scene("shadows.toml").string() + " -o " + none.string() + common);
+  Result b = run("render " + scene("shadows.toml").string() + " -o " + smaa.string() + common + " --aa smaa");
+  ASSERT_EQ(a.code, 0) << a.err;
+  ASSERT_EQ(b.code, 0) << b.err;
+  auto j = nlohmann::json::parse(b.out);
+  EXPECT_EQ(j["aa"], "smaa");
+  EXPECT_GT(j["aa_ms"].get<double>(), 0.0);
+  EXPECT_NE(std::ifstream(none, std::ios::binary).rdbuf()->in_avail(), -1);
+  Result bad = run("render " + scene("shadows.toml").string() + " --aa ssaa16");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find("not implemented"), std::string::npos) << bad.err;
+}
+
+}  // namespace
