@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "datasets/image_io.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -143,7 +145,14 @@ TEST(Cli, SmaaIsTimedAndChangesOnlyEdgePixels) {
   auto j = nlohmann::json::parse(b.out);
   EXPECT_EQ(j["aa"], "smaa");
   EXPECT_GT(j["aa_ms"].get<double>(), 0.0);
-  EXPECT_NE(std::ifstream(none, std::ios::binary).rdbuf()->in_avail(), -1);
+  bvhlab::ImageRgba8 ia = bvhlab::loadImageRgba8(none), ib = bvhlab::loadImageRgba8(smaa);
+  ASSERT_EQ(ia.rgba.size(), ib.rgba.size());
+  size_t changed = 0, pixels = ia.rgba.size() / 4;
+  for (size_t i = 0; i < pixels; ++i)
+    changed += ia.rgba[4 * i] != ib.rgba[4 * i] || ia.rgba[4 * i + 1] != ib.rgba[4 * i + 1] ||
+               ia.rgba[4 * i + 2] != ib.rgba[4 * i + 2];
+  EXPECT_GT(changed, 0u) << "SMAA changed nothing";
+  EXPECT_LT(changed, pixels / 4) << "SMAA should touch edge pixels only, not most of the image";
   Result bad = run("render " + scene("shadows.toml").string() + " --aa ssaa16");
   EXPECT_NE(bad.code, 0);
   EXPECT_NE(bad.err.find("not implemented"), std::string::npos) << bad.err;
