@@ -65,8 +65,9 @@ int runRender(const RenderCommand& cmd) {
   so.reinhard = s.reinhard;
   so.uber = cmd.uber;
   const Backend backend = parseBackend(cmd.backend);
-  if (cmd.aa != "none" && cmd.aa != "smaa")
-    throw std::invalid_argument("--aa '" + cmd.aa + "' is not available (valid now: none, smaa; ssaa4/ssaa16 are not implemented yet)");
+  if (cmd.aa != "none" && cmd.aa != "smaa" && cmd.aa != "ssaa4" && cmd.aa != "ssaa16")
+    throw std::invalid_argument("unknown --aa '" + cmd.aa + "' (valid: none, smaa, ssaa4, ssaa16)");
+  so.ssaaGrid = cmd.aa == "ssaa4" ? 2 : cmd.aa == "ssaa16" ? 4 : 1;
   const bool smaaOn = cmd.aa == "smaa";
   const SmaaSettings smaaSettings = SmaaSettings::preset(parseSmaaPreset(cmd.smaaPreset));
   if (smaaOn && cmd.cpu) throw std::invalid_argument("--aa smaa runs on the GPU only (no --cpu)");

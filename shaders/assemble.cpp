@@ -110,6 +110,8 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   d << "#define MATERIAL_ARRAY_SIZE " << std::max(1, f.numMaterials) << "\n";
   d << "#define LIGHT_ARRAY_SIZE " << std::max(1, f.numLights) << "\n";
   d << "#define BVH_STACK_SIZE " << o.bvhStackSize << "\n";
+  if (o.ssaaGrid < 1 || o.ssaaGrid > 8) throw std::invalid_argument("SSAA grid must be 1..8 per axis");
+  d << "#define SSAA_GRID " << o.ssaaGrid << "\n";
   if (uber) d << "#define UBER 1\n";
   if (o.countStats) d << "#define COUNT_STATS 1\n";
   if (o.reinhard) d << "#define TONEMAP_REINHARD 1\n";

@@ -45,6 +45,7 @@ struct ShaderOptions {
   bool countStats = false;
   bool reinhard = false;
   bool uber = false;
+  int ssaaGrid = 1;  // shaded view: ssaaGrid^2 regular sub-pixel rays per pixel (1 = off)
 };
 
 struct ShaderModule {

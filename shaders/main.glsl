@@ -28,14 +28,17 @@ float srgbEncode(float c) {
   return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
 }
 
-vec3 displayColor(vec3 c) {
+// Exposure, tone map and clamp: the displayable linear value. Supersamples are averaged here,
+// before the sRGB encode, so one bright sample cannot dominate a pixel.
+vec3 toneMap(vec3 c) {
   c *= u_exposure;
 #ifdef TONEMAP_REINHARD
   c = c / (1.0 + c);
 #endif
-  c = clamp(c, 0.0, 1.0);
-  return vec3(srgbEncode(c.r), srgbEncode(c.g), srgbEncode(c.b));
+  return clamp(c, 0.0, 1.0);
 }
+
+vec3 srgbEncode(vec3 c) { return vec3(srgbEncode(c.r), srgbEncode(c.g), srgbEncode(c.b)); }
 
 // A distinct, never-black colour per primitive id.
 vec3 idColor(int id) {
@@ -49,7 +52,18 @@ void main() {
   int primaryId = -1;
   vec3 color;
 #if VIEW == VIEW_SHADED
-  color = displayColor(radiance(ray));
+#if SSAA_GRID > 1
+  // Supersampling in the tracer: a regular SSAA_GRID x SSAA_GRID grid of sub-pixel rays.
+  vec3 sum = vec3(0.0);
+  for (int j = 0; j < SSAA_GRID; ++j)
+    for (int i = 0; i < SSAA_GRID; ++i) {
+      vec2 offset = (vec2(i, j) + 0.5) / float(SSAA_GRID) - 0.5;
+      sum += toneMap(radiance(cameraRay(gl_FragCoord.xy + offset)));
+    }
+  color = srgbEncode(sum / float(SSAA_GRID * SSAA_GRID));
+#else
+  color = srgbEncode(toneMap(radiance(ray)));
+#endif
 #else
   Hit h;
   bool found = intersectScene(ray, INF, h);

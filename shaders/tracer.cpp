@@ -346,25 +346,46 @@ struct Tracer {
 
   // ---- main.glsl --------------------------------------------------------------------------
   static float srgbEncode(float c) { return c <= 0.0031308f ? 12.92f * c : 1.055f * pow(c, 1.0f / 2.4f) - 0.055f; }
-  vec3 displayColor(vec3 c, float exposure) const {
+  vec3 toneMap(vec3 c, float exposure) const {
     c *= exposure;
     if (options.reinhard) c = c / (1.0f + c);
-    c = clamp(c, 0.0f, 1.0f);
-    return vec3(srgbEncode(c.r), srgbEncode(c.g), srgbEncode(c.b));
+    return clamp(c, 0.0f, 1.0f);
   }
+  static vec3 srgbEncode(vec3 c) { return vec3(srgbEncode(c.r), srgbEncode(c.g), srgbEncode(c.b)); }
   static vec3 idColor(int id) {
     uint32_t h = uint32_t(id) * 2654435761u;
     h ^= h >> 15;
     return vec3(0.2f) + 0.8f * vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) / 255.0f;
   }
 
-  // One pixel: returns the colour written to o_color and fills `stats` like o_stats.
-  vec3 renderPixel(Ray ray, float exposure, float sceneRadius, uvec4& stats) {
+  vec3 radiance(Ray ray) { return options.branching == Branching::Full ? radianceFull(ray) : radianceReport(ray); }
+
+  // main.glsl's cameraRay
+  Ray cameraRay(const CameraBasis& cam, vec2 resolution, vec2 pixel) const {
+    vec2 ndc = 2.0f * pixel / resolution - 1.0f;
+    return Ray{cam.eye, normalize(cam.forward + ndc.x * cam.right + ndc.y * cam.up)};
+  }
+
+  // One pixel (main.glsl's main): the colour written to o_color; fills `stats` like o_stats.
+  vec3 renderPixel(const CameraBasis& cam, vec2 resolution, vec2 fragCoord, float exposure, float sceneRadius,
+                   uvec4& stats) {
     counters = Counters{};
+    Ray ray = cameraRay(cam, resolution, fragCoord);
     int primaryId = -1;
     vec3 color;
     if (options.view == View::Shaded) {
-      color = displayColor(options.branching == Branching::Full ? radianceFull(ray) : radianceReport(ray), exposure);
+      const int SSAA_GRID = options.ssaaGrid;
+      if (SSAA_GRID > 1) {
+        vec3 sum = vec3(0.0f);
+        for (int j = 0; j < SSAA_GRID; ++j)
+          for (int i = 0; i < SSAA_GRID; ++i) {
+            vec2 offset = (vec2(float(i), float(j)) + 0.5f) / float(SSAA_GRID) - 0.5f;
+            sum += toneMap(radiance(cameraRay(cam, resolution, fragCoord + offset)), exposure);
+          }
+        color = srgbEncode(sum / float(SSAA_GRID * SSAA_GRID));
+      } else {
+        color = srgbEncode(toneMap(radiance(ray), exposure));
+      }
     } else {
       Hit h;
       bool found = intersectScene(ray, INF, h);
@@ -404,12 +425,10 @@ ReferenceImage renderReference(const Scene& scene, const SceneData& data, const 
     const vec2 resolution(float(frame.width), float(frame.height));
     for (int y = first; y < frame.height; y += step)
       for (int x = 0; x < frame.width; ++x) {
-        // main.glsl: cameraRay(gl_FragCoord.xy), pixel centres at +0.5
-        vec2 pixel(float(x) + 0.5f, float(y) + 0.5f);
-        vec2 ndc = 2.0f * pixel / resolution - 1.0f;
-        Ray ray{cam.eye, normalize(cam.forward + ndc.x * cam.right + ndc.y * cam.up)};
+        // gl_FragCoord.xy: pixel centres at +0.5
+        vec2 fragCoord(float(x) + 0.5f, float(y) + 0.5f);
         size_t i = size_t(y) * frame.width + x;
-        vec3 c = tr.renderPixel(ray, frame.exposure, data.sceneRadius, img.stats[i]);
+        vec3 c = tr.renderPixel(cam, resolution, fragCoord, frame.exposure, data.sceneRadius, img.stats[i]);
         // Float -> UNORM8 conversion as GL specifies it: round(clamp(c) * 255).
         for (int k = 0; k < 3; ++k) img.rgba[4 * i + k] = uint8_t(std::lround(clamp(c[k], 0.0f, 1.0f) * 255.0f));
         img.rgba[4 * i + 3] = 255;

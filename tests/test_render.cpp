@@ -104,6 +104,24 @@ TEST(Render, ReportBranchingDiffersFromFullOnlyWhereGlassIs) {
   EXPECT_LT(compareRgba(report.rgba, cpu.rgba).meanAbs, 0.5);
 }
 
+TEST(Render, SsaaMatchesMirrorAndConvergesTowardsTheReference) {
+  auto p = prepare(sourceDir() / "datasets/scenes/textures.toml");
+  ShaderOptions o = optionsFor(*p);
+  FrameOptions f = smallFrame(p->scene, kW, kH);
+  Rendered none = renderGpu(*p, o, f);
+  o.ssaaGrid = 2;
+  Rendered ssaa4 = renderGpu(*p, o, f);
+  ReferenceImage cpu4 = renderReference(p->scene, p->data, p->packed, o, f);
+  o.ssaaGrid = 4;
+  Rendered ssaa16 = renderGpu(*p, o, f);
+  ImageDiff mirror = compareRgba(ssaa4.rgba, cpu4.rgba);
+  EXPECT_LT(mirror.meanAbs, 0.5);
+  EXPECT_GE(mirror.within3, 0.99);
+  double errNone = compareRgba(none.rgba, ssaa16.rgba).meanAbs;
+  double err4 = compareRgba(ssaa4.rgba, ssaa16.rgba).meanAbs;
+  EXPECT_LT(err4, 0.7 * errNone) << "none " << errNone << " vs ssaa4 " << err4;
+}
+
 TEST(Render, DebugViewsBlackOnMissNeverBlackOnHit) {
   auto p = prepare(sourceDir() / "datasets/scenes/sphere.toml");
   ShaderOptions o = optionsFor(*p);
