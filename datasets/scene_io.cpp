@@ -241,7 +241,9 @@ class SceneReader {
   [[noreturn]] void failMissing(const toml::node& n, const std::string& what, const std::string& given,
                                 const fs::path& resolved) const {
     std::string msg = what + " '" + given + "' not found (looked for " + resolved.string() + ")";
-    if (resolved.string().find("datasets/cache") != std::string::npos) msg += "; run `bash datasets/fetch.sh`";
+    std::error_code ec;
+    if (resolved.string().find("datasets/cache") != std::string::npos && !fs::is_directory(resolved.parent_path(), ec))
+      msg += "; the dataset cache is missing: run `bash datasets/fetch.sh`";
     fail(n, msg);
   }
 
