@@ -64,6 +64,7 @@ int runRender(const RenderCommand& cmd) {
   so.storage = parseStorage(cmd.storage);
   so.reinhard = s.reinhard;
   so.uber = cmd.uber;
+  so.robust = parseRobustness(cmd.robust);
   const Backend backend = parseBackend(cmd.backend);
   if (cmd.aa != "none" && cmd.aa != "smaa" && cmd.aa != "ssaa4" && cmd.aa != "ssaa16")
     throw std::invalid_argument("unknown --aa '" + cmd.aa + "' (valid: none, smaa, ssaa4, ssaa16)");
@@ -176,6 +177,7 @@ int runRender(const RenderCommand& cmd) {
     out["branching"] = branchingName(so.branching);
     out["storage"] = storageName(so.storage);
     out["aa"] = cmd.aa;
+    out["robust"] = robustnessName(so.robust);
     if (smaaOn) {
       out["smaa_preset"] = cmd.smaaPreset;
       out["aa_ms"] = median(aaTimes);

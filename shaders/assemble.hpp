@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "datasets/scene.hpp"
+#include "traversal/kernels.hpp"
 
 namespace bvhlab {
 
@@ -45,7 +46,8 @@ struct ShaderOptions {
   bool countStats = false;
   bool reinhard = false;
   bool uber = false;
-  int ssaaGrid = 1;  // shaded view: ssaaGrid^2 regular sub-pixel rays per pixel (1 = off)
+  int ssaaGrid = 1;
+  Robustness robust = Robustness::Fast;  // ray-box/ray-triangle pair and secondary-ray offset  // shaded view: ssaaGrid^2 regular sub-pixel rays per pixel (1 = off)
 };
 
 struct ShaderModule {

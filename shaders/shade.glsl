@@ -8,8 +8,12 @@
 #define RAY_OFFSET_SCALE 1e-4
 
 vec3 offsetRayOrigin(vec3 p, vec3 towards) {
+#ifdef RAY_OFFSET_ULP
+  return offsetRayOriginUlp(p, towards);  // --robust watertight: Waechter & Binder's ULP-based offset
+#else
   float scale = RAY_OFFSET_SCALE * (1.0 + max(max(abs(p.x), abs(p.y)), abs(p.z)));
   return p + towards * scale;
+#endif
 }
 
 vec3 surfaceAlbedo(MaterialData m, vec2 uv) {

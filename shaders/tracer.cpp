@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "shaders/common.hpp"
+#include "shaders/offset_ulp.hpp"
 #include "shaders/primitives.hpp"
 #include "traversal/kernels.hpp"
 
@@ -131,7 +132,7 @@ struct Tracer {
     if (MESH_PRESENT) {
       counters.meshRays++;
       MeshHit mh;
-      if (kernel.traceClosest(storage, ray, 0.0f, hit.t, mh, counters)) {
+      if (kernel.closest(options.robust)(storage, ray, 0.0f, hit.t, mh, counters)) {
         found = true;
         vec3 v0, v1, v2;
         loadTriangle(storage, mh.tri, v0, v1, v2);
@@ -161,7 +162,7 @@ struct Tracer {
     }
     if (MESH_PRESENT) {
       counters.meshRays++;
-      if (kernel.traceAny(storage, ray, 0.0f, tMax, counters)) return true;
+      if (kernel.any(options.robust)(storage, ray, 0.0f, tMax, counters)) return true;
     }
     return false;
   }
@@ -191,7 +192,8 @@ struct Tracer {
   }
 
   // ---- shade.glsl -------------------------------------------------------------------------
-  static vec3 offsetRayOrigin(vec3 p, vec3 towards) {
+  vec3 offsetRayOrigin(vec3 p, vec3 towards) const {
+    if (options.robust == Robustness::Watertight) return offsetRayOriginUlp(p, towards);  // RAY_OFFSET_ULP
     float scale = RAY_OFFSET_SCALE * (1.0f + max(max(abs(p.x), abs(p.y)), abs(p.z)));
     return p + towards * scale;
   }

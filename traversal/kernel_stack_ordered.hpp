@@ -2,15 +2,15 @@
 // bound and counter definitions are documented there).
 #pragma once
 #include "traversal/layout.hpp"
-#include "traversal/ray_box.hpp"
-#include "traversal/ray_triangle.hpp"
+#include "traversal/intersectors.hpp"
 
 namespace bvhlab::glsl::stack_ordered {
 
+template <class Tests>
 inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
                             Counters& c) {
   hit = MeshHit{tMax, -1, vec2(0.0f)};
-  vec3 invDir = rayInverseDirection(ray.dir);
+  vec3 invDir = Tests::rayInverseDirection(ray.dir);
   StackArray<int> stackNode(s.stackSize);
   StackArray<float> stackEnter(s.stackSize);
   int sp = 0;
@@ -21,7 +21,7 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
   float tEnter;
   c.nodeVisits++;
   loadNode(s, node, bmin, bmax, a, escape, count);
-  if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
+  if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
   while (true) {
     if (count > 0u) {
       for (uint i = 0u; i < count; ++i) {
@@ -31,7 +31,7 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
         float t;
         vec2 bary;
         c.triTests++;
-        if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+        if (Tests::intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
           hit = MeshHit{t, tri, bary};
           if (anyHit) return true;
         }
@@ -43,10 +43,10 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
       float leftEnter, rightEnter;
       c.nodeVisits++;
       loadNode(s, left, bmin, bmax, leftA, escape, leftCount);
-      bool hitLeft = intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, leftEnter);
+      bool hitLeft = Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, leftEnter);
       c.nodeVisits++;
       loadNode(s, right, bmin, bmax, rightA, escape, rightCount);
-      bool hitRight = intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, rightEnter);
+      bool hitRight = Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, rightEnter);
       if (hitLeft && hitRight) {
         if (sp == s.stackSize) {
           c.stackOverflow = true;
@@ -77,13 +77,15 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
   return hit.tri >= 0;
 }
 
+template <class Tests = FastTests>
 inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
-  return traverseOrdered(s, ray, tMin, tMax, false, hit, c);
+  return traverseOrdered<Tests>(s, ray, tMin, tMax, false, hit, c);
 }
 
+template <class Tests = FastTests>
 inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
   MeshHit hit;
-  return traverseOrdered(s, ray, tMin, tMax, true, hit, c);
+  return traverseOrdered<Tests>(s, ray, tMin, tMax, true, hit, c);
 }
 
 }  // namespace bvhlab::glsl::stack_ordered

@@ -2,15 +2,15 @@
 // Algorithm 2; stack bound and counter definitions are documented there).
 #pragma once
 #include "traversal/layout.hpp"
-#include "traversal/ray_box.hpp"
-#include "traversal/ray_triangle.hpp"
+#include "traversal/intersectors.hpp"
 
 namespace bvhlab::glsl::stack_unordered {
 
+template <class Tests>
 inline bool traverseUnordered(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
                               Counters& c) {
   hit = MeshHit{tMax, -1, vec2(0.0f)};
-  vec3 invDir = rayInverseDirection(ray.dir);
+  vec3 invDir = Tests::rayInverseDirection(ray.dir);
   StackArray<int> stack(s.stackSize);
   int sp = 0;
   stack[sp++] = 0;
@@ -28,7 +28,7 @@ inline bool traverseUnordered(const Storage& s, Ray ray, float tMin, float tMax,
         float t;
         vec2 bary;
         c.triTests++;
-        if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+        if (Tests::intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
           hit = MeshHit{t, tri, bary};
           if (anyHit) return true;
         }
@@ -41,7 +41,7 @@ inline bool traverseUnordered(const Storage& s, Ray ray, float tMin, float tMax,
       float tEnter;
       c.nodeVisits++;
       loadNode(s, children[k], bmin, bmax, childA, childEscape, childCount);
-      if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) continue;
+      if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) continue;
       if (sp == s.stackSize) {
         c.stackOverflow = true;
         return hit.tri >= 0;
@@ -52,13 +52,15 @@ inline bool traverseUnordered(const Storage& s, Ray ray, float tMin, float tMax,
   return hit.tri >= 0;
 }
 
+template <class Tests = FastTests>
 inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
-  return traverseUnordered(s, ray, tMin, tMax, false, hit, c);
+  return traverseUnordered<Tests>(s, ray, tMin, tMax, false, hit, c);
 }
 
+template <class Tests = FastTests>
 inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
   MeshHit hit;
-  return traverseUnordered(s, ray, tMin, tMax, true, hit, c);
+  return traverseUnordered<Tests>(s, ray, tMin, tMax, true, hit, c);
 }
 
 }  // namespace bvhlab::glsl::stack_unordered

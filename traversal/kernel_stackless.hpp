@@ -2,15 +2,15 @@
 // are documented there).
 #pragma once
 #include "traversal/layout.hpp"
-#include "traversal/ray_box.hpp"
-#include "traversal/ray_triangle.hpp"
+#include "traversal/intersectors.hpp"
 
 namespace bvhlab::glsl::stackless {
 
+template <class Tests>
 inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
                               Counters& c) {
   hit = MeshHit{tMax, -1, vec2(0.0f)};
-  vec3 invDir = rayInverseDirection(ray.dir);
+  vec3 invDir = Tests::rayInverseDirection(ray.dir);
   uint node = 0u;
   while (node != kEscapeEnd) {
     vec3 bmin, bmax;
@@ -18,7 +18,7 @@ inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax,
     float tEnter;
     c.nodeVisits++;
     loadNode(s, int(node), bmin, bmax, a, escape, count);
-    if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
+    if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
       node = escape;
       continue;
     }
@@ -33,7 +33,7 @@ inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax,
       float t;
       vec2 bary;
       c.triTests++;
-      if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+      if (Tests::intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
         hit = MeshHit{t, tri, bary};
         if (anyHit) return true;
       }
@@ -43,13 +43,15 @@ inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax,
   return hit.tri >= 0;
 }
 
+template <class Tests = FastTests>
 inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
-  return traverseStackless(s, ray, tMin, tMax, false, hit, c);
+  return traverseStackless<Tests>(s, ray, tMin, tMax, false, hit, c);
 }
 
+template <class Tests = FastTests>
 inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
   MeshHit hit;
-  return traverseStackless(s, ray, tMin, tMax, true, hit, c);
+  return traverseStackless<Tests>(s, ray, tMin, tMax, true, hit, c);
 }
 
 }  // namespace bvhlab::glsl::stackless

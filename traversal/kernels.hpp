@@ -18,12 +18,23 @@ using TraceClosestFn = bool (*)(const glsl::Storage&, glsl::Ray, float tMin, flo
                                 glsl::Counters&);
 using TraceAnyFn = bool (*)(const glsl::Storage&, glsl::Ray, float tMin, float tMax, glsl::Counters&);
 
+// Which ray-box / ray-triangle pair a kernel runs with (traversal/intersectors.hpp; issue 4):
+// fast = slab test + Moller-Trumbore; watertight = Ize's robust slab test + Woop et al.'s
+// watertight triangle test (+ the ULP-based secondary-ray offset in the tracer).
+enum class Robustness { Fast, Watertight };
+Robustness parseRobustness(const std::string& name);  // throws std::invalid_argument naming the valid ones
+const char* robustnessName(Robustness r);
+
 struct KernelInfo {
   std::string name;         // e.g. "stack-ordered"
   std::string description;  // one line for `bvhlab kernels`
   std::string glslFile;     // e.g. "kernel_stack_ordered.glsl"
-  TraceClosestFn traceClosest;
+  TraceClosestFn traceClosest;  // mirror with the fast tests
   TraceAnyFn traceAny;
+  TraceClosestFn traceClosestRobust;  // mirror with the robust tests
+  TraceAnyFn traceAnyRobust;
+  TraceClosestFn closest(Robustness r) const { return r == Robustness::Fast ? traceClosest : traceClosestRobust; }
+  TraceAnyFn any(Robustness r) const { return r == Robustness::Fast ? traceAny : traceAnyRobust; }
 };
 
 const std::vector<KernelInfo>& kernels();
