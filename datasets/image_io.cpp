@@ -34,7 +34,10 @@ std::unique_ptr<OIIO::ImageInput> openInput(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) fail(path, "image file not found");
   if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
-  auto in = OIIO::ImageInput::open(path.string());
+  // Keep alpha unassociated (straight), as stored in PNG: by default OIIO premultiplies on read.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = OIIO::ImageInput::open(path.string(), &config);
   if (!in) fail(path, "cannot read image (" + oneLine(OIIO::geterror()) + ")");
   const OIIO::ImageSpec& spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) fail(path, "empty image");
@@ -173,6 +176,7 @@ void saveImageRgba8(const fs::path& path, int width, int height, const std::vect
                                 std::to_string(rgbaBottomUp.size()) + " bytes for a " + std::to_string(width) +
                                 "x" + std::to_string(height) + " RGBA8 image");
   OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
+  spec.attribute("oiio:UnassociatedAlpha", 1);  // the bytes are straight alpha: write them as they are
   writeAtomically(path, [&](const fs::path& tmp) {
     writeOiio(path, tmp, "png", spec, rgbaBottomUp.data(), size_t(width) * 4);
   });

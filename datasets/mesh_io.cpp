@@ -261,6 +261,14 @@ Declared precheckStl(std::string_view text, bool& binary) {
     std::memcpy(&count, text.data() + 80, 4);  // little-endian on every platform we build for
     if (84 + 50 * uint64_t(count) == text.size()) {
       binary = true;
+      // OpenMesh merges STL vertices in a std::map keyed by position: NaN there breaks the ordering
+      // the map relies on, so reject non-finite coordinates before it sees them.
+      for (uint32_t i = 0; i < count; ++i)
+        for (int k = 0; k < 9; ++k) {
+          float v = 0.0f;
+          std::memcpy(&v, text.data() + 84 + 50 * size_t(i) + 12 + 4 * k, 4);
+          if (!std::isfinite(v)) fail("triangle " + std::to_string(i) + ": vertex coordinate is NaN or infinite");
+        }
       return Declared{std::nullopt, size_t(count)};
     }
   }
@@ -622,8 +630,18 @@ Mesh loadMeshImpl(const fs::path& path) {
     for (size_t k = 1; k + 1 < n; ++k) mesh.triangles.emplace_back(idx[0], idx[k], idx[k + 1]);
   }
 
-  const bool everyNormal = std::all_of(soup.hasNormal.begin(), soup.hasNormal.end(), [](uint8_t b) { return b; });
-  if (everyNormal) {
+  // Attributes count as present when every vertex a triangle uses has one; vertices no triangle uses
+  // (files have them) get a placeholder so the arrays stay parallel to the positions.
+  std::vector<uint8_t> used(nV, 0);
+  for (const glm::uvec3& t : mesh.triangles) used[t.x] = used[t.y] = used[t.z] = 1;
+  auto everyUsed = [&](const std::vector<uint8_t>& has) {
+    for (size_t v = 0; v < nV; ++v)
+      if (used[v] && !has[v]) return false;
+    return true;
+  };
+  if (everyUsed(soup.hasNormal)) {
+    for (size_t v = 0; v < nV; ++v)
+      if (!used[v]) soup.normals[v] = glm::vec3(0.0f, 0.0f, 1.0f);
     if (!allFinite(soup.normals)) fail("vertex normal is NaN or infinite");
     // A zero normal carries no direction: then the file's normals are unusable and we drop them all
     // (the renderer falls back to geometric normals). 1e-12 on the squared length: far below any
@@ -635,10 +653,9 @@ Mesh loadMeshImpl(const fs::path& path) {
       for (glm::vec3& n : mesh.normals) n = glm::normalize(n);
     }
   }
-  const bool everyUv = std::all_of(soup.hasUv.begin(), soup.hasUv.end(), [](uint8_t b) { return b; });
-  if (everyUv) {
+  if (everyUsed(soup.hasUv)) {
     if (!allFinite(soup.uvs)) fail("texture coordinate is NaN or infinite");
-    mesh.uvs = std::move(soup.uvs);
+    mesh.uvs = std::move(soup.uvs);  // unused vertices keep (0, 0)
   }
   return mesh;
 }
