@@ -431,3 +431,24 @@ TEST(MeshScenes, CameraFramesTheMeshAndTheGroundTouchesIt) {
   EXPECT_EQ(bare.objects.size(), 1u);
   EXPECT_EQ(bare.objects[0].kind, ObjectKind::Mesh);
 }
+
+// ---- documentation ---------------------------------------------------------------------------------
+
+TEST(SceneDocs, TheCompleteExampleLoads) {
+  if (!fs::exists(kSource / "datasets/cache/meshes/bunny00.off"))
+    GTEST_SKIP() << "needs the dataset cache: run `bash datasets/fetch.sh`";
+  const std::string doc = readFile(kSource / "docs/scene-format.md");
+  const size_t begin = doc.find("```toml\n");
+  ASSERT_NE(begin, std::string::npos);
+  const size_t end = doc.find("```", begin + 8);
+  std::string example = doc.substr(begin + 8, end - begin - 8);
+  // Its paths are written relative to datasets/scenes/.
+  for (size_t at = example.find("../cache/"); at != std::string::npos; at = example.find("../cache/", at))
+    example.replace(at, 9, (kSource / "datasets/cache").string() + "/");
+  TempDir tmp;
+  writeFile(tmp / "example.toml", example);
+  const Scene s = loadScene(tmp / "example.toml");
+  EXPECT_EQ(s.objects.size(), 4u);
+  EXPECT_EQ(s.meshes.size(), 1u);
+  EXPECT_EQ(s.world.kind, WorldKind::Map);
+}
