@@ -209,8 +209,10 @@ Declared precheckObj(std::string_view text) {
   std::string_view line;
   long long nV = 0, nT = 0, nN = 0;
   size_t nF = 0;
-  struct Ref { long long index; size_t line; char kind; };
-  std::vector<Ref> forward;  // positive references checked once all counts are known
+  // Positive indices may point forward, so they are checked once all counts are known: keep, per
+  // element kind, the largest index seen and the line that holds it.
+  struct MaxRef { long long index = 0; size_t line = 0; };
+  MaxRef maxRef[3];
   while (sc.next(line)) {
     auto t = tokens(line);
     if (t.empty() || t[0].front() == '#') continue;
@@ -222,7 +224,6 @@ Declared precheckObj(std::string_view text) {
       for (size_t c = 1; c < t.size(); ++c) {
         // corner = v | v/vt | v//vn | v/vt/vn
         std::string_view corner = t[c];
-        const char kinds[3] = {'v', 't', 'n'};
         const long long counts[3] = {nV, nT, nN};
         for (int part = 0; part < 3 && !corner.empty(); ++part) {
           const size_t slash = corner.find('/');
@@ -238,19 +239,18 @@ Declared precheckObj(std::string_view text) {
           if (*idx < 0 && -*idx > counts[part])
             failAt(sc.lineNo, "face: relative index " + std::to_string(*idx) + " in " + quoted(t[c]) +
                                   " points before the first element");
-          if (*idx > 0) forward.push_back({*idx, sc.lineNo, kinds[part]});
+          if (*idx > maxRef[part].index) maxRef[part] = {*idx, sc.lineNo};
         }
       }
       ++nF;
     }
   }
-  for (const Ref& r : forward) {
-    const long long n = r.kind == 'v' ? nV : r.kind == 't' ? nT : nN;
-    const char* what = r.kind == 'v' ? "vertex" : r.kind == 't' ? "texture coordinate" : "normal";
-    if (r.index > n)
-      failAt(r.line, std::string("face: ") + what + " index " + std::to_string(r.index) + " out of range (file has " +
-                         std::to_string(n) + ")");
-  }
+  const long long counts[3] = {nV, nT, nN};
+  const char* what[3] = {"vertex", "texture coordinate", "normal"};
+  for (int part = 0; part < 3; ++part)
+    if (maxRef[part].index > counts[part])
+      failAt(maxRef[part].line, std::string("face: ") + what[part] + " index " + std::to_string(maxRef[part].index) +
+                                    " out of range (file has " + std::to_string(counts[part]) + ")");
   return Declared{size_t(nV), nF};
 }
 
