@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
   render->add_option("--up", up, "camera up x,y,z");
   render->add_option("--fov", rc.fov, "vertical field of view in degrees");
   render->add_option("--exposure", rc.exposure, "exposure multiplier");
-  render->add_option("--aa", rc.aa, "anti-aliasing: none | smaa | ssaa4 | ssaa16");
+  render->add_option("--aa", rc.aa, "anti-aliasing: none | smaa | smaa-low|medium|high|ultra | ssaa4 | ssaa16");
   render->add_option("--smaa-preset", rc.smaaPreset, "SMAA quality: low | medium | high | ultra");
   render->add_option("--robust", rc.robust, "fast | watertight (robust slab + watertight triangles + ULP offsets)");
   render->add_flag("--cpu", rc.cpu, "render with the C++ mirror instead of OpenGL");

@@ -138,8 +138,14 @@ KnownNames registeredNames() {
 namespace {
 
 const std::vector<std::string> kStorages = {"tbo", "tex2d"};
-const std::vector<std::string> kAntialiasing = {"none", "smaa", "ssaa4", "ssaa16"};
+// "smaa" is SMAA with --smaa-preset (high by default); "smaa-PRESET" names the preset in the axis.
+const std::vector<std::string> kAntialiasing = {"none",        "smaa",      "smaa-low", "smaa-medium",
+                                                "smaa-high",   "smaa-ultra", "ssaa4",   "ssaa16"};
+#ifdef BVHLAB_HAVE_KERNEL_REGISTRY
+const std::vector<std::string>& kRobustness = robustnessNames();
+#else
 const std::vector<std::string> kRobustness = {"fast", "watertight"};
+#endif
 const std::vector<std::string> kBranching = {"full", "report"};
 const std::vector<std::string> kViews = {"shaded", "normal", "depth", "primid", "visits"};
 const std::vector<std::string> kBackends = {"osmesa", "egl"};

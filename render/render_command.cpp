@@ -66,11 +66,15 @@ int runRender(const RenderCommand& cmd) {
   so.uber = cmd.uber;
   so.robust = parseRobustness(cmd.robust);
   const Backend backend = parseBackend(cmd.backend);
-  if (cmd.aa != "none" && cmd.aa != "smaa" && cmd.aa != "ssaa4" && cmd.aa != "ssaa16")
-    throw std::invalid_argument("unknown --aa '" + cmd.aa + "' (valid: none, smaa, ssaa4, ssaa16)");
+  // "smaa-PRESET" is "smaa" with --smaa-preset PRESET, so an experiment axis can sweep the presets.
+  const bool smaaNamed = cmd.aa.rfind("smaa-", 0) == 0;
+  if (cmd.aa != "none" && cmd.aa != "smaa" && !smaaNamed && cmd.aa != "ssaa4" && cmd.aa != "ssaa16")
+    throw std::invalid_argument("unknown --aa '" + cmd.aa +
+                                "' (valid: none, smaa, smaa-low, smaa-medium, smaa-high, smaa-ultra, ssaa4, ssaa16)");
   so.ssaaGrid = cmd.aa == "ssaa4" ? 2 : cmd.aa == "ssaa16" ? 4 : 1;
-  const bool smaaOn = cmd.aa == "smaa";
-  const SmaaSettings smaaSettings = SmaaSettings::preset(parseSmaaPreset(cmd.smaaPreset));
+  const bool smaaOn = cmd.aa == "smaa" || smaaNamed;
+  const std::string smaaPreset = smaaNamed ? cmd.aa.substr(5) : cmd.smaaPreset;
+  const SmaaSettings smaaSettings = SmaaSettings::preset(parseSmaaPreset(smaaPreset));
   if (smaaOn && cmd.cpu) throw std::invalid_argument("--aa smaa runs on the GPU only (no --cpu)");
 
   BuildOptions bo;
@@ -179,7 +183,7 @@ int runRender(const RenderCommand& cmd) {
     out["aa"] = cmd.aa;
     out["robust"] = robustnessName(so.robust);
     if (smaaOn) {
-      out["smaa_preset"] = cmd.smaaPreset;
+      out["smaa_preset"] = smaaPreset;
       out["aa_ms"] = median(aaTimes);
     }
     out["builder"] = cmd.builder;

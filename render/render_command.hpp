@@ -26,7 +26,7 @@ struct RenderCommand {
   std::optional<glm::vec3> eye, target, up;
   std::optional<float> fov;
   std::optional<float> exposure;
-  std::string aa = "none";          // none | smaa | ssaa4 | ssaa16 (regular 2x2 / 4x4 grid in the tracer)
+  std::string aa = "none";          // none | smaa | smaa-PRESET | ssaa4 | ssaa16 (regular 2x2 / 4x4 grid in the tracer)
   std::string smaaPreset = "high";  // low | medium | high | ultra
   std::string robust = "fast";     // fast | watertight
   bool cpu = false;  // render with the C++ mirror instead of GL

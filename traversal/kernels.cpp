@@ -43,6 +43,11 @@ Robustness parseRobustness(const std::string& name) {
 
 const char* robustnessName(Robustness r) { return r == Robustness::Fast ? "fast" : "watertight"; }
 
+const std::vector<std::string>& robustnessNames() {
+  static const std::vector<std::string> names = {"fast", "watertight"};
+  return names;
+}
+
 int stackSizeFor(uint32_t treeDepth) {
   if (treeDepth > uint32_t(std::numeric_limits<int>::max()))
     throw std::invalid_argument("stackSizeFor: tree depth " + std::to_string(treeDepth) + " is too large");

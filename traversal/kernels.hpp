@@ -24,6 +24,7 @@ using TraceAnyFn = bool (*)(const glsl::Storage&, glsl::Ray, float tMin, float t
 enum class Robustness { Fast, Watertight };
 Robustness parseRobustness(const std::string& name);  // throws std::invalid_argument naming the valid ones
 const char* robustnessName(Robustness r);
+const std::vector<std::string>& robustnessNames();  // every name parseRobustness accepts, in order
 
 struct KernelInfo {
   std::string name;         // e.g. "stack-ordered"
