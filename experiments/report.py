@@ -811,6 +811,94 @@ def seed_sections(page, data):
             fmt(mae), fmt(ratio(num(on["frame_ms"]), num(off["frame_ms"])))))
 
 
+def aa_preset(row):
+    """'smaa' runs name their preset in smaa_preset; show them as smaa-PRESET like the axis values."""
+    v = label(row, "aa")
+    return "smaa-%s" % row["smaa_preset"] if v == "smaa" and row.get("smaa_preset") else v
+
+
+def worst_window(diff, frac=6):
+    """Top-left corner and size of the window (1/frac of each side) with the largest summed diff."""
+    h, w = diff.shape
+    ch, cw = max(1, h // frac), max(1, w // frac)
+    best, at = -1.0, (0, 0)
+    for y in range(0, h - ch + 1, max(1, ch // 2)):
+        for x in range(0, w - cw + 1, max(1, cw // 2)):
+            v = float(diff[y:y + ch, x:x + cw].sum())
+            if v > best:
+                best, at = v, (y, x)
+    return at, (ch, cw)
+
+
+def section_antialiasing(page, data):
+    """Issue 5's comparison: per scene, every anti-aliasing mode's frame time and image error against
+    the config's reference (16x supersampling), with the seed's two targets and crops (Fig. 12)."""
+    rows = [r for r in data.ok if r.get("aa")]
+    if len(data.values(rows, "aa")) < 2:
+        return
+    page.section("antialiasing", "Anti-aliasing: accuracy vs time")
+    page.p("Error = mean absolute difference over 8-bit RGB against the reference run (its image is "
+           "supersampled 16× when the config says so). Targets from issue 5: SMAA error ≤ 0.5× the error "
+           "without AA, SMAA frame time ≤ 0.25× SSAA 4×'s. The post-process column is the time of the three SMAA "
+           "passes alone, included in the frame time.")
+    by_key = {r.get("key"): r for r in data.ok}
+    others = [a for a in AXES if a not in ("aa",)]
+    for combo, members in sorted(group(rows, lambda r: tuple(label(r, a) for a in others)).items(),
+                                 key=lambda kv: [str(x) for x in kv[0]]):
+        modes = {}
+        for r in members:
+            modes.setdefault(aa_preset(r), r)
+        if len(modes) < 2:
+            continue
+        scene = label(members[0], "scene")
+        varying = [a for a in data.varying(rows, exclude=("aa",))]
+        title = describe(members[0], varying) or scene
+        page.add("<h3>%s</h3>" % html.escape(title))
+        none, ssaa4 = modes.get("none"), modes.get("ssaa4")
+        cells = []
+        for mode in sorted(modes, key=lambda m: (data.values(rows, "aa").index(label(modes[m], "aa"))
+                                                 if label(modes[m], "aa") in data.values(rows, "aa") else 99, m)):
+            r = modes[mode]
+            e, e0 = num(r.get("image_mae")), num(none.get("image_mae")) if none else None
+            t = num(r["frame_ms"])
+            err_ratio = ratio(e, e0) if e is not None and e0 else None
+            time_vs_ssaa4 = ratio(t, num(ssaa4["frame_ms"])) if ssaa4 else None
+            verdict = ""
+            if mode.startswith("smaa"):
+                checks = []
+                if err_ratio is not None:
+                    checks.append("error %s" % ("✓" if err_ratio <= 0.5 else "✗ (target ≤ 0.5)"))
+                if time_vs_ssaa4 is not None:
+                    checks.append("time %s" % ("✓" if time_vs_ssaa4 <= 0.25 else "✗ (target ≤ 0.25)"))
+                verdict = ", ".join(checks)
+            cells.append([html.escape(mode), fmt(t), fmt(r.get("aa_ms")) if r.get("aa_ms") is not None else "–",
+                          fmt(ratio(t, num(none["frame_ms"]))) if none else "–", fmt(time_vs_ssaa4),
+                          fmt(e), fmt(err_ratio), fmt(r.get("image_psnr")), verdict])
+        page.table("aa-%s" % html.escape(str(title)), ["mode", "frame ms", "post-process ms", "time / none",
+                                                      "time / SSAA 4×", "error", "error / none", "PSNR dB",
+                                                      "targets"], cells)
+        # Crops where the unfiltered image is furthest from the reference.
+        ref = by_key.get(none.get("reference_key")) if none else None
+        images = [(m, data.load_image(modes[m].get("image"))) for m in modes]
+        refimg = data.load_image(ref.get("image")) if ref else None
+        images = [(m, im) for m, im in images if im is not None]
+        if none is None or refimg is None or not images:
+            page.note("No crops: the aa=none run or the reference image is missing.")
+            continue
+        base = dict(images).get("none")
+        if base is None or base.shape != refimg.shape:
+            continue
+        (y, x), (ch, cw) = worst_window(np.abs(base[..., :3].astype(float) - refimg[..., :3]).sum(axis=2))
+        shown = [(m, im) for m, im in images if im.shape == refimg.shape] + [("reference", refimg)]
+        fig, axs = plt.subplots(1, len(shown), figsize=(2.0 * len(shown), 2.0 * ch / cw + 0.4))
+        for ax, (m, im) in zip(np.atleast_1d(axs), shown):
+            ax.imshow(im[y:y + ch, x:x + cw], interpolation="nearest")
+            ax.set_title(m, fontsize=8)
+            ax.set_axis_off()
+        page.figure(fig, "Crops (%d×%d pixels at x = %d, y = %d from the top, nearest-neighbour zoom) where the "
+                         "image without anti-aliasing differs most from the reference." % (cw, ch, x, y))
+
+
 def seed_fps_plot(page, data, rows, axis, xlabel, tid, sweep):
     rows = [r for r in rows if num(r.get(axis)) is not None]
     if len(data.values(rows, axis)) < 2:
@@ -865,6 +953,7 @@ def build(root):
                  "Median over runs with the same scene, builder and leaf size.")
     section_plot(body, "plot-pareto", "Accuracy vs time (Pareto fronts)", (pareto_fig, pareto_reason),
                  "Image error against each run's reference run (mean absolute error over 8-bit RGB).")
+    section_antialiasing(body, data)
     section_images(body, data)
     section_builder_table(body, data)
     section_knobs(body, knobs)

@@ -15,7 +15,7 @@ namespace bvhlab {
 namespace {
 
 // Texture units of the passes (each pass declares its bindings).
-enum Unit { kUnit0 = 0, kUnit1 = 1, kUnit2 = 2 };
+enum Unit { kUnit0 = 0, kUnit1 = 1, kUnit2 = 2, kUnit3 = 3 };
 
 GLuint linkSmaaProgram(const std::string& module, const std::string& defines) {
   return compileFullscreenProgram(assembleModule(defines, module));
@@ -67,10 +67,10 @@ const char* smaaPresetName(SmaaPreset preset) {
 SmaaSettings SmaaSettings::preset(SmaaPreset preset) {
   SmaaSettings s;
   switch (preset) {
-    case SmaaPreset::Low: s.threshold = 0.15f, s.maxSearchSteps = 4, s.cornerRounding = 100; break;
-    case SmaaPreset::Medium: s.threshold = 0.1f, s.maxSearchSteps = 8, s.cornerRounding = 100; break;
-    case SmaaPreset::High: s.threshold = 0.1f, s.maxSearchSteps = 16, s.cornerRounding = 25; break;
-    case SmaaPreset::Ultra: s.threshold = 0.05f, s.maxSearchSteps = 32, s.cornerRounding = 25; break;
+    case SmaaPreset::Low: s.threshold = 0.15f, s.maxSearchSteps = 4, s.maxDiagSearchSteps = 0, s.cornerRounding = 100; break;
+    case SmaaPreset::Medium: s.threshold = 0.1f, s.maxSearchSteps = 8, s.maxDiagSearchSteps = 0, s.cornerRounding = 100; break;
+    case SmaaPreset::High: s.threshold = 0.1f, s.maxSearchSteps = 16, s.maxDiagSearchSteps = 8, s.cornerRounding = 25; break;
+    case SmaaPreset::Ultra: s.threshold = 0.05f, s.maxSearchSteps = 32, s.maxDiagSearchSteps = 16, s.cornerRounding = 25; break;
   }
   return s;
 }
@@ -83,13 +83,16 @@ SmaaPass::SmaaPass(int width, int height, const SmaaSettings& settings)
   // Search distances beyond the area texture's reach (225 pixels) would all read its last texel.
   if (settings.maxSearchSteps < 1 || 2 * settings.maxSearchSteps > smaa::kAreaMaxDistance)
     throw std::invalid_argument("SMAA maxSearchSteps must be in 1.." + std::to_string(smaa::kAreaMaxDistance / 2));
+  if (settings.maxDiagSearchSteps < 0 || settings.maxDiagSearchSteps > smaa::kDiagMaxDistance)
+    throw std::invalid_argument("SMAA maxDiagSearchSteps must be in 0.." + std::to_string(smaa::kDiagMaxDistance));
   if (settings.cornerRounding < 0 || settings.cornerRounding > 100)
     throw std::invalid_argument("SMAA cornerRounding must be a percentage in 0..100");
 
   std::string defines = "#define SMAA_THRESHOLD " + std::to_string(settings.threshold) + "\n" +
                         "#define SMAA_EDGE_COLOR " + (settings.edgeMode == SmaaEdgeMode::Color ? "1" : "0") +
                         "\n#define SMAA_MAX_SEARCH_STEPS " + std::to_string(settings.maxSearchSteps) +
-                        "\n#define SMAA_CORNER_ROUNDING " + std::to_string(settings.cornerRounding) + "\n";
+                        "\n#define SMAA_CORNER_ROUNDING " + std::to_string(settings.cornerRounding) +
+                        "\n#define SMAA_MAX_SEARCH_STEPS_DIAG " + std::to_string(settings.maxDiagSearchSteps) + "\n";
   edgesProgram_ = linkSmaaProgram("smaa_edges.glsl", defines);
   weightsProgram_ = linkSmaaProgram("smaa_weights.glsl", defines);
   blendProgram_ = linkSmaaProgram("smaa_blend.glsl", defines);
@@ -103,6 +106,14 @@ SmaaPass::SmaaPass(int width, int height, const SmaaSettings& settings)
   glCreateTextures(GL_TEXTURE_2D, 1, &areaTex_);
   glTextureStorage2D(areaTex_, 1, GL_RG32F, area.width, area.height);
   glTextureSubImage2D(areaTex_, 0, 0, 0, area.width, area.height, GL_RG, GL_FLOAT, area.texels.data());
+
+  const smaa::DiagonalAreaTexture areaDiag = smaa::makeDiagonalAreaTexture();
+  glCreateTextures(GL_TEXTURE_2D, 1, &areaDiagTex_);
+  glTextureStorage2D(areaDiagTex_, 1, GL_RGBA32F, areaDiag.width, areaDiag.height);
+  glTextureSubImage2D(areaDiagTex_, 0, 0, 0, areaDiag.width, areaDiag.height, GL_RGBA, GL_FLOAT,
+                      areaDiag.texels.data());
+  glTextureParameteri(areaDiagTex_, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(areaDiagTex_, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
 
   const smaa::SearchTexture search = smaa::makeSearchTexture();
   glCreateTextures(GL_TEXTURE_2D, 1, &searchTex_);
@@ -130,8 +141,8 @@ SmaaPass::~SmaaPass() {
   glDeleteVertexArrays(1, &vao_);
   GLuint fbos[] = {edgesFbo_, weightsFbo_, outputFbo_};
   glDeleteFramebuffers(3, fbos);
-  GLuint textures[] = {edgesTex_, weightsTex_, outputTex_, areaTex_, searchTex_, uploadTex_};
-  glDeleteTextures(6, textures);
+  GLuint textures[] = {edgesTex_, weightsTex_, outputTex_, areaTex_, searchTex_, uploadTex_, areaDiagTex_};
+  glDeleteTextures(7, textures);
   glDeleteSamplers(1, &linearClamp_);
 }
 
@@ -158,6 +169,8 @@ unsigned SmaaPass::apply(unsigned colorTexture) {
   glBindSampler(kUnit1, linearClamp_);
   glBindTextureUnit(kUnit2, searchTex_);
   glBindSampler(kUnit2, 0);
+  glBindTextureUnit(kUnit3, areaDiagTex_);
+  glBindSampler(kUnit3, 0);
   glDrawArrays(GL_TRIANGLES, 0, 3);
 
   glBindFramebuffer(GL_FRAMEBUFFER, outputFbo_);

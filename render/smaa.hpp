@@ -1,7 +1,7 @@
 // SMAA 1x as a post-process of the ray-traced frame (Jimenez et al., "SMAA: Enhanced Subpixel
 // Morphological Antialiasing", CGF 31(2), 2012): edge detection, blending weights, neighbourhood
 // blending, three full-screen passes into this object's own FBOs (shaders/smaa_*.glsl; textures from
-// shaders/smaa_textures.hpp). Diagonal pattern detection is not implemented (see the report).
+// shaders/smaa_textures.hpp), with orthogonal and diagonal pattern detection.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -21,9 +21,10 @@ struct SmaaSettings {
   float threshold = 0.1f;        // minimum contrast of an edge (gamma-space luma or colour, 0..1)
   int maxSearchSteps = 16;       // bilinear fetches per search direction (2 pixels each)
   int cornerRounding = 25;       // percent of the area kept at sharp corners; 100 disables the test
+  int maxDiagSearchSteps = 8;    // units searched along a diagonal each way (0 = no diagonal patterns)
   SmaaEdgeMode edgeMode = SmaaEdgeMode::Luma;
-  // The SMAA reference presets (threshold, search steps, corner rounding): low 0.15/4/off,
-  // medium 0.1/8/off, high 0.1/16/25, ultra 0.05/32/25.
+  // The SMAA reference presets (threshold, search steps, diagonal steps, corner rounding):
+  // low 0.15/4/off/off, medium 0.1/8/off/off, high 0.1/16/8/25, ultra 0.05/32/16/25.
   static SmaaSettings preset(SmaaPreset preset);
 };
 
@@ -57,6 +58,7 @@ class SmaaPass {
   SmaaSettings settings_;
   unsigned edgesProgram_ = 0, weightsProgram_ = 0, blendProgram_ = 0, vao_ = 0;
   unsigned edgesTex_ = 0, weightsTex_ = 0, outputTex_ = 0, areaTex_ = 0, searchTex_ = 0, uploadTex_ = 0;
+  unsigned areaDiagTex_ = 0;
   unsigned edgesFbo_ = 0, weightsFbo_ = 0, outputFbo_ = 0;
   unsigned linearClamp_ = 0;  // sampler: bilinear, clamped (edges and area fetches)
 };

@@ -91,6 +91,82 @@ glm::vec2 lookupOrthogonal(const AreaTexture& tex, int e1, int e2, int d1, int d
                   f.y);
 }
 
+namespace {
+
+// Integral over [0, w] of clamp(g, 0, 1) for g linear from g0 to g1: split where g crosses 0 and 1.
+float integrateClamped01(float g0, float g1, float w) {
+  if (w <= 0.0f) return 0.0f;
+  // Parameters in (0, 1) where g crosses 0 or 1 (g0 != g1 whenever a crossing exists); clamp(g) is
+  // linear between consecutive cuts, so the trapezoid rule is exact there.
+  float c[2] = {1.0f, 1.0f};
+  int count = 0;
+  for (float level : {0.0f, 1.0f})
+    if ((g0 - level) * (g1 - level) < 0.0f) c[count++] = (level - g0) / (g1 - g0);
+  if (c[0] > c[1]) std::swap(c[0], c[1]);
+  const float cuts[4] = {0.0f, c[0], c[1], 1.0f};
+  float sum = 0.0f;
+  for (int i = 0; i < 3; ++i) {
+    const float a = cuts[i], b = cuts[i + 1];
+    const float ga = glm::clamp(g0 + (g1 - g0) * a, 0.0f, 1.0f), gb = glm::clamp(g0 + (g1 - g0) * b, 0.0f, 1.0f);
+    sum += 0.5f * (ga + gb) * (b - a);
+  }
+  return sum * w;
+}
+
+// Offset h(X) of the reconstructed diagonal line from the midpoint line: the shape's polyline, 0 where
+// the shape does not reach (an L covers half the run) or when there is no pattern.
+float shapeHeight(const std::vector<glm::vec2>& shape, float x) {
+  for (size_t i = 1; i < shape.size(); ++i)
+    if (x >= shape[i - 1].x && x <= shape[i].x)
+      return glm::mix(shape[i - 1].y, shape[i].y, (x - shape[i - 1].x) / (shape[i].x - shape[i - 1].x));
+  return 0.0f;
+}
+
+// Integral over X in [x0, x0 + 1] of clamp(f(X), 0, 1) where f(X) = a + s * (X - x0) + sign * h(X):
+// exact, as f is linear between the shape's vertices.
+float integrateOverPixel(const std::vector<glm::vec2>& shape, float x0, float a, float s, float sign) {
+  std::vector<float> xs = {x0, x0 + 1.0f};
+  for (const glm::vec2& v : shape)
+    if (v.x > x0 && v.x < x0 + 1.0f) xs.push_back(v.x);
+  // Every shape starts or ends at height 0 where it does not span the run (an L), so h is continuous and
+  // linear between these points.
+  std::sort(xs.begin(), xs.end());
+  float sum = 0.0f;
+  for (size_t i = 1; i < xs.size(); ++i) {
+    const float g0 = a + s * (xs[i - 1] - x0) + sign * shapeHeight(shape, xs[i - 1]);
+    const float g1 = a + s * (xs[i] - x0) + sign * shapeHeight(shape, xs[i]);
+    sum += integrateClamped01(g0, g1, xs[i] - xs[i - 1]);
+  }
+  return sum;
+}
+
+}  // namespace
+
+glm::vec4 diagonalArea(int e1, int e2, int d1, int d2) {
+  if (d1 < 0 || d2 < 0) throw std::invalid_argument("negative distance");
+  if (e1 == kCrossBoth || e2 == kCrossBoth) throw std::invalid_argument("diagonal ends have no kCrossBoth");
+  const int n = d1 + d2 + 1;
+  const std::vector<glm::vec2> shape = orthogonalShape(e1, e2, float(n + 1));
+  // Line Y(X) = X - 1/2 + h(X). Inner pixel k = [k, k+1] x [k, k+1]: covered below the line by
+  // clamp(Y(X) - k, 0, 1) = clamp(X - k - 1/2 + h, 0, 1). Outer pixel j = [j+1, j+2] x [j, j+1]: covered
+  // above the line by clamp(j + 1 - Y(X), 0, 1) = clamp(1/2 - (X - j - 1) - h, 0, 1).
+  auto inner = [&](int k) { return integrateOverPixel(shape, float(k), -0.5f, 1.0f, 1.0f); };
+  auto outer = [&](int j) { return integrateOverPixel(shape, float(j + 1), 0.5f, -1.0f, -1.0f); };
+  return glm::vec4(inner(d1), outer(d1 - 1), outer(d1), 0.0f);
+}
+
+DiagonalAreaTexture makeDiagonalAreaTexture() {
+  DiagonalAreaTexture tex;
+  tex.texels.assign(size_t(tex.width) * tex.height, glm::vec4(0.0f));
+  for (int e2 = 0; e2 < 3; ++e2)  // kCrossBoth does not occur at a diagonal end: its tiles stay 0
+    for (int e1 = 0; e1 < 3; ++e1)
+      for (int d2 = 0; d2 < kDiagTileSize; ++d2)
+        for (int d1 = 0; d1 < kDiagTileSize; ++d1)
+          tex.texels[size_t(e2 * kDiagTileSize + d2) * tex.width + e1 * kDiagTileSize + d1] =
+              diagonalArea(e1, e2, d1, d2);
+  return tex;
+}
+
 int encodeSearchBits(bool a, bool b, bool c, bool d) { return 21 * a + 7 * b + 3 * c + 1 * d; }
 
 uint8_t searchDecisionFromBits(int direction, std::array<bool, 4> cross, std::array<bool, 4> line) {

@@ -52,6 +52,43 @@ AreaTexture makeOrthogonalAreaTexture(float offset = 0.0f);
 // sqrt-compressed coordinates, clamped to the tile (the same arithmetic as smaa_weights.glsl).
 glm::vec2 lookupOrthogonal(const AreaTexture& tex, int e1, int e2, int d1, int d2);
 
+// ---- diagonal patterns ----------------------------------------------------------------------------
+// A staircase of one-pixel steps is a diagonal line. With the edge conventions above, a "unit" of a
+// slope +1 staircase at pixel q is the pair bottom(q) + left(q + (1,0)): an elbow whose corner is q's
+// lower-right corner. Pixel q lies on the inner (upper-left) side, o = q + (1,0) on the outer side, and
+// the next unit is at q + (1,1). A slope -1 staircase is the mirror image (x -> -x), which the shader
+// maps onto this frame: in mirrored coordinates bottom'(q) = bottom(mirror q) and left'(q) =
+// left(mirror q + (1,0)), so the unit left(q) + bottom(q) of a slope -1 staircase becomes a unit here.
+//
+// A run of n = d1 + d2 + 1 units q_k = q_0 + k (1,1), k = 0..n-1, is reconstructed as a line in the run's
+// frame (origin at q_0's lower-left corner): Y(X) = X - 1/2 + h(X) for X in [0, n + 1], where X - 1/2 is
+// the line through the midpoints of all the run's edges and h is the offset that the ends call for,
+// built like an orthogonal pattern (orthogonalShape with length n + 1, end heights +-1/2):
+//   start end: the staircase continues horizontally before q_0 (bottom(q_0 - (1,0)), no left(q_0 -
+//     (0,1))) -> +1/2 (kCrossOwner, the line starts at the inner corner: the edge is shallower than 45
+//     degrees); it continues vertically (left(q_0 - (0,1))) -> -1/2 (kCrossOther); else kCrossNone.
+//   far end, with q_n = q_0 + n (1,1): bottom(q_n) (horizontal continuation) -> -1/2 (kCrossOther);
+//     left(q_n) (vertical continuation) -> +1/2 (kCrossOwner); else kCrossNone.
+// (Two horizontal continuations give the line (0, 0) -> (n + 1, n): slope n / (n + 1), the straight edge
+// that makes n one-pixel steps between two two-pixel steps.)
+// The weights are areas of whole pixels on the far side of the line:
+//   inner(k): area of q_k below the line (q_k takes it from its outer neighbours);
+//   outer(k): area of o_k above the line (o_k takes it from its inner neighbours), k = -1..n-1.
+constexpr int kDiagTileSize = 20;                     // distances 0..19 units to each end
+constexpr int kDiagMaxDistance = kDiagTileSize - 1;
+
+// For the unit k = d1 of a run of d1 + d2 + 1 units: (inner(k), outer(k - 1), outer(k), 0).
+glm::vec4 diagonalArea(int e1, int e2, int d1, int d2);
+
+struct DiagonalAreaTexture {
+  int width = 4 * kDiagTileSize, height = 4 * kDiagTileSize;
+  std::vector<glm::vec4> texels;  // row-major: texel (e1 * 20 + d1, e2 * 20 + d2), read with texelFetch
+  glm::vec4 at(int e1, int e2, int d1, int d2) const {
+    return texels[size_t(e2 * kDiagTileSize + d2) * width + e1 * kDiagTileSize + d1];
+  }
+};
+DiagonalAreaTexture makeDiagonalAreaTexture();
+
 // ---- search texture ---------------------------------------------------------------------------------
 // The search reads two pixels of the line per bilinear fetch. The fetch point is placed so that the
 // first pixel (in search order) weighs 3/4 and the second 1/4 along the line, and the owner row weighs

@@ -2,7 +2,10 @@
 // pixel, search both ends of its line (two pixels per bilinear fetch, decoded by the search texture),
 // read the crossing edges at the ends, look the pattern's area up in the area texture and attenuate
 // sharp corners. Prefixed with #version 450 core and: SMAA_MAX_SEARCH_STEPS (int),
-// SMAA_CORNER_ROUNDING (percent of the area kept at a detected sharp corner; 100 = no detection).
+// SMAA_CORNER_ROUNDING (percent of the area kept at a detected sharp corner; 100 = no detection),
+// SMAA_MAX_SEARCH_STEPS_DIAG (units searched along a diagonal line each way; 0 = no diagonal patterns).
+// An edge on a staircase of two or more one-pixel steps takes its weights from the diagonal line through
+// the whole staircase instead of the orthogonal pattern of its own one-pixel line.
 // Conventions (edges, line frame, crossing codes, texture layouts): shaders/smaa_textures.hpp.
 // Output: rg = the bottom edge's (owner takes from below, below takes from owner),
 //         ba = the left edge's   (owner takes from the left, left takes from owner).
@@ -80,11 +83,69 @@ vec2 smaaLineWeights(ivec2 p, ivec2 along, ivec2 toNeighbour) {
   return area;
 }
 
+#if SMAA_MAX_SEARCH_STEPS_DIAG > 0
+// ---- diagonal patterns (frame, units and areas: shaders/smaa_textures.hpp, "diagonal patterns") ----
+layout(binding = 3) uniform sampler2D u_areaDiag;  // RGBA32F, texelFetch only
+#define SMAA_DIAG_TILE 20
+
+bool smaaEdge(ivec2 p, int channel) {  // channel 0: left edge, 1: bottom edge; nothing outside the frame
+  ivec2 size = textureSize(u_edges, 0);
+  if (any(lessThan(p, ivec2(0))) || any(greaterThanEqual(p, size))) return false;
+  return texelFetch(u_edges, p, 0)[channel] > 0.5;
+}
+
+// Edges of the slope +1 frame at local offset d from pixel o; `mirrored` maps a slope -1 staircase onto it.
+bool smaaDiagBottom(ivec2 o, ivec2 d, bool mirrored) { return smaaEdge(o + ivec2(mirrored ? -d.x : d.x, d.y), 1); }
+bool smaaDiagLeft(ivec2 o, ivec2 d, bool mirrored) { return smaaEdge(o + ivec2(mirrored ? 1 - d.x : d.x, d.y), 0); }
+bool smaaDiagUnit(ivec2 o, ivec2 d, bool mirrored) {
+  return smaaDiagBottom(o, d, mirrored) && smaaDiagLeft(o, d + ivec2(1, 0), mirrored);
+}
+
+// For the unit at local offset u (which exists): (inner(k), outer(k-1), outer(k), d1 + d2) of its run,
+// or w = 0 for a run of one unit (the orthogonal patterns describe it as well).
+vec4 smaaDiagAreas(ivec2 o, ivec2 u, bool mirrored) {
+  int d1 = 0, d2 = 0;
+  while (d1 < SMAA_MAX_SEARCH_STEPS_DIAG && smaaDiagUnit(o, u - (d1 + 1) * ivec2(1), mirrored)) ++d1;
+  while (d2 < SMAA_MAX_SEARCH_STEPS_DIAG && smaaDiagUnit(o, u + (d2 + 1) * ivec2(1), mirrored)) ++d2;
+  if (d1 + d2 == 0) return vec4(0.0);
+  ivec2 first = u - d1 * ivec2(1), next = u + (d2 + 1) * ivec2(1);
+  // End codes as crossings: 2 = owner side (+1/2, inner), 1 = other side (-1/2, outer), 0 = none. An end
+  // the search did not reach counts as none.
+  int e1 = d1 == SMAA_MAX_SEARCH_STEPS_DIAG ? 0
+           : smaaDiagLeft(o, first + ivec2(0, -1), mirrored)   ? 1
+           : smaaDiagBottom(o, first + ivec2(-1, 0), mirrored) ? 2 : 0;
+  int e2 = d2 == SMAA_MAX_SEARCH_STEPS_DIAG ? 0
+           : smaaDiagBottom(o, next, mirrored)                 ? 1
+           : smaaDiagLeft(o, next, mirrored)                   ? 2 : 0;
+  vec4 a = texelFetch(u_areaDiag, ivec2(e1 * SMAA_DIAG_TILE + d1, e2 * SMAA_DIAG_TILE + d2), 0);
+  return vec4(a.xyz, float(d1 + d2));
+}
+
+#endif
+
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   vec2 e = texelFetch(u_edges, p, 0).rg;
   vec4 w = vec4(0.0);
-  if (e.g > 0.5) w.rg = smaaLineWeights(p, ivec2(1, 0), ivec2(0, -1));  // bottom edge: horizontal line
-  if (e.r > 0.5) w.ba = smaaLineWeights(p, ivec2(0, 1), ivec2(-1, 0));  // left edge: vertical line
+  if (e.g > 0.5) {  // bottom edge: p is the inner pixel of a unit at local offset 0 in either frame
+#if SMAA_MAX_SEARCH_STEPS_DIAG > 0
+    vec4 up = smaaDiagUnit(p, ivec2(0), false) ? smaaDiagAreas(p, ivec2(0), false) : vec4(0.0);
+    vec4 down = smaaDiagUnit(p, ivec2(0), true) ? smaaDiagAreas(p, ivec2(0), true) : vec4(0.0);
+    // The longer run wins; a tie (including two single units) leaves the edge to the orthogonal patterns.
+    if (up.w != down.w) w.rg = (up.w > down.w ? up : down).xy;  // p takes inner(k); below takes outer(k-1)
+    else
+#endif
+    w.rg = smaaLineWeights(p, ivec2(1, 0), ivec2(0, -1));  // horizontal line
+  }
+  if (e.r > 0.5) {  // left edge: the riser of a slope +1 unit at p - (1,0), or of a slope -1 unit at p
+#if SMAA_MAX_SEARCH_STEPS_DIAG > 0
+    vec4 up = smaaDiagUnit(p, ivec2(-1, 0), false) ? smaaDiagAreas(p, ivec2(-1, 0), false) : vec4(0.0);
+    vec4 down = smaaDiagUnit(p, ivec2(0), true) ? smaaDiagAreas(p, ivec2(0), true) : vec4(0.0);
+    // Slope +1: p is the outer pixel o_k and its left neighbour the inner q_k; slope -1 the other way.
+    if (up.w != down.w) w.ba = up.w > down.w ? up.zx : down.xz;
+    else
+#endif
+    w.ba = smaaLineWeights(p, ivec2(0, 1), ivec2(-1, 0));  // vertical line
+  }
   o_weights = w;
 }
