@@ -1,6 +1,7 @@
 #include "render/smaa.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <stdexcept>
 
 #include <glad/gl.h>
@@ -96,6 +97,8 @@ SmaaPass::SmaaPass(int width, int height, const SmaaSettings& settings)
   edgesProgram_ = linkSmaaProgram("smaa_edges.glsl", defines);
   weightsProgram_ = linkSmaaProgram("smaa_weights.glsl", defines);
   blendProgram_ = linkSmaaProgram("smaa_blend.glsl", defines);
+  glProgramUniform1i(weightsProgram_, 0, settings.maxSearchSteps);  // see smaa_weights.glsl
+  if (settings.maxDiagSearchSteps > 0) glProgramUniform1i(weightsProgram_, 1, settings.maxDiagSearchSteps);
   glCreateVertexArrays(1, &vao_);
 
   edgesTex_ = makeTarget(GL_RG8, width, height, &edgesFbo_);
@@ -146,46 +149,60 @@ SmaaPass::~SmaaPass() {
   glDeleteSamplers(1, &linearClamp_);
 }
 
-unsigned SmaaPass::apply(unsigned colorTexture) {
+void SmaaPass::runPass(int pass, unsigned colorTexture) {
   const GLfloat zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
   glViewport(0, 0, width_, height_);
   glDisable(GL_BLEND);
   glDisable(GL_DEPTH_TEST);
   glBindVertexArray(vao_);
-
-  glBindFramebuffer(GL_FRAMEBUFFER, edgesFbo_);
-  glClearNamedFramebufferfv(edgesFbo_, GL_COLOR, 0, zero);
-  glUseProgram(edgesProgram_);
-  glBindTextureUnit(kUnit0, colorTexture);
-  glBindSampler(kUnit0, 0);
+  if (pass == 0) {
+    glBindFramebuffer(GL_FRAMEBUFFER, edgesFbo_);
+    glClearNamedFramebufferfv(edgesFbo_, GL_COLOR, 0, zero);
+    glUseProgram(edgesProgram_);
+    glBindTextureUnit(kUnit0, colorTexture);
+    glBindSampler(kUnit0, 0);
+  } else if (pass == 1) {
+    glBindFramebuffer(GL_FRAMEBUFFER, weightsFbo_);
+    glClearNamedFramebufferfv(weightsFbo_, GL_COLOR, 0, zero);
+    glUseProgram(weightsProgram_);
+    glBindTextureUnit(kUnit0, edgesTex_);
+    glBindSampler(kUnit0, linearClamp_);
+    glBindTextureUnit(kUnit1, areaTex_);
+    glBindSampler(kUnit1, linearClamp_);
+    glBindTextureUnit(kUnit2, searchTex_);
+    glBindSampler(kUnit2, 0);
+    glBindTextureUnit(kUnit3, areaDiagTex_);
+    glBindSampler(kUnit3, 0);
+  } else {
+    glBindFramebuffer(GL_FRAMEBUFFER, outputFbo_);
+    glClearNamedFramebufferfv(outputFbo_, GL_COLOR, 0, zero);
+    glUseProgram(blendProgram_);
+    glBindTextureUnit(kUnit0, colorTexture);
+    glBindSampler(kUnit0, 0);
+    glBindTextureUnit(kUnit1, weightsTex_);
+    glBindSampler(kUnit1, 0);
+  }
   glDrawArrays(GL_TRIANGLES, 0, 3);
-
-  glBindFramebuffer(GL_FRAMEBUFFER, weightsFbo_);
-  glClearNamedFramebufferfv(weightsFbo_, GL_COLOR, 0, zero);
-  glUseProgram(weightsProgram_);
-  glBindTextureUnit(kUnit0, edgesTex_);
-  glBindSampler(kUnit0, linearClamp_);
-  glBindTextureUnit(kUnit1, areaTex_);
-  glBindSampler(kUnit1, linearClamp_);
-  glBindTextureUnit(kUnit2, searchTex_);
-  glBindSampler(kUnit2, 0);
-  glBindTextureUnit(kUnit3, areaDiagTex_);
-  glBindSampler(kUnit3, 0);
-  glDrawArrays(GL_TRIANGLES, 0, 3);
-
-  glBindFramebuffer(GL_FRAMEBUFFER, outputFbo_);
-  glClearNamedFramebufferfv(outputFbo_, GL_COLOR, 0, zero);
-  glUseProgram(blendProgram_);
-  glBindTextureUnit(kUnit0, colorTexture);
-  glBindSampler(kUnit0, 0);
-  glBindTextureUnit(kUnit1, weightsTex_);
-  glBindSampler(kUnit1, 0);
-  glDrawArrays(GL_TRIANGLES, 0, 3);
-
   glBindSampler(kUnit0, 0);
   glBindSampler(kUnit1, 0);
-  checkGl("SmaaPass::apply");
+  checkGl("SmaaPass pass");
+}
+
+unsigned SmaaPass::apply(unsigned colorTexture) {
+  for (int pass = 0; pass < 3; ++pass) runPass(pass, colorTexture);
   return outputTex_;
+}
+
+std::array<double, 3> SmaaPass::applyProfiled(unsigned colorTexture) {
+  std::array<double, 3> ms{};
+  glFinish();  // whatever was queued before (the tracer's frame) is not the passes' time
+  for (int pass = 0; pass < 3; ++pass) {
+    const auto start = std::chrono::steady_clock::now();
+    runPass(pass, colorTexture);
+    glFinish();
+    ms[pass] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
+  return ms;
 }
 
 std::vector<uint8_t> SmaaPass::apply(const std::vector<uint8_t>& rgbaBottomUp) {

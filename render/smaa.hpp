@@ -3,6 +3,7 @@
 // blending, three full-screen passes into this object's own FBOs (shaders/smaa_*.glsl; textures from
 // shaders/smaa_textures.hpp), with orthogonal and diagonal pattern detection.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -42,6 +43,9 @@ class SmaaPass {
   // this pass's size, e.g. the tracer's colour attachment). Clears its targets first. Returns the
   // output texture (RGBA8, sRGB-encoded values), owned by this object. Does not wait for the GPU.
   unsigned apply(unsigned colorTexture);
+  // The same, waiting for each pass (glFinish) and returning its wall-clock ms: edges, weights, blend.
+  // For profiling and the viewer's overlay; apply() leaves the passes pipelined.
+  std::array<double, 3> applyProfiled(unsigned colorTexture);
   // Convenience: uploads RGBA8 bytes (bottom-up, 4*w*h), applies, waits and reads the result back.
   std::vector<uint8_t> apply(const std::vector<uint8_t>& rgbaBottomUp);
 
@@ -61,6 +65,8 @@ class SmaaPass {
   unsigned areaDiagTex_ = 0;
   unsigned edgesFbo_ = 0, weightsFbo_ = 0, outputFbo_ = 0;
   unsigned linearClamp_ = 0;  // sampler: bilinear, clamped (edges and area fetches)
+
+  void runPass(int pass, unsigned colorTexture);  // 0: edges, 1: weights, 2: blend
 };
 
 }  // namespace bvhlab
