@@ -114,7 +114,7 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   d << "#define SSAA_GRID " << o.ssaaGrid << "\n";
   if (uber) d << "#define UBER 1\n";
   if (o.countStats) d << "#define COUNT_STATS 1\n";
-  if (o.robust == Robustness::Watertight) d << "#define RAY_OFFSET_ULP 1\n";
+  if (o.robust.offset == OriginOffset::Ulp) d << "#define RAY_OFFSET_ULP 1\n";
   if (o.reinhard) d << "#define TONEMAP_REINHARD 1\n";
   for (int k = 0; k < 6; ++k)
     if (uber || f.kinds[k]) d << "#define " << kKindDefines[k] << " 1\n";
@@ -140,9 +140,9 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
     if (uber) a.raw("<uber>", "uniform int u_meshPresent;\n");
     a.module(o.storage == Storage::Tbo ? "storage_tbo.glsl" : "storage_tex2d.glsl");
     a.module("layout.glsl");
-    const bool robust = o.robust == Robustness::Watertight;
-    a.module(robust ? "ray_box_robust.glsl" : "ray_box.glsl");
-    a.module(robust ? "ray_triangle_watertight.glsl" : "ray_triangle.glsl");
+    // The robustness knobs (traversal/robustness.hpp): each test is a drop-in module.
+    a.module(o.robust.box == BoxTest::Robust ? "ray_box_robust.glsl" : "ray_box.glsl");
+    a.module(o.robust.triangle == TriangleTest::Watertight ? "ray_triangle_watertight.glsl" : "ray_triangle.glsl");
     a.module(findKernel(o.kernel).glslFile);
   }
   for (int k = 0; k < 6; ++k)
@@ -153,7 +153,7 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   if (uber || f.world == WorldKind::Sky) a.module("world_sky.glsl");
   if (uber || f.world == WorldKind::Map) a.module("world_map.glsl");
   a.module("world.glsl");
-  if (o.robust == Robustness::Watertight) a.module("offset_ulp.glsl");
+  if (o.robust.offset == OriginOffset::Ulp) a.module("offset_ulp.glsl");
   a.module("shade.glsl");
   if (o.view == View::Shaded) a.module(o.branching == Branching::Full ? "trace_full.glsl" : "trace_report.glsl");
   a.module("main.glsl");

@@ -46,8 +46,8 @@ struct ShaderOptions {
   bool countStats = false;
   bool reinhard = false;
   bool uber = false;
-  int ssaaGrid = 1;
-  Robustness robust = Robustness::Fast;  // ray-box/ray-triangle pair and secondary-ray offset  // shaded view: ssaaGrid^2 regular sub-pixel rays per pixel (1 = off)
+  int ssaaGrid = 1;  // shaded view: ssaaGrid^2 regular sub-pixel rays per pixel (1 = off)
+  Robustness robust = Robustness::Fast;  // triangle test, box test and secondary-ray offset, each on its own
 };
 
 struct ShaderModule {

@@ -192,11 +192,7 @@ struct Tracer {
   }
 
   // ---- shade.glsl -------------------------------------------------------------------------
-  vec3 offsetRayOrigin(vec3 p, vec3 towards) const {
-    if (options.robust == Robustness::Watertight) return offsetRayOriginUlp(p, towards);  // RAY_OFFSET_ULP
-    float scale = RAY_OFFSET_SCALE * (1.0f + max(max(abs(p.x), abs(p.y)), abs(p.z)));
-    return p + towards * scale;
-  }
+  vec3 offsetRayOrigin(vec3 p, vec3 towards) const { return bvhlab::offsetRayOrigin(p, towards, options.robust.offset); }
 
   vec3 surfaceAlbedo(const MaterialData& m, vec2 uv) const {
     vec3 albedo = vec3(m.color);
@@ -407,6 +403,13 @@ struct Tracer {
 
 }  // namespace
 }  // namespace glsl
+
+glm::vec3 offsetRayOrigin(glm::vec3 p, glm::vec3 towards, OriginOffset offset) {
+  using namespace glsl;
+  if (offset == OriginOffset::Ulp) return offsetRayOriginUlp(p, towards);  // #ifdef RAY_OFFSET_ULP
+  float scale = RAY_OFFSET_SCALE * (1.0f + max(max(abs(p.x), abs(p.y)), abs(p.z)));
+  return p + towards * scale;
+}
 
 ReferenceImage renderReference(const Scene& scene, const SceneData& data, const PackedBvh& bvh,
                                const ShaderOptions& options, const FrameOptions& frame) {

@@ -20,6 +20,11 @@ struct ReferenceImage {
   double ms = 0.0;
 };
 
+// shade.glsl's offsetRayOrigin: a secondary ray's origin, p moved off the surface towards `towards`
+// (the side the new ray leaves into) by the fixed relative epsilon or, with OriginOffset::Ulp
+// (RAY_OFFSET_ULP), by Waechter & Binder's ULP offset (shaders/offset_ulp.glsl).
+glm::vec3 offsetRayOrigin(glm::vec3 p, glm::vec3 towards, OriginOffset offset);
+
 // Renders with the C++ mirror on all cores.
 ReferenceImage renderReference(const Scene& scene, const SceneData& data, const PackedBvh& bvh,
                                const ShaderOptions& options, const FrameOptions& frame);

@@ -1,33 +1,34 @@
 // The ray-box / ray-triangle pair a kernel mirror is instantiated with: the C++ counterpart of the
-// shader assembler choosing ray_box.glsl + ray_triangle.glsl (fast) or ray_box_robust.glsl +
-// ray_triangle_watertight.glsl (--robust watertight). Kernel mirrors call Tests::intersectAabb(...)
-// where their GLSL twin calls intersectAabb(...).
+// shader assembler choosing ray_box.glsl or ray_box_robust.glsl, and ray_triangle.glsl or
+// ray_triangle_watertight.glsl, independently (traversal/robustness.hpp). Kernel mirrors call
+// Tests::intersectAabb(...) where their GLSL twin calls intersectAabb(...).
 #pragma once
 #include "traversal/ray_box.hpp"
 #include "traversal/ray_box_robust.hpp"
 #include "traversal/ray_triangle.hpp"
 #include "traversal/ray_triangle_watertight.hpp"
+#include "traversal/robustness.hpp"
 
 namespace bvhlab::glsl {
 
-struct FastTests {
-  static vec3 rayInverseDirection(vec3 dir) { return glsl::rayInverseDirection(dir); }
+template <TriangleTest Triangle, BoxTest Box>
+struct Tests {
+  static vec3 rayInverseDirection(vec3 dir) {
+    if constexpr (Box == BoxTest::Robust) return robust::rayInverseDirection(dir);
+    else return glsl::rayInverseDirection(dir);
+  }
   static bool intersectAabb(vec3 origin, vec3 invDir, vec3 bmin, vec3 bmax, float tMin, float tMax, float& tEnter) {
-    return glsl::intersectAabb(origin, invDir, bmin, bmax, tMin, tMax, tEnter);
+    if constexpr (Box == BoxTest::Robust) return robust::intersectAabb(origin, invDir, bmin, bmax, tMin, tMax, tEnter);
+    else return glsl::intersectAabb(origin, invDir, bmin, bmax, tMin, tMax, tEnter);
   }
   static bool intersectTriangle(Ray ray, vec3 v0, vec3 v1, vec3 v2, float tMin, float tMax, float& t, vec2& bary) {
-    return glsl::intersectTriangle(ray, v0, v1, v2, tMin, tMax, t, bary);
+    if constexpr (Triangle == TriangleTest::Watertight)
+      return watertight::intersectTriangle(ray, v0, v1, v2, tMin, tMax, t, bary);
+    else return glsl::intersectTriangle(ray, v0, v1, v2, tMin, tMax, t, bary);
   }
 };
 
-struct RobustTests {
-  static vec3 rayInverseDirection(vec3 dir) { return robust::rayInverseDirection(dir); }
-  static bool intersectAabb(vec3 origin, vec3 invDir, vec3 bmin, vec3 bmax, float tMin, float tMax, float& tEnter) {
-    return robust::intersectAabb(origin, invDir, bmin, bmax, tMin, tMax, tEnter);
-  }
-  static bool intersectTriangle(Ray ray, vec3 v0, vec3 v1, vec3 v2, float tMin, float tMax, float& t, vec2& bary) {
-    return watertight::intersectTriangle(ray, v0, v1, v2, tMin, tMax, t, bary);
-  }
-};
+using FastTests = Tests<TriangleTest::MollerTrumbore, BoxTest::Slab>;  // --robust fast
+using RobustTests = Tests<TriangleTest::Watertight, BoxTest::Robust>;   // --robust watertight (and tri+box)
 
 }  // namespace bvhlab::glsl

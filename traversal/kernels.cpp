@@ -11,20 +11,31 @@
 
 namespace bvhlab {
 
+// One kernel's mirror instantiations: the fast pair first (KernelInfo::traceClosest / traceAny),
+// then the four (triangle test, box test) pairs in Robustness::testsIndex() order.
+#define BVHLAB_KERNEL_MIRRORS(ns)                                                                        \
+  ns::traceClosest<glsl::FastTests>, ns::traceAny<glsl::FastTests>,                                      \
+      {ns::traceClosest<glsl::Tests<TriangleTest::MollerTrumbore, BoxTest::Slab>>,                       \
+       ns::traceClosest<glsl::Tests<TriangleTest::MollerTrumbore, BoxTest::Robust>>,                     \
+       ns::traceClosest<glsl::Tests<TriangleTest::Watertight, BoxTest::Slab>>,                           \
+       ns::traceClosest<glsl::Tests<TriangleTest::Watertight, BoxTest::Robust>>},                        \
+      {ns::traceAny<glsl::Tests<TriangleTest::MollerTrumbore, BoxTest::Slab>>,                           \
+       ns::traceAny<glsl::Tests<TriangleTest::MollerTrumbore, BoxTest::Robust>>,                         \
+       ns::traceAny<glsl::Tests<TriangleTest::Watertight, BoxTest::Slab>>,                               \
+       ns::traceAny<glsl::Tests<TriangleTest::Watertight, BoxTest::Robust>> }
+
 const std::vector<KernelInfo>& kernels() {
   static const std::vector<KernelInfo> table = {
       {"stack-unordered", "explicit stack, both hit children pushed in fixed order (the report's Algorithm 2)",
-       "kernel_stack_unordered.glsl", glsl::stack_unordered::traceClosest<>, glsl::stack_unordered::traceAny<>,
-       glsl::stack_unordered::traceClosest<glsl::RobustTests>, glsl::stack_unordered::traceAny<glsl::RobustTests>},
+       "kernel_stack_unordered.glsl", BVHLAB_KERNEL_MIRRORS(glsl::stack_unordered)},
       {"stack-ordered", "explicit stack, nearer child first, pending nodes beyond the closest hit skipped",
-       "kernel_stack_ordered.glsl", glsl::stack_ordered::traceClosest<>, glsl::stack_ordered::traceAny<>,
-       glsl::stack_ordered::traceClosest<glsl::RobustTests>, glsl::stack_ordered::traceAny<glsl::RobustTests>},
+       "kernel_stack_ordered.glsl", BVHLAB_KERNEL_MIRRORS(glsl::stack_ordered)},
       {"stackless", "no stack: depth-first walk following escape links", "kernel_stackless.glsl",
-       glsl::stackless::traceClosest<>, glsl::stackless::traceAny<>,
-       glsl::stackless::traceClosest<glsl::RobustTests>, glsl::stackless::traceAny<glsl::RobustTests>},
+       BVHLAB_KERNEL_MIRRORS(glsl::stackless)},
   };
   return table;
 }
+#undef BVHLAB_KERNEL_MIRRORS
 
 const KernelInfo& findKernel(const std::string& name) {
   for (const KernelInfo& k : kernels())
@@ -33,19 +44,6 @@ const KernelInfo& findKernel(const std::string& name) {
   msg << "unknown traversal kernel '" << name << "'; valid kernels:";
   for (const KernelInfo& k : kernels()) msg << ' ' << k.name;
   throw std::invalid_argument(msg.str());
-}
-
-Robustness parseRobustness(const std::string& name) {
-  if (name == "fast") return Robustness::Fast;
-  if (name == "watertight") return Robustness::Watertight;
-  throw std::invalid_argument("unknown robustness variant '" + name + "' (valid: fast, watertight)");
-}
-
-const char* robustnessName(Robustness r) { return r == Robustness::Fast ? "fast" : "watertight"; }
-
-const std::vector<std::string>& robustnessNames() {
-  static const std::vector<std::string> names = {"fast", "watertight"};
-  return names;
 }
 
 int stackSizeFor(uint32_t treeDepth) {

@@ -3,12 +3,14 @@
 // ray_triangle.glsl) plus its C++ mirror (kernel_*.hpp). Adding a kernel = those two files and one
 // line in kernels.cpp.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "shaders/common.hpp"
 #include "traversal/layout.hpp"  // the decoding mirrors (loadTriangle, loadAttributes, ...) for CPU tracers
+#include "traversal/robustness.hpp"  // Robustness, parseRobustness, robustnessNames (callers include this header)
 
 namespace bvhlab {
 
@@ -18,24 +20,18 @@ using TraceClosestFn = bool (*)(const glsl::Storage&, glsl::Ray, float tMin, flo
                                 glsl::Counters&);
 using TraceAnyFn = bool (*)(const glsl::Storage&, glsl::Ray, float tMin, float tMax, glsl::Counters&);
 
-// Which ray-box / ray-triangle pair a kernel runs with (traversal/intersectors.hpp; issue 4):
-// fast = slab test + Moller-Trumbore; watertight = Ize's robust slab test + Woop et al.'s
-// watertight triangle test (+ the ULP-based secondary-ray offset in the tracer).
-enum class Robustness { Fast, Watertight };
-Robustness parseRobustness(const std::string& name);  // throws std::invalid_argument naming the valid ones
-const char* robustnessName(Robustness r);
-const std::vector<std::string>& robustnessNames();  // every name parseRobustness accepts, in order
-
 struct KernelInfo {
   std::string name;         // e.g. "stack-ordered"
   std::string description;  // one line for `bvhlab kernels`
   std::string glslFile;     // e.g. "kernel_stack_ordered.glsl"
-  TraceClosestFn traceClosest;  // mirror with the fast tests
+  TraceClosestFn traceClosest;  // mirror with the fast tests (Moller-Trumbore, slab)
   TraceAnyFn traceAny;
-  TraceClosestFn traceClosestRobust;  // mirror with the robust tests
-  TraceAnyFn traceAnyRobust;
-  TraceClosestFn closest(Robustness r) const { return r == Robustness::Fast ? traceClosest : traceClosestRobust; }
-  TraceAnyFn any(Robustness r) const { return r == Robustness::Fast ? traceAny : traceAnyRobust; }
+  // The mirror instantiated with each (triangle test, box test) pair (traversal/robustness.hpp), by
+  // Robustness::testsIndex(); closest(r) / any(r) pick the one a variant runs.
+  std::array<TraceClosestFn, 4> closestByTests;
+  std::array<TraceAnyFn, 4> anyByTests;
+  TraceClosestFn closest(Robustness r) const { return closestByTests[size_t(r.testsIndex())]; }
+  TraceAnyFn any(Robustness r) const { return anyByTests[size_t(r.testsIndex())]; }
 };
 
 const std::vector<KernelInfo>& kernels();
