@@ -23,6 +23,12 @@ struct ShaderError : std::runtime_error {
 // Throws ShaderError whose message names module:line for every driver message.
 unsigned compileFullscreenProgram(const AssembledShader& shader);
 
+// Decoding of the statistics target (main.glsl's o_stats; the C++ mirror fills the same layout):
+// x node visits, y triangle tests, z mesh rays | stack-overflow bit 31, w primary id + 1 | non-finite bit 31.
+inline uint32_t statsPrimaryIdPlusOne(const glm::uvec4& s) { return s.w & 0x7FFFFFFFu; }  // 0: miss / shaded view
+// The pixel's pre-tone-mapping radiance (shaded view) or view value was NaN or infinite.
+inline bool statsNonFinite(const glm::uvec4& s) { return (s.w >> 31) != 0u; }
+
 class GpuRenderer {
  public:
   // Needs a current GL context. Throws ShaderError / std::runtime_error.

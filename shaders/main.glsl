@@ -16,7 +16,9 @@ uniform float u_sceneRadius;  // for the depth view
 
 layout(location = 0) out vec4 o_color;
 #ifdef COUNT_STATS
-layout(location = 1) out uvec4 o_stats;  // node visits, triangle tests, mesh rays | overflow bit, primary id + 1
+// x node visits, y triangle tests, z mesh rays | stack-overflow bit 31,
+// w primary id + 1 (debug views; 0 = miss or shaded view) | non-finite bit 31 (see nonFinite)
+layout(location = 1) out uvec4 o_stats;
 #endif
 
 Ray cameraRay(vec2 pixel) {
@@ -40,6 +42,13 @@ vec3 toneMap(vec3 c) {
 
 vec3 srgbEncode(vec3 c) { return vec3(srgbEncode(c.r), srgbEncode(c.g), srgbEncode(c.b)); }
 
+// True when a component is NaN or +-infinite (all exponent bits set). A bit test rather than
+// isnan/isinf, which a compiler that assumes finite math may fold to false. The RGBA8 target would
+// clamp such a value to some colour and hide it; the stats target reports it instead.
+bool nonFinite(vec3 c) {
+  return any(equal(floatBitsToUint(c) & uvec3(0x7F800000u), uvec3(0x7F800000u)));
+}
+
 // A distinct, never-black colour per primitive id.
 vec3 idColor(int id) {
   uint h = uint(id) * 2654435761u;
@@ -50,6 +59,7 @@ vec3 idColor(int id) {
 void main() {
   Ray ray = cameraRay(gl_FragCoord.xy);
   int primaryId = -1;
+  bool nonFiniteValue = false;  // the radiance (shaded) or view value of some sample was not finite
   vec3 color;
 #if VIEW == VIEW_SHADED
 #if SSAA_GRID > 1
@@ -58,11 +68,15 @@ void main() {
   for (int j = 0; j < SSAA_GRID; ++j)
     for (int i = 0; i < SSAA_GRID; ++i) {
       vec2 offset = (vec2(i, j) + 0.5) / float(SSAA_GRID) - 0.5;
-      sum += toneMap(radiance(cameraRay(gl_FragCoord.xy + offset)));
+      vec3 L = radiance(cameraRay(gl_FragCoord.xy + offset));
+      nonFiniteValue = nonFiniteValue || nonFinite(L);
+      sum += toneMap(L);
     }
   color = srgbEncode(sum / float(SSAA_GRID * SSAA_GRID));
 #else
-  color = srgbEncode(toneMap(radiance(ray)));
+  vec3 L = radiance(ray);
+  nonFiniteValue = nonFinite(L);
+  color = srgbEncode(toneMap(L));
 #endif
 #else
   Hit h;
@@ -78,10 +92,11 @@ void main() {
     color = idColor(h.id);
 #endif
   }
+  nonFiniteValue = nonFinite(color);
 #endif
   o_color = vec4(color, 1.0);
 #ifdef COUNT_STATS
   o_stats = uvec4(g_nodeVisits, g_triTests, g_meshRays | (g_stackOverflow ? 0x80000000u : 0u),
-                  uint(primaryId + 1));
+                  uint(primaryId + 1) | (nonFiniteValue ? 0x80000000u : 0u));
 #endif
 }
