@@ -350,6 +350,9 @@ struct Tracer {
     return clamp(c, 0.0f, 1.0f);
   }
   static vec3 srgbEncode(vec3 c) { return vec3(srgbEncode(c.r), srgbEncode(c.g), srgbEncode(c.b)); }
+  static bool nonFinite(vec3 c) {
+    return any(equal(floatBitsToUint(c) & uvec3(0x7F800000u), uvec3(0x7F800000u)));
+  }
   static vec3 idColor(int id) {
     uint32_t h = uint32_t(id) * 2654435761u;
     h ^= h >> 15;
@@ -370,6 +373,7 @@ struct Tracer {
     counters = Counters{};
     Ray ray = cameraRay(cam, resolution, fragCoord);
     int primaryId = -1;
+    bool nonFiniteValue = false;
     vec3 color;
     if (options.view == View::Shaded) {
       const int SSAA_GRID = options.ssaaGrid;
@@ -378,11 +382,15 @@ struct Tracer {
         for (int j = 0; j < SSAA_GRID; ++j)
           for (int i = 0; i < SSAA_GRID; ++i) {
             vec2 offset = (vec2(float(i), float(j)) + 0.5f) / float(SSAA_GRID) - 0.5f;
-            sum += toneMap(radiance(cameraRay(cam, resolution, fragCoord + offset)), exposure);
+            vec3 L = radiance(cameraRay(cam, resolution, fragCoord + offset));
+            nonFiniteValue = nonFiniteValue || nonFinite(L);
+            sum += toneMap(L, exposure);
           }
         color = srgbEncode(sum / float(SSAA_GRID * SSAA_GRID));
       } else {
-        color = srgbEncode(toneMap(radiance(ray), exposure));
+        vec3 L = radiance(ray);
+        nonFiniteValue = nonFinite(L);
+        color = srgbEncode(toneMap(L, exposure));
       }
     } else {
       Hit h;
@@ -394,9 +402,11 @@ struct Tracer {
         if (options.view == View::Depth) color = vec3(max(sceneRadius / (sceneRadius + h.t), 1.0f / 255.0f));
         if (options.view == View::PrimId) color = idColor(h.id);
       }
+      nonFiniteValue = nonFinite(color);
     }
     stats = uvec4(counters.nodeVisits, counters.triTests,
-                  counters.meshRays | (counters.stackOverflow ? 0x80000000u : 0u), uint32_t(primaryId + 1));
+                  counters.meshRays | (counters.stackOverflow ? 0x80000000u : 0u),
+                  uint32_t(primaryId + 1) | (nonFiniteValue ? 0x80000000u : 0u));
     return color;
   }
 };
