@@ -139,11 +139,12 @@ int runRender(const RenderCommand& cmd) {
 
   // Per-ray statistics: totals over the frame divided by rays traced into the mesh; p95 over pixels
   // of each pixel's own per-ray mean.
-  uint64_t visits = 0, tests = 0, rays = 0, overflows = 0;
+  uint64_t visits = 0, tests = 0, rays = 0, overflows = 0, nonfinite = 0;
   std::vector<double> pixelVisits, pixelTests;
   for (const glm::uvec4& p : stats) {
     uint32_t r = p.z & 0x7FFFFFFFu;
     overflows += (p.z >> 31);
+    nonfinite += (p.w >> 31);  // radiance NaN or infinite before tone mapping (main.glsl's nonFinite)
     visits += p.x;
     tests += p.y;
     rays += r;
@@ -202,6 +203,7 @@ int runRender(const RenderCommand& cmd) {
     out["node_visits_p95"] = percentile(pixelVisits, 0.95);
     out["triangle_tests_p95"] = percentile(pixelTests, 0.95);
     out["stack_overflow_pixels"] = overflows;
+    out["nonfinite_pixels"] = nonfinite;
     std::cout << out.dump() << std::endl;
   }
   if (overflows > 0) {
