@@ -13,6 +13,7 @@
 #include "experiments/runner.hpp"
 #include "layout/layout.hpp"
 #include "render/gpu_renderer.hpp"
+#include "render/hard_cases_command.hpp"
 #include "render/render_command.hpp"
 #include "render/viewer.hpp"
 #include "traversal/kernels.hpp"
@@ -98,7 +99,7 @@ int main(int argc, char** argv) {
   render->add_option("--exposure", rc.exposure, "exposure multiplier");
   render->add_option("--aa", rc.aa, "anti-aliasing: none | smaa | smaa-low|medium|high|ultra | ssaa4 | ssaa16");
   render->add_option("--smaa-preset", rc.smaaPreset, "SMAA quality: low | medium | high | ultra");
-  render->add_option("--robust", rc.robust, "fast | watertight (robust slab + watertight triangles + ULP offsets)");
+  render->add_option("--robust", rc.robust, "fast | tri | box | ulp | tri+box | tri+ulp | box+ulp | watertight (watertight triangles, Ize boxes, ULP offsets)");
   render->add_flag("--cpu", rc.cpu, "render with the C++ mirror instead of OpenGL");
 
   std::string mesh, builder = "sah-binned";
@@ -157,6 +158,14 @@ int main(int argc, char** argv) {
   viewCmd->add_flag("!--no-overlay", vo.overlay, "hide the ImGui overlay");
 
 
+  HardCasesCommand hc;
+  auto* hardCmd = app.add_subcommand("hard-cases", "robustness variants on the hard-case suite: leaks, exact-oracle disagreement");
+  hardCmd->add_option("--robust", hc.robust, "variant to run (repeatable; default: every variant)");
+  hardCmd->add_option("--json", hc.json, "write the results as JSON here ('-' = stdout)");
+  hardCmd->add_flag("--gpu", hc.gpu, "also count the GLSL kernel's leaks (camera inside closed meshes)");
+  hardCmd->add_option("--backend", hc.backend, "osmesa | egl (with --gpu)");
+  hardCmd->add_option("--kernel", hc.kernel, "traversal kernel");
+  hardCmd->add_option("--builder", hc.builder, "BVH builder");
   auto* listBuilders = app.add_subcommand("builders", "list the BVH builders");
   auto* listKernels = app.add_subcommand("kernels", "list the traversal kernels");
 
@@ -186,6 +195,7 @@ int main(int argc, char** argv) {
     if (mergeCmd->parsed())
       return mergeCommand(std::vector<std::filesystem::path>(mergeDirs.begin(), mergeDirs.end()), mergeOut);
     if (reportCmd->parsed()) return reportCommand(reportDir);
+    if (hardCmd->parsed()) return runHardCases(hc);
     if (build->parsed()) return buildCommand(mesh, builder, leafSize, bins, buildJson);
     if (listBuilders->parsed()) {
       for (const BuilderInfo& b : builders()) std::printf("%-12s %s\n", b.name.c_str(), b.description.c_str());

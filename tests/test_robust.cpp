@@ -7,14 +7,21 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <string>
 #include <unistd.h>
 
+#include "builders/builder.hpp"
 #include "datasets/cgal_oracle.hpp"
 #include "datasets/hard_cases.hpp"
+#include "experiments/process.hpp"
+#include "layout/layout.hpp"
+#include "render/hard_cases_command.hpp"
 #include "shaders/assemble.hpp"
 #include "shaders/offset_ulp.hpp"
+#include "shaders/tracer.hpp"
 #include "traversal/kernels.hpp"
 #include "traversal/ray_box.hpp"
 #include "traversal/ray_box_robust.hpp"
@@ -29,11 +36,10 @@ using bvhlab::hard::HardRay;
 using glm::vec2;
 using glm::vec3;
 
-enum class TriangleTest { Fast, Watertight };
-const char* name(TriangleTest v) { return v == TriangleTest::Fast ? "fast (Moller-Trumbore)" : "watertight"; }
+const char* name(TriangleTest v) { return v == TriangleTest::MollerTrumbore ? "fast (Moller-Trumbore)" : "watertight"; }
 
 bool intersect(TriangleTest v, glsl::Ray ray, vec3 a, vec3 b, vec3 c, float tMin, float tMax, float& t, vec2& bary) {
-  return v == TriangleTest::Fast ? glsl::intersectTriangle(ray, a, b, c, tMin, tMax, t, bary)
+  return v == TriangleTest::MollerTrumbore ? glsl::intersectTriangle(ray, a, b, c, tMin, tMax, t, bary)
                                  : glsl::watertight::intersectTriangle(ray, a, b, c, tMin, tMax, t, bary);
 }
 
@@ -102,7 +108,7 @@ TEST(Robust, WatertightNeverLeaksFastLeaksAreCounted) {
     for (const HardRay& r : c.rays) {
       if (!r.mustHit) continue;
       ++rays;
-      for (TriangleTest v : {TriangleTest::Fast, TriangleTest::Watertight})
+      for (TriangleTest v : {TriangleTest::MollerTrumbore, TriangleTest::Watertight})
         if (!closest(v, c, {r.origin, r.dir}, r.tMin, r.tMax).hit) ++leaks[int(v)];
     }
     if (rays == 0) continue;
@@ -122,7 +128,7 @@ TEST(Robust, NoNanOrInfOnAnyHardCase) {
   size_t hits = 0;
   for (const HardCase& c : suite())
     for (const HardRay& r : c.rays) {
-      for (TriangleTest v : {TriangleTest::Fast, TriangleTest::Watertight}) {
+      for (TriangleTest v : {TriangleTest::MollerTrumbore, TriangleTest::Watertight}) {
         BruteHit h = closest(v, c, {r.origin, r.dir}, r.tMin, r.tMax);
         if (!h.hit) continue;
         ++hits;
@@ -180,7 +186,7 @@ TEST(Robust, AgreesWithTheExactOracle) {
       ++rays;
       const oracle::ExactFirstHit exact = oracle::exactFirstHit(c.positions, c.triangles, r.origin, r.dir, r.tMin, r.tMax);
       if (exact.hit == oracle::Decision::Tie) ++ties;
-      for (TriangleTest v : {TriangleTest::Fast, TriangleTest::Watertight}) {
+      for (TriangleTest v : {TriangleTest::MollerTrumbore, TriangleTest::Watertight}) {
         const BruteHit h = closest(v, c, {r.origin, r.dir}, r.tMin, r.tMax);
         Tally& s = tally[int(v)];
         if (exact.hit != oracle::Decision::Tie) {
@@ -211,7 +217,7 @@ TEST(Robust, AgreesWithTheExactOracle) {
   }
   std::printf("oracle: %zu rays on unit-scale cases, %zu exact ties (boundary-only touches), %zu decisive first "
               "hits within 2^-16 of an edge (float near-ties)\n", rays, ties, nearTies);
-  for (TriangleTest v : {TriangleTest::Fast, TriangleTest::Watertight}) {
+  for (TriangleTest v : {TriangleTest::MollerTrumbore, TriangleTest::Watertight}) {
     const Tally& s = tally[int(v)];
     std::printf("  %-24s hit/miss %zu/%zu agree (%.2f%%), first hit %zu/%zu agree (%.2f%%)\n", name(v), s.hitAgree,
                 s.hitDecisive, 100.0 * double(s.hitAgree) / double(s.hitDecisive), s.firstAgree, s.firstDecisive,
@@ -301,12 +307,6 @@ TEST(Robust, SlabPlanesAndFlatBoxes) {
 
 // ---- secondary-ray origins -------------------------------------------------------------------------
 
-// shade.glsl's fixed relative epsilon (RAY_OFFSET_SCALE 1e-4), written out for comparison.
-vec3 offsetRayOriginFixed(vec3 p, vec3 towards) {
-  float scale = 1e-4f * (1.0f + std::max(std::max(std::abs(p.x), std::abs(p.y)), std::abs(p.z)));
-  return p + towards * scale;
-}
-
 TEST(Robust, UlpOffsetMovesEveryCoordinateTowardsN) {
   for (vec3 p : {vec3(1.0f, -2.0f, 1e6f), vec3(-3e-3f, 5e4f, -7e5f), vec3(0.0f, -0.0f, 1e-20f)}) {
     const vec3 n = glm::normalize(vec3(0.6f, -0.48f, 0.64f));
@@ -338,7 +338,7 @@ TEST(Robust, UlpOffsetAvoidsSelfIntersectionAtEveryScale) {
       if (glm::dot(n, r.dir) > 0.0f) n = -n;  // facing the ray
       const vec3 p = (1.0f - h.bary.x - h.bary.y) * a + h.bary.x * b + h.bary.y * d;
       const vec3 dir = glm::reflect(glm::normalize(r.dir), n);
-      const vec3 origins[3] = {p, offsetRayOriginFixed(p, n), glsl::offsetRayOriginUlp(p, n)};
+      const vec3 origins[3] = {p, offsetRayOrigin(p, n, OriginOffset::Epsilon), glsl::offsetRayOriginUlp(p, n)};
       ++spawned;
       for (int k = 0; k < 3; ++k) {
         float t;
@@ -353,44 +353,183 @@ TEST(Robust, UlpOffsetAvoidsSelfIntersectionAtEveryScale) {
   EXPECT_EQ(selfHits[2], 0u);
 }
 
+// ---- the variants ----------------------------------------------------------------------------------
+
+TEST(Variants, EveryKnobCombinationHasOneNameThatParsesBack) {
+  const std::vector<std::string>& names = robustnessNames();
+  ASSERT_EQ(names.size(), 8u);
+  EXPECT_EQ(names.front(), "fast");
+  EXPECT_EQ(names.back(), "watertight");
+  std::set<std::tuple<int, int, int>> combinations;
+  for (size_t i = 0; i < names.size(); ++i) {
+    const Robustness r = parseRobustness(names[i]);
+    EXPECT_EQ(r, robustnessVariants()[i]);
+    EXPECT_EQ(robustnessName(r), names[i]);
+    combinations.insert({int(r.triangle), int(r.box), int(r.offset)});
+  }
+  EXPECT_EQ(combinations.size(), 8u);  // all 2 x 2 x 2
+  EXPECT_EQ(parseRobustness("fast"), Robustness::Fast);
+  EXPECT_EQ(parseRobustness("watertight"), Robustness::Watertight);
+  const Robustness triUlp = parseRobustness("tri+ulp");
+  EXPECT_EQ(triUlp.triangle, TriangleTest::Watertight);
+  EXPECT_EQ(triUlp.box, BoxTest::Slab);
+  EXPECT_EQ(triUlp.offset, OriginOffset::Ulp);
+  try {
+    parseRobustness("ulp+tri");  // one spelling per variant: the canonical order only
+    ADD_FAILURE() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    for (const std::string& n : names) EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << e.what();
+  }
+}
+
+// Closest hit through a BVH, one function per (triangle test, box test) pair.
+struct CaseBvh {
+  PackedBvh packed;
+  explicit CaseBvh(const HardCase& c) {
+    Scene s;
+    Mesh m;
+    m.positions = c.positions;
+    m.triangles = c.triangles;
+    s.meshes.push_back(m);
+    Object o;
+    o.kind = ObjectKind::Mesh;
+    s.objects.push_back(o);
+    s.materials.push_back(Material{});
+    const TriangleSoup soup = gatherTriangles(s);
+    const std::vector<Aabb> boxes = triangleBoxes(soup);
+    const std::vector<vec3> centroids = triangleCentroids(soup);
+    packed = packBvh(buildBvh("sah-binned", BuildInput{boxes, centroids}, BuildOptions{}), soup);
+  }
+};
+
+// Each kernel mirror, for every (triangle test, box test) pair, against brute force with the same
+// triangle test over every ray of the suite. With Ize's box test the BVH culls no box the exact ray
+// meets: found equals brute force, and t too up to rounding (two triangles hit within rounding at an
+// edge, where the float t of one lies below the float entry of its box, may swap).
+// With the plain slab test the BVH may cull a hit (the box leaks): never a hit brute force lacks, never
+// a nearer one; the culled ones are counted and printed.
+TEST(Variants, KernelMirrorsMatchBruteForceForEveryTestPair) {
+  for (const KernelInfo& k : kernels()) {
+    size_t rays = 0, boxCulled[4] = {0, 0, 0, 0}, nearTies = 0;
+    double worstTie = 0.0;
+    for (const HardCase& c : suite()) {
+      const CaseBvh bvh(c);
+      float scale = 0.0f;  // the case's coordinate magnitude: what a float t is accurate relative to
+      for (const vec3& p : c.positions) scale = std::max({scale, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+      const glsl::Storage storage(bvh.packed);
+      for (Robustness r : robustnessVariants()) {
+        if (r.offset == OriginOffset::Ulp) continue;  // the offset is not the kernel's: 4 pairs suffice
+        for (const HardRay& ray : c.rays) {
+          const BruteHit brute = closest(r.triangle, c, {ray.origin, ray.dir}, ray.tMin, ray.tMax);
+          glsl::MeshHit hit;
+          glsl::Counters counters;
+          const bool found = k.closest(r)(storage, {ray.origin, ray.dir}, ray.tMin, ray.tMax, hit, counters);
+          const bool any = k.any(r)(storage, {ray.origin, ray.dir}, ray.tMin, ray.tMax, counters);
+          ++rays;
+          ASSERT_EQ(found, any) << k.name << " " << robustnessName(r) << " " << c.name;
+          if (found) {
+            ASSERT_TRUE(brute.hit) << k.name << " " << robustnessName(r) << " " << c.name;
+            ASSERT_GE(hit.t, brute.t) << k.name << " " << robustnessName(r) << " " << c.name;
+          }
+          if (r.box == BoxTest::Robust) {
+            ASSERT_EQ(found, brute.hit) << k.name << " " << robustnessName(r) << " " << c.name;
+            if (found && hit.t != brute.t) {
+              ++nearTies;
+              worstTie = std::max(worstTie, double(hit.t - brute.t) * double(glm::length(ray.dir)) / scale);
+            }
+          } else {
+            boxCulled[r.testsIndex()] += brute.hit && (!found || hit.t > brute.t);
+          }
+        }
+      }
+    }
+    std::printf("%-16s %zu ray traces; hits lost (or found further) with the slab box test: moller-trumbore %zu, watertight %zu; "
+                "robust box: %zu near-ties, worst %.3g\n",
+                k.name.c_str(), rays, boxCulled[Robustness{}.testsIndex()],
+                boxCulled[Robustness{TriangleTest::Watertight, BoxTest::Slab, OriginOffset::Epsilon}.testsIndex()],
+                nearTies, worstTie);
+    // A float t is good to a few roundings of the coordinates: the conservative box keeps every box the
+    // exact ray meets, not every one a float t rounded below its entry would need, so two triangles hit
+    // within rounding (an edge) may swap. 2^-20 = 16 u of the case's coordinate magnitude bounds that
+    // (measured worst ~7 u).
+    EXPECT_LE(worstTie, 0x1p-20) << k.name;
+  }
+}
+
+// `bvhlab hard-cases` (CPU part): the table and JSON for two variants; watertight leaks nothing and
+// agrees with the oracle on every decisive ray, the fast variant's leaks are there to see.
+TEST(Variants, HardCasesCommandWritesItsJson) {
+  const std::filesystem::path json =
+      std::filesystem::temp_directory_path() / ("bvhlab_hard_cases_" + std::to_string(::getpid()) + ".json");
+  const ProcessResult p = runProcess({BVHLAB_BINARY, "hard-cases", "--robust", "fast", "--robust", "watertight",
+                                      "--json", json.string()});
+  ASSERT_TRUE(p.ok()) << p.status() << "\n" << p.err;
+  EXPECT_NE(p.out.find("watertight"), std::string::npos) << p.out;
+  std::ifstream in(json);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  std::filesystem::remove(json);
+  ASSERT_EQ(j["variants"].size(), 2u);
+  const nlohmann::json& fast = j["variants"][0];
+  const nlohmann::json& watertight = j["variants"][1];
+  EXPECT_EQ(fast["robust"], "fast");
+  EXPECT_EQ(watertight["origin_offset"], "ulp");
+  EXPECT_EQ(watertight["total"]["leaks"], 0);
+  EXPECT_EQ(watertight["total"]["oracle_hit_disagree"], 0);
+  EXPECT_EQ(watertight["total"]["oracle_first_clear_disagree"], 0);
+  EXPECT_GT(fast["total"]["leaks"].get<size_t>(), 0u);
+  EXPECT_EQ(fast["total"]["must_hit"], j["suite"]["must_hit"]);
+  EXPECT_EQ(fast["cases"].size(), j["suite"]["cases"]);
+  for (const nlohmann::json& v : j["variants"]) {
+    EXPECT_EQ(v["total"]["nan_box_entries"], 0) << v["robust"];
+    EXPECT_EQ(v["total"]["nonfinite_hits"], 0) << v["robust"];
+    EXPECT_EQ(v["total"]["secondary_self_hits"], 0) << v["robust"];
+  }
+  const ProcessResult bad = runProcess({BVHLAB_BINARY, "hard-cases", "--robust", "tri+nope"});
+  EXPECT_FALSE(bad.ok());
+  EXPECT_NE(bad.err.find("box+ulp"), std::string::npos) << bad.err;  // the error lists the valid names
+}
+
 // ---- the GLSL ------------------------------------------------------------------------------------
 
-// The variants are drop-in modules: every kernel assembled with ray_box_robust.glsl and
-// ray_triangle_watertight.glsl instead of the fast files (and offset_ulp.glsl) compiles with glslang.
-TEST(RobustGlsl, VariantsCompileInEveryKernelWithGlslang) {
-  if (std::system("command -v glslangValidator > /dev/null 2>&1") != 0)
-    GTEST_SKIP() << "glslangValidator not found (Debian package glslang-tools)";
+// Every variant assembles its own modules (each knob on its own) and the whole tracer compiles with
+// glslang, in every kernel, for a scene that spawns every kind of secondary ray.
+TEST(RobustGlsl, EveryVariantAssemblesItsModulesAndCompilesWithGlslang) {
+  SceneFeatures f;  // a mesh, a light with shadows, reflection and refraction: every offset call site
+  f.mesh = f.lights = f.shadows = f.reflection = f.refraction = true;
+  f.kinds[0] = true;  // a sphere
+  f.numObjects = f.numLights = 1;
+  f.numMaterials = 2;
+  const bool haveGlslang = std::system("command -v glslangValidator > /dev/null 2>&1") == 0;
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("bvhlab_test_robust_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  const std::string stubMain = R"(
-layout(location = 0) out vec4 o_result;
-void main() {
-  Ray ray = Ray(vec3(gl_FragCoord.xy, -1.0), vec3(0.0, 0.0, 1.0));
-  MeshHit hit;
-  bool closest = traceClosest(ray, 0.0, INF, hit);
-  bool any = traceAny(ray, 0.0, INF);
-  vec3 origin = offsetRayOriginUlp(ray.origin + hit.t * ray.dir, vec3(0.0, 0.0, -1.0));
-  o_result = vec4(origin, float(closest) + float(any));
-}
-)";
-  for (const KernelInfo& k : kernels()) {
-    std::string source = "#version 450 core\n#define BVH_STACK_SIZE 7\n";
-    for (const std::string& module : {std::string("common.glsl"), std::string("storage_tbo.glsl"),
-                                      std::string("layout.glsl"), std::string("ray_box_robust.glsl"),
-                                      std::string("ray_triangle_watertight.glsl"), k.glslFile,
-                                      std::string("offset_ulp.glsl")})
-      source += glslModule(module);
-    source += stubMain;
-    const std::filesystem::path file = dir / (k.name + ".frag"), log = dir / (k.name + ".log");
-    std::ofstream(file) << source;
-    const std::string cmd = "glslangValidator -S frag '" + file.string() + "' > '" + log.string() + "' 2>&1";
-    const int rc = std::system(cmd.c_str());
-    std::stringstream text;
-    text << std::ifstream(log).rdbuf();
-    EXPECT_EQ(rc, 0) << k.name << ":\n" << text.str();
+  for (Robustness r : robustnessVariants()) {
+    const std::string variant = robustnessName(r);
+    for (const KernelInfo& k : kernels()) {
+      ShaderOptions o;
+      o.kernel = k.name;
+      o.robust = r;
+      const AssembledShader s = assembleTracer(f, o);
+      const bool tri = r.triangle == TriangleTest::Watertight, box = r.box == BoxTest::Robust,
+                 ulp = r.offset == OriginOffset::Ulp;
+      EXPECT_EQ(s.hasModule("ray_triangle_watertight.glsl"), tri) << variant;
+      EXPECT_EQ(s.hasModule("ray_triangle.glsl"), !tri) << variant;
+      EXPECT_EQ(s.hasModule("ray_box_robust.glsl"), box) << variant;
+      EXPECT_EQ(s.hasModule("ray_box.glsl"), !box) << variant;
+      EXPECT_EQ(s.hasModule("offset_ulp.glsl"), ulp) << variant;
+      EXPECT_EQ(s.source.find("#define RAY_OFFSET_ULP") != std::string::npos, ulp) << variant;
+      if (!haveGlslang) continue;
+      const std::filesystem::path file = dir / (variant + "-" + k.name + ".frag"), log = dir / "log.txt";
+      std::ofstream(file) << s.source;
+      const std::string cmd = "glslangValidator -S frag '" + file.string() + "' > '" + log.string() + "' 2>&1";
+      const int rc = std::system(cmd.c_str());
+      std::stringstream text;
+      text << std::ifstream(log).rdbuf();
+      EXPECT_EQ(rc, 0) << variant << " " << k.name << ":\n" << s.mapLog(text.str());
+    }
   }
   std::filesystem::remove_all(dir);
+  if (!haveGlslang) GTEST_SKIP() << "glslangValidator not found (Debian package glslang-tools): assembly checked only";
 }
 
 }  // namespace
