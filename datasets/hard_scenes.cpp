@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <system_error>
 #include <tuple>
 
@@ -190,8 +191,9 @@ HardScene acneZoom() {
       "horizon. Acne shows as dark dots (self-shadowing) or wrong colours on these surfaces; the test counts "
       "pixels that differ by more than 16 steps from their surface's most common colour (surface borders "
       "excluded).";
-  h.variants = "Expected to fail in every variant (neither offset knows how far the ray travelled); see the "
-               "measured counts below.";
+  h.variants = "Fails in every variant: neither offset knows how far the ray travelled. Measured (llvmpipe, "
+               "96x64): 116 acne pixels of 1100 surface pixels with the epsilon offset, 86 with the ULP offset "
+               "(the triangle and box knobs change nothing; the scene has no triangles).";
   SceneSpec& s = h.spec;
   s.description = "Telephoto view from 1e4 away: every surface should be one flat colour.";
   const dvec3 forward = glm::normalize(dvec3(0.0, -0.6, -1.0));
@@ -275,7 +277,12 @@ HardScene tirSlab() {
       "underside of the yellow ball, dark), squeezed towards its rim; outside it the slab's faces mirror each "
       "other (light trapped in the slab fades to black at max_depth) with the floor seen through the side faces. "
       "The disc's rim is sharp; no NaN pixels.";
-  h.variants = "All variants (analytic scene).";
+  h.variants =
+      "All variants, with one caveat: rays trapped by total internal reflection reach the slab's edges after a "
+      "few bounces, and which face such a ray hits is a tie that the two offsets break differently. Measured: "
+      "the ULP image differs from the epsilon one by mean 0.86 steps, 0.5 % of pixels, all on the lines where "
+      "the edges are seen (the test allows 2 steps / 2 % for this scene; every other unit-scale scene agrees "
+      "within 0.06 steps).";
   SceneSpec& s = h.spec;
   s.description = "Total internal reflection: looking up from inside a glass slab.";
   s.eye = {0.0, -0.5, 0.0};
@@ -476,6 +483,50 @@ HardScene insideMesh(bool sphere) {
   return h;
 }
 
+// What tests/test_hard_scenes.cpp measured for each far/scaled member against its reference (llvmpipe,
+// 96x64, same variant): mean |diff| in 8-bit steps / share of pixels off by more than 16 steps, for the
+// epsilon and the ULP offset (the triangle and box knobs changed nothing in these images). The test
+// asserts the two booleans; the numbers are documentation.
+struct FamilyMeasurement {
+  const char* name;
+  bool epsilon, ulp;
+  const char* numbers;
+  const char* why;
+};
+const FamilyMeasurement kFamilyMeasurements[] = {
+    {"acne_large_1e4", true, false, "epsilon 0.01 / 0.0 %, ULP 11.43 / 9.1 %",
+     "The ULP offset's failure is self-shadowing speckle on the floor: the floor is the plane y = 0, where "
+     "|p.y| < 1/32 and the ULP offset is the absolute 1/65536 (a constant fitted to unit-scale scenes), while "
+     "p = o + t d carries an error of about eps |o| ~ 1e-3 in y from a camera 5e4 away. The epsilon offset, "
+     "1e-4 (1 + max |p_i|), is driven by the large x and z and clears it."},
+    {"acne_far_1e5", false, false, "epsilon 14.66 / 24.9 %, ULP 12.94 / 22.7 %",
+     "Both offsets are far too large here: epsilon 1e-4 * 1e5 = 10 units, ULP 256 ulps = 2 units. Secondary "
+     "rays start beyond the glass block and past the occluders of contact shadows: the glass turns milky, "
+     "shadows detach."},
+    {"far_1e4", false, false, "epsilon 7.80 / 10.2 %, ULP 5.65 / 7.6 %",
+     "Offsets of 1 unit (epsilon) and 0.25 units (ULP) jump the thin pane (0.06 thick) and the glass ball's "
+     "inside, and lift shadow rays past nearby occluders."},
+    {"far_1e5", false, false, "epsilon 13.29 / 16.2 %, ULP 14.43 / 16.0 %",
+     "As far_1e4, worse (offsets of 10 and 2 units)."},
+    {"far_1e6", false, false, "epsilon 24.37 / 26.2 %, ULP 24.37 / 26.2 %",
+     "No variant can help: the input itself is rounded to 1/16 (the tessellated ball's vertices move by 1/6 of "
+     "its radius), and both offsets exceed the scene."},
+    {"scale_1e-4", false, false, "epsilon 7.46 / 9.6 %, ULP 4.89 / 6.8 %",
+     "Absolute floors: the epsilon offset's 1e-4 is the size of the whole scene, the ULP offset's 1/65536 "
+     "(below |p_i| = 1/32, i.e. everywhere here) is 15 % of it."},
+    {"scale_1e-2", false, true, "epsilon 0.76 / 0.9 %, ULP 0.09 / 0.2 %",
+     "The epsilon offset's floor of 1e-4 is 1 % of the scene: contact shadows shift by a pixel or two."},
+    {"scale_1e2", true, false, "epsilon 0.01 / 0.0 %, ULP 5.24 / 4.2 %",
+     "The ULP offset's floor acne, as in acne_large_1e4 (the camera is 650 away)."},
+    {"scale_1e4", true, false, "epsilon 0.01 / 0.0 %, ULP 11.66 / 9.7 %",
+     "The ULP offset's floor acne, as in acne_large_1e4."},
+};
+const FamilyMeasurement& familyMeasurement(const std::string& name) {
+  for (const FamilyMeasurement& m : kFamilyMeasurements)
+    if (name == m.name) return m;
+  throw std::logic_error("no measurement recorded for hard scene " + name);
+}
+
 std::string exponentTag(double v) {
   int e = int(std::lround(std::log10(v)));
   return "1e" + std::to_string(e);
@@ -577,13 +628,12 @@ std::vector<HardScene> makeHardScenes() {
     const bool large = scale != 1.0;
     h.spec.description = large ? "The acne scene scaled by 1e4 about the origin." : "The acne scene moved to (1e5, 5e4, -1e5).";
     h.provokes = large ? "The acne scene 10^4 times larger: hit points have coordinates up to ~5e4, their rounding "
-                         "error grows with them, and the secondary-ray offset must grow in proportion."
+                         "error grows with them (and with the camera's distance), and the secondary-ray offset must "
+                         "grow in proportion."
                        : "The acne scene moved to (1e5, 5e4, -1e5) at unit scale: float spacing there is 2^-7 = "
-                         "0.0078, so hit points are quantised to 1/100 of the mirror ball's radius, and an offset "
+                         "0.0078, so hit points are quantised to 1/64 of the mirror ball's radius, and an offset "
                          "that grows with |p| (both offsets do) becomes large against the scene's features.";
     h.correct = "The image of acne.toml.";
-    h.variants = large ? "Both offsets scale with the coordinates, so every variant should match the reference."
-                       : "Expected to differ from the reference in every variant: see the measured table below.";
     out.push_back(h);
   }
 
@@ -607,11 +657,11 @@ std::vector<HardScene> makeHardScenes() {
     h.offset = d * dvec3(1.0, 0.5, -1.0);
     h.spec = transformed(base, h.offset, 1.0);
     h.spec.description = "base.toml moved to " + vec(h.offset) + " (unit scale).";
-    h.provokes = "base.toml moved to " + vec(h.offset) +
-                 ": float spacing at " + number(d) + " is " + number(std::ldexp(1.0, int(std::floor(std::log2(d))) - 23)) +
-                 ", so every coordinate (camera, hit points, mesh vertices) is rounded to that grid.";
+    h.provokes = "base.toml moved to " + vec(h.offset) + ": float spacing at " + number(d) + " is " +
+                 number(std::ldexp(1.0, int(std::floor(std::log2(d))) - 23)) +
+                 ", so every coordinate (camera, hit points, mesh vertices) is rounded to that grid, and both "
+                 "offsets grow with |p|: epsilon 1e-4 (1 + |p|), ULP 256 ulps of |p|.";
     h.correct = "The image of base.toml.";
-    h.variants = "See the measured table: the far family is where the offset variants separate.";
     out.push_back(h);
   }
   for (double k : {1e-4, 1e-2, 1e2, 1e4}) {
@@ -624,10 +674,17 @@ std::vector<HardScene> makeHardScenes() {
     h.provokes = "base.toml scaled by " + number(k) +
                  " about the origin (camera, lights and geometry together). Relative rounding is the same at every "
                  "scale; what does not scale is an absolute constant (the epsilon offset's 1e-4 floor, the ULP "
-                 "offset's 1/65536 floor below |p| = 1/32).";
+                 "offset's 1/65536 below |p_i| = 1/32).";
     h.correct = "The image of base.toml.";
-    h.variants = "See the measured table.";
     out.push_back(h);
+  }
+  for (HardScene& h : out) {
+    if (h.reference.empty()) continue;
+    const FamilyMeasurement& m = familyMeasurement(h.name);
+    h.matchesWithEpsilon = m.epsilon;
+    h.matchesWithUlp = m.ulp;
+    h.variants = std::string("Epsilon offset: ") + (m.epsilon ? "matches" : "differs") + ", ULP offset: " +
+                 (m.ulp ? "matches" : "differs") + " (measured: " + m.numbers + "). " + m.why;
   }
   return out;
 }
@@ -662,8 +719,28 @@ std::vector<GeneratedFile> hardSceneFiles() {
       "- far/scaled families: each member's image is compared with its reference's (same variant). Metric: mean "
       "absolute difference over the RGB channels in 8-bit steps, and the share of pixels whose largest channel "
       "difference exceeds 16 steps (\"bad pixels\": a visibly wrong pixel, not rounding). A member *matches* when "
-      "mean <= 1.0 and bad pixels <= 1%; the table of which variants match at which offset and scale is printed "
-      "and recorded as test properties, and the facts it establishes are asserted.\n\n";
+      "mean <= 0.5 and bad pixels <= 0.5 % (the project's GLSL-vs-mirror tolerance is mean < 0.5; a scaled copy "
+      "that is right lands at 0.01). The test prints the whole table per variant and asserts which offset "
+      "matches, as recorded below;\n"
+      "- `acne_zoom`: every surface should be one flat colour; acne pixels (inside a surface, more than 16 steps "
+      "from its most common colour) are counted per variant, and the test asserts the measured fact that both "
+      "offsets produce them.\n\n";
+  readme += "## Far and scaled copies: measured\n\n"
+            "Against the reference, same variant, GLSL on llvmpipe at 96x64: mean |diff| (8-bit steps) / bad "
+            "pixels. The triangle and box knobs changed nothing in these images, so the columns are the origin "
+            "offset's two settings (`fast`, `tri`, `box`, `tri+box` use epsilon; `ulp`, `tri+ulp`, `box+ulp`, "
+            "`watertight` use ULP).\n\n| scene | epsilon offset | ULP offset | measured |\n|---|---|---|---|\n";
+  for (const HardScene& h : scenes)
+    if (!h.reference.empty()) {
+      const FamilyMeasurement& m = familyMeasurement(h.name);
+      readme += "| `" + h.name + "` | " + (m.epsilon ? "matches" : "differs") + " | " + (m.ulp ? "matches" : "differs") +
+                " | " + m.numbers + " |\n";
+    }
+  readme +=
+      "\nNeither offset reproduces the image at 1e4 or more from the origin or at 1e-4 scale; the ULP offset "
+      "fails where the epsilon offset does not (large scale, a floor through y = 0) because its near-zero floor "
+      "is an absolute constant and because the tracer computes hit points as o + t d, whose error grows with "
+      "the distance travelled, not with |p|. `acne_zoom` shows the same for both offsets at unit scale.\n\n";
   readme += "## Scenes\n\n| scene | provokes | reference |\n|---|---|---|\n";
   for (const HardScene& h : scenes) {
     std::string first = h.spec.description;

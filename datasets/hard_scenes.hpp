@@ -76,6 +76,9 @@ struct HardScene {
   std::string reference;
   glm::dvec3 offset{0.0};
   double scale = 1.0;
+  // Family members: does the image match the reference's (README's criterion) with the epsilon / the
+  // ULP origin offset? Measured, recorded in the generator, asserted by tests/test_hard_scenes.cpp.
+  bool matchesWithEpsilon = false, matchesWithUlp = false;
   bool cameraInsideClosedMesh = false;  // every primary ray must hit the mesh
   bool uniformSurfaces = false;  // each surface's correct colour is one constant (acne shows as outliers)
 };
