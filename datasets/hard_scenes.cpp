@@ -34,11 +34,16 @@ std::string number(float v) {
   auto res = std::to_chars(buf, buf + sizeof buf, v);
   return std::string(buf, res.ptr);
 }
-// Coordinates are written as the float the loader will read: the shortest text of float(v), which
-// reads back as exactly that float (and is easier to read than the double's expansion).
-std::string vec(dvec3 v) {
-  return "[" + number(float(v.x)) + ", " + number(float(v.y)) + ", " + number(float(v.z)) + "]";
+// Coordinates with 12 significant digits: far beyond float's 7, so a loader that reads positions in
+// double precision (and rebases far scenes) gets the transformed scene exactly as computed, while the
+// text stays readable ("0.00022", not the double expansion of 2.2 * 1e-4).
+std::string coordinate(double v) {
+  if (v == 0.0) v = 0.0;
+  char buf[64];
+  auto res = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 12);
+  return std::string(buf, res.ptr);
 }
+std::string vec(dvec3 v) { return "[" + coordinate(v.x) + ", " + coordinate(v.y) + ", " + coordinate(v.z) + "]"; }
 std::string quoted(const std::string& s) { return "\"" + s + "\""; }
 
 // ---- the mesh files ------------------------------------------------------------------------------
