@@ -101,6 +101,7 @@ int main(int argc, char** argv) {
   render->add_option("--smaa-preset", rc.smaaPreset, "SMAA quality: low | medium | high | ultra");
   render->add_option("--robust", rc.robust, "fast | tri | box | ulp | tri+box | tri+ulp | box+ulp | watertight (watertight triangles, Ize boxes, ULP offsets)");
   render->add_flag("--cpu", rc.cpu, "render with the C++ mirror instead of OpenGL");
+  render->add_option("--camera-path", rc.cameraPath, "time frames along a recorded camera path (image: pose 0)");
 
   std::string mesh, builder = "sah-binned";
   int leafSize = 4, bins = 0;
@@ -145,6 +146,9 @@ int main(int argc, char** argv) {
   viewCmd->add_option("--depth", vo.depth, "initial max path depth ([ and ])");
   viewCmd->add_option("--view", vo.view, "shaded | normal | depth | primid | visits (V cycles)");
   viewCmd->add_option("--scale", vo.resolutionScale, "render at this fraction of the window (0.05..1)");
+  viewCmd->add_option("--aa", vo.aa, "none | smaa-low|medium|high|ultra | ssaa4 | ssaa16 (M cycles)");
+  viewCmd->add_option("--robust", vo.robust, "robustness variant, as render --robust (T cycles)");
+  viewCmd->add_flag("--readback-present", vo.readbackPresent, "display via CPU read-back (to measure the blit)");
   viewCmd->add_option("--eye", viewEye, "camera position x,y,z");
   viewCmd->add_option("--target", viewTarget, "camera target x,y,z");
   viewCmd->add_option("--up", viewUp, "camera up x,y,z");
@@ -152,7 +156,7 @@ int main(int argc, char** argv) {
   viewCmd->add_option("--script", vo.script, "scripted input file (frame-numbered key presses / poses)");
   viewCmd->add_option("--frames", vo.frames, "stop after N frames (0 = when closed / the script ends)");
   viewCmd->add_option("--screenshot", vo.screenshot, "write the last frame (without overlay) here");
-  viewCmd->add_option("--record", vo.record, "record the camera path to this JSON file");
+  viewCmd->add_option("--record", vo.record, "record the camera path to this file (one pose per line)");
   viewCmd->add_option("--replay", vo.replay, "replay a recorded camera path");
   viewCmd->add_flag("--json", vo.json, "print the final state and every switch as JSON");
   viewCmd->add_flag("!--no-overlay", vo.overlay, "hide the ImGui overlay");

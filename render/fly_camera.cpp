@@ -1,11 +1,10 @@
 #include "render/fly_camera.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <sstream>
-
-#include <nlohmann/json.hpp>
 
 namespace bvhlab {
 
@@ -64,75 +63,95 @@ void FlyCamera::setFov(float fovDeg) { camera_.fovDeg = fovDeg; }
 
 namespace {
 
-nlohmann::json vec3Json(glm::vec3 v) { return nlohmann::json::array({v.x, v.y, v.z}); }
+// Shortest text that reads back to the same float/double (std::to_chars round-trip guarantee), so a
+// saved path replays to bit-identical poses.
+template <typename T>
+std::string exact(T v) {
+  char buf[32];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, end);
+}
 
-glm::vec3 vec3From(const nlohmann::json& j, const std::string& where) {
-  if (!j.is_array() || j.size() != 3) throw InputError(where + ": expected an array of 3 numbers");
-  glm::vec3 v;
-  for (int i = 0; i < 3; ++i) {
-    if (!j[i].is_number()) throw InputError(where + ": expected an array of 3 numbers");
-    v[i] = j[i].get<float>();
-    if (!std::isfinite(v[i])) throw InputError(where + ": not finite");
+std::string vec3Text(glm::vec3 v) { return exact(v.x) + " " + exact(v.y) + " " + exact(v.z); }
+
+// Reads "eye X Y Z target X Y Z [up X Y Z] [fov F] [t T]" keys from `in` until the end of the line.
+// `allowT`: the key "t" (camera paths) is accepted. Returns which keys were seen.
+struct PoseKeys {
+  bool eye = false, target = false, up = false, fov = false, t = false;
+};
+PoseKeys readPose(std::istream& in, const std::string& where, bool allowT, Camera& pose, double& seconds) {
+  PoseKeys seen;
+  auto number = [&](auto& v, const std::string& what) {
+    if (!(in >> v) || !std::isfinite(v)) throw InputError(where + "expected a number for " + what);
+  };
+  std::string key;
+  while (in >> key) {
+    bool* flag = key == "eye" ? &seen.eye : key == "target" ? &seen.target : key == "up" ? &seen.up
+               : key == "fov" ? &seen.fov : (key == "t" && allowT) ? &seen.t : nullptr;
+    if (!flag)
+      throw InputError(where + "unknown pose key '" + key + "' (eye, target, up, fov" + (allowT ? ", t)" : ")"));
+    if (*flag) throw InputError(where + "'" + key + "' given twice");
+    *flag = true;
+    if (key == "fov") number(pose.fovDeg, "fov");
+    else if (key == "t") number(seconds, "t");
+    else {
+      glm::vec3& v = key == "eye" ? pose.eye : key == "target" ? pose.target : pose.up;
+      for (int i = 0; i < 3; ++i) number(v[i], key);
+    }
   }
-  return v;
+  if (seen.eye && seen.target && pose.eye == pose.target) throw InputError(where + "eye equals target");
+  if (seen.up && pose.up == glm::vec3(0.0f)) throw InputError(where + "up is the zero vector");
+  if (seen.fov && !(pose.fovDeg > 0.0f && pose.fovDeg < 180.0f))
+    throw InputError(where + "fov must be in (0, 180) degrees");
+  return seen;
 }
 
 }  // namespace
 
 void saveCameraPath(const std::filesystem::path& path, const CameraPath& poses) {
-  nlohmann::json list = nlohmann::json::array();
-  for (const CameraPathPose& p : poses)
-    list.push_back({{"t", p.seconds},
-                    {"eye", vec3Json(p.camera.eye)},
-                    {"target", vec3Json(p.camera.target)},
-                    {"up", vec3Json(p.camera.up)},
-                    {"fov", p.camera.fovDeg}});
-  nlohmann::json doc = {{"format", "bvhlab-camera-path"}, {"version", 1}, {"poses", list}};
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
   std::ofstream out(path);
-  // max_digits10 floats: a path replays to bit-identical poses.
-  out << doc.dump(1) << '\n';
+  for (const CameraPathPose& p : poses)
+    out << "t " << exact(p.seconds) << " eye " << vec3Text(p.camera.eye) << " target " << vec3Text(p.camera.target)
+        << " up " << vec3Text(p.camera.up) << " fov " << exact(p.camera.fovDeg) << '\n';
   if (!out) throw InputError(path.string() + ": cannot write the camera path");
+}
+
+CameraPath parseCameraPath(const std::string& text, const std::string& file) {
+  CameraPath poses;
+  std::istringstream lines(text);
+  std::string line;
+  for (int lineNo = 1; std::getline(lines, line); ++lineNo) {
+    if (size_t hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;  // blank or comment
+    const std::string where = file + ":" + std::to_string(lineNo) + ": ";
+    std::istringstream in(line);
+    CameraPathPose pose;
+    const PoseKeys seen = readPose(in, where, true, pose.camera, pose.seconds);
+    for (auto [ok, key] : {std::pair{seen.t, "t"}, {seen.eye, "eye"}, {seen.target, "target"}, {seen.up, "up"},
+                           {seen.fov, "fov"}})
+      if (!ok) throw InputError(where + "missing '" + key + "' (a pose line is: t T eye X Y Z target X Y Z up X Y Z fov F)");
+    poses.push_back(pose);
+  }
+  if (poses.empty()) throw InputError(file + ":1: the camera path has no poses");
+  return poses;
 }
 
 CameraPath loadCameraPath(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path.string() + ": cannot open the camera path");
-  nlohmann::json doc;
-  try {
-    doc = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(path.string() + ": not JSON (" + e.what() + ")");
-  }
-  const std::string file = path.string();
-  if (!doc.is_object() || doc.value("format", "") != "bvhlab-camera-path")
-    throw InputError(file + ": not a camera path (\"format\" must be \"bvhlab-camera-path\")");
-  if (doc.value("version", 0) != 1) throw InputError(file + ": unsupported camera path \"version\" (want 1)");
-  if (!doc.contains("poses") || !doc["poses"].is_array()) throw InputError(file + ": \"poses\" must be an array");
-  CameraPath poses;
-  for (size_t i = 0; i < doc["poses"].size(); ++i) {
-    const nlohmann::json& p = doc["poses"][i];
-    const std::string where = file + ": poses[" + std::to_string(i) + "]";
-    if (!p.is_object()) throw InputError(where + ": expected an object");
-    for (const char* key : {"t", "eye", "target", "up", "fov"})
-      if (!p.contains(key)) throw InputError(where + ": missing \"" + key + "\"");
-    CameraPathPose pose;
-    if (!p["t"].is_number() || !p["fov"].is_number()) throw InputError(where + ": \"t\" and \"fov\" must be numbers");
-    pose.seconds = p["t"].get<double>();
-    pose.camera.eye = vec3From(p["eye"], where + ".eye");
-    pose.camera.target = vec3From(p["target"], where + ".target");
-    pose.camera.up = vec3From(p["up"], where + ".up");
-    pose.camera.fovDeg = p["fov"].get<float>();
-    if (!(pose.camera.fovDeg > 0.0f && pose.camera.fovDeg < 180.0f))
-      throw InputError(where + ".fov: must be in (0, 180) degrees");
-    if (pose.camera.eye == pose.camera.target) throw InputError(where + ": eye equals target");
-    if (pose.camera.up == glm::vec3(0.0f)) throw InputError(where + ".up: zero vector");
-    poses.push_back(pose);
-  }
-  return poses;
+  std::stringstream text;
+  text << in.rdbuf();
+  return parseCameraPath(text.str(), path.string());
 }
 
 // ---- scripts ------------------------------------------------------------------
+
+const std::vector<std::string>& scriptSettings() {
+  static const std::vector<std::string> names = {"builder", "kernel", "leaf_size", "depth", "view",
+                                                 "scale",   "aa",     "robust"};
+  return names;
+}
 
 int ViewerScript::lastFrame() const {
   int last = 0;
@@ -175,32 +194,31 @@ ViewerScript parseViewerScript(const std::string& text, const std::string& file)
       number(e.delta.y, "scroll");
     } else if (action == "pose") {
       e.kind = ScriptEvent::Kind::Pose;
-      bool seen[4] = {false, false, false, false};
-      std::string key;
-      while (in >> key) {
-        glm::vec3* v = key == "eye" ? &e.pose.eye : key == "target" ? &e.pose.target : key == "up" ? &e.pose.up : nullptr;
-        if (v) {
-          for (int i = 0; i < 3; ++i) number((*v)[i], key.c_str());
-          seen[key == "eye" ? 0 : key == "target" ? 1 : 2] = true;
-        } else if (key == "fov") {
-          number(e.pose.fovDeg, "fov");
-          seen[3] = true;
-        } else {
-          throw InputError(where + "unknown pose key '" + key + "' (eye, target, up, fov)");
-        }
+      double unused = 0.0;
+      const PoseKeys seen = readPose(in, where, false, e.pose, unused);
+      if (!seen.eye || !seen.target) throw InputError(where + "pose needs at least 'eye X Y Z target X Y Z'");
+      if (!seen.fov) e.pose.fovDeg = -1.0f;  // keep the current FOV
+    } else if (action == "set") {
+      e.kind = ScriptEvent::Kind::Set;
+      if (!(in >> e.key >> e.value))
+        throw InputError(where + "set needs a setting and a value, e.g. 'set aa smaa-high'");
+      const std::vector<std::string>& settings = scriptSettings();
+      if (std::find(settings.begin(), settings.end(), e.key) == settings.end()) {
+        std::string valid;
+        for (const std::string& s : settings) valid += (valid.empty() ? "" : ", ") + s;
+        throw InputError(where + "unknown setting '" + e.key + "' (" + valid + ")");
       }
-      if (!seen[0] || !seen[1]) throw InputError(where + "pose needs at least 'eye X Y Z target X Y Z'");
-      if (e.pose.eye == e.pose.target) throw InputError(where + "pose eye equals target");
-      if (e.pose.up == glm::vec3(0.0f)) throw InputError(where + "pose up is zero");
-      if (!(e.pose.fovDeg > 0.0f && e.pose.fovDeg < 180.0f)) throw InputError(where + "fov must be in (0, 180)");
-      if (!seen[3]) e.pose.fovDeg = -1.0f;  // keep the current FOV
     } else if (action == "screenshot") {
       e.kind = ScriptEvent::Kind::Screenshot;
       if (!(in >> e.path)) throw InputError(where + "screenshot needs a file name");
+    } else if (action == "window-screenshot") {
+      e.kind = ScriptEvent::Kind::WindowScreenshot;
+      if (!(in >> e.path)) throw InputError(where + "window-screenshot needs a file name");
     } else if (action == "quit") {
       e.kind = ScriptEvent::Kind::Quit;
     } else {
-      throw InputError(where + "unknown action '" + action + "' (key, hold, mouse, scroll, pose, screenshot, quit)");
+      throw InputError(where + "unknown action '" + action +
+                       "' (key, hold, mouse, scroll, pose, set, screenshot, window-screenshot, quit)");
     }
     std::string extra;
     if (in >> extra) throw InputError(where + "unexpected '" + extra + "' at the end of the line");

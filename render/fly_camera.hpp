@@ -1,5 +1,5 @@
 // The viewer's pieces that need no window: a first-person camera, camera paths (a recorded
-// fly-through, one pose per frame, as JSON) and scripted input (docs/viewer.md). Kept apart from
+// fly-through, one pose per line of text) and scripted input (docs/viewer.md). Kept apart from
 // viewer.cpp so tests and experiment configs can use them without GLFW.
 #pragma once
 #include <filesystem>
@@ -51,21 +51,26 @@ struct CameraPathPose {
 };
 using CameraPath = std::vector<CameraPathPose>;
 
-// JSON: {"format": "bvhlab-camera-path", "version": 1, "poses": [{"t", "eye", "target", "up", "fov"}]}.
+// Text, one pose per line: "t T eye X Y Z target X Y Z up X Y Z fov F" (keys in any order, all
+// required; '#' starts a comment, blank lines are skipped). Numbers are written in their shortest
+// round-trip form, so a saved path loads back to bit-identical poses.
 void saveCameraPath(const std::filesystem::path& path, const CameraPath& poses);
-// Throws InputError naming the file and the offending pose/key.
+// Throws InputError "FILE:LINE: what is wrong" (also for a file without poses).
 CameraPath loadCameraPath(const std::filesystem::path& path);
+CameraPath parseCameraPath(const std::string& text, const std::string& file);
 
 // One line of a viewer script: "FRAME ACTION ARGS...".
 struct ScriptEvent {
-  enum class Kind { Key, Hold, Mouse, Scroll, Pose, Screenshot, Quit };
+  enum class Kind { Key, Hold, Mouse, Scroll, Pose, Set, Screenshot, WindowScreenshot, Quit };
   int frame = 0;
   Kind kind = Kind::Key;
-  std::string key;      // Key/Hold: key name as in docs/viewer.md ("B", "SHIFT+B", "F1", "LBRACKET")
+  std::string key;      // Key/Hold: key name as in docs/viewer.md ("B", "SHIFT+B", "F1", "LBRACKET");
+                        // Set: the setting (one of scriptSettings())
+  std::string value;    // Set: the new value, e.g. "smaa-high" (checked by the viewer)
   int holdFrames = 0;   // Hold
   glm::vec2 delta{0};   // Mouse: pixels; Scroll: y in .y
   Camera pose;          // Pose
-  std::string path;     // Screenshot
+  std::string path;     // Screenshot (the render) / WindowScreenshot (the window as displayed)
   int line = 0;         // for messages
 };
 struct ViewerScript {
@@ -73,6 +78,8 @@ struct ViewerScript {
   std::vector<ScriptEvent> events;  // sorted by frame (stable: same-frame events keep file order)
   int lastFrame() const;            // the frame after which the script has nothing more to do
 };
+// Settings a script's "FRAME set SETTING VALUE" line can change.
+const std::vector<std::string>& scriptSettings();
 // Throws InputError "FILE:LINE: message" for anything it cannot read.
 ViewerScript loadViewerScript(const std::filesystem::path& path);
 ViewerScript parseViewerScript(const std::string& text, const std::string& file);

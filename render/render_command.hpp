@@ -30,6 +30,9 @@ struct RenderCommand {
   std::string smaaPreset = "high";  // low | medium | high | ultra
   std::string robust = "fast";     // fast | watertight
   bool cpu = false;  // render with the C++ mirror instead of GL
+  // A recorded camera path (render/fly_camera.hpp): warm-up and timed frame i use pose i mod N, the
+  // saved image and the statistics pose 0. Excludes --eye/--target/--up/--fov.
+  std::string cameraPath;
 };
 
 // Runs it; prints the JSON object on stdout when asked. Returns the process exit code.

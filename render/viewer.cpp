@@ -4,13 +4,17 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <deque>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
+#include <type_traits>
 
 #include <glad/gl.h>
 #define GLFW_INCLUDE_NONE
@@ -26,6 +30,7 @@
 #include "render/gl_context.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/heatmap.hpp"
+#include "render/smaa.hpp"
 #include "traversal/kernels.hpp"
 
 namespace bvhlab {
@@ -43,12 +48,76 @@ double median(std::vector<double> v) {
 }
 
 const std::vector<std::string> kViews = {"shaded", "normal", "depth", "primid", "visits"};
+// The anti-aliasing modes of `bvhlab render --aa`, SMAA by preset name (render/smaa.hpp).
+const std::vector<std::string> kAaModes = {"none",       "smaa-low", "smaa-medium", "smaa-high",
+                                           "smaa-ultra", "ssaa4",    "ssaa16"};
 const std::vector<float> kScales = {0.125f, 0.25f, 0.375f, 0.5f, 0.75f, 1.0f};
 constexpr int kMaxDepth = 16;
 constexpr int kRollingWindow = 31;      // frames in the rolling median (odd: a true middle element)
 constexpr int kGraphLength = 240;       // rolling medians kept for the graph
 constexpr double kScriptDt = 1.0 / 30;  // seconds per frame in scripted mode: movement is reproducible
 constexpr float kLookDegPerPixel = 0.1f;
+
+bool isSmaa(const std::string& aa) { return aa.rfind("smaa-", 0) == 0; }
+int ssaaGridOf(const std::string& aa) { return aa == "ssaa4" ? 2 : aa == "ssaa16" ? 4 : 1; }
+
+template <typename T>
+std::string shortest(T v) {  // shortest round-trip text of a number
+  char buf[32];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, end);
+}
+
+// The whole string as a number; nullopt for anything else ("4x", "", "nan").
+template <typename T>
+std::optional<T> parseNumber(const std::string& text) {
+  T v{};
+  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  if constexpr (std::is_floating_point_v<T>)
+    if (!std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+// The values a named setting cycles through (keys, combos); empty for numeric settings.
+std::vector<std::string> choices(const std::string& what) {
+  std::vector<std::string> names;
+  if (what == "builder")
+    for (const BuilderInfo& b : builders()) names.push_back(b.name);
+  if (what == "kernel")
+    for (const KernelInfo& k : kernels()) names.push_back(k.name);
+  if (what == "view") names = kViews;
+  if (what == "aa") names = kAaModes;
+  if (what == "robust") names = robustnessNames();
+  return names;
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+// "" when `value` is valid for the setting (one of scriptSettings()), else what is wrong.
+std::string settingError(const std::string& what, const std::string& value) {
+  if (what == "leaf_size") {
+    std::optional<int> v = parseNumber<int>(value);
+    return v && *v >= 1 && *v <= int(kMaxLeafSize) ? "" : "leaf_size must be in 1.." + std::to_string(kMaxLeafSize);
+  }
+  if (what == "depth") {
+    std::optional<int> v = parseNumber<int>(value);
+    return v && *v >= 1 && *v <= kMaxDepth ? "" : "depth must be in 1.." + std::to_string(kMaxDepth);
+  }
+  if (what == "scale") {
+    std::optional<float> v = parseNumber<float>(value);
+    return v && *v >= 0.05f && *v <= 1.0f ? "" : "scale must be in 0.05..1";
+  }
+  const std::vector<std::string> names = choices(what);
+  if (names.empty()) return "unknown setting '" + what + "' (" + joined(scriptSettings()) + ")";
+  if (std::find(names.begin(), names.end(), value) == names.end())
+    return "unknown " + what + " '" + value + "' (valid: " + joined(names) + ")";
+  return "";
+}
 
 // Script key names -> GLFW keys (docs/viewer.md lists them).
 int keyFromName(const std::string& name) {
@@ -147,16 +216,21 @@ class Viewer {
   void moveCamera(double dt);
 
   // configuration
-  void cycle(const char* what, int step);
+  void cycle(const std::string& what, int step);
+  void set(const std::string& what, const std::string& value);  // value checked by settingError
   void ensureRenderers();
   void logSwitch(const std::string& what, const std::string& value);
   ShaderOptions shaderOptions(bool countStats) const;
 
   // frame
   void renderFrame();
+  bool heatmapShown() const { return view_ == "visits" && prepared_->soup.size() > 0; }
+  unsigned displayedTexture() const;         // the frame's final GPU image (trace or SMAA output)
+  std::vector<uint8_t> readDisplayed() const;  // its pixels (RGBA8, bottom-up); a GPU read-back
   void present();
   void drawOverlay();
   void saveScreenshot(const std::string& path);
+  void saveWindowScreenshot(const std::string& path);
   void toggleRecording();
   void startReplay(const std::string& path);
 
@@ -168,23 +242,26 @@ class Viewer {
   std::string glRenderer_;
 
   // live configuration
-  std::string builder_, kernel_, view_;
+  std::string builder_, kernel_, view_, aa_, robust_;
   int leafSize_ = 4, depth_ = 5;
   float scale_ = 1.0f;
-  bool needRebuild_ = true, needRenderer_ = true;
+  bool needRebuild_ = true, needRenderer_ = true, needSmaa_ = true;
 
   std::unique_ptr<PreparedScene> prepared_;
   std::unique_ptr<GpuRenderer> gpu_, statsGpu_;
+  std::unique_ptr<SmaaPass> smaa_;  // only while an SMAA mode is on
   int renderW_ = 0, renderH_ = 0;
   double prepareMs_ = 0.0, firstFrameMs_ = 0.0;
   bool firstFramePending_ = false, statsStale_ = true;
   Clock::time_point lastStats_;
   RayStats rayStats_;
 
-  // display
+  // display: the frame's texture is blitted straight to the window; only the heatmap (computed on
+  // the CPU from the counters) and --readback-present go through image_ and the upload texture.
   unsigned displayTex_ = 0, displayFbo_ = 0;
   int displayW_ = 0, displayH_ = 0;
   std::vector<uint8_t> image_;
+  std::string pendingWindowShot_;
 
   // camera and input
   FlyCamera camera_;
@@ -210,11 +287,14 @@ class Viewer {
   double time_ = 0.0;  // seconds since start (scripted: frame * kScriptDt)
   bool quit_ = false;
   std::string pendingScreenshot_;
-  std::deque<double> recentMs_;
+  std::deque<double> recentMs_, recentAaMs_, recentLoopMs_;  // frame = trace + AA pass
+  std::deque<double> recentPresentMs_;  // getting the frame onto the window (read-back included)
+  double readbackMs_ = 0.0;
   std::vector<float> graph_;
-  double lastDrawMs_ = 0.0, lastLoopMs_ = 0.0;
+  double lastDrawMs_ = 0.0, lastAaMs_ = 0.0, lastLoopMs_ = 0.0;
+  bool frameCounted_ = false;  // this frame's times are steady-state (not the first after a change)
   nlohmann::json switches_ = nlohmann::json::array();
-  std::vector<double> sinceSwitchMs_;
+  std::vector<double> sinceSwitchMs_, sinceSwitchAaMs_;
   std::string status_;
 };
 
@@ -230,6 +310,8 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
     throw std::invalid_argument("--view must be one of shaded, normal, depth, primid, visits");
   if (!(o.resolutionScale >= 0.05f && o.resolutionScale <= 1.0f))
     throw std::invalid_argument("--scale must be in 0.05..1");
+  if (std::string e = settingError("aa", o.aa); !e.empty()) throw std::invalid_argument("--aa: " + e);
+  if (std::string e = settingError("robust", o.robust); !e.empty()) throw std::invalid_argument("--robust: " + e);
   if (o.frames < 0) throw std::invalid_argument("--frames must be >= 0");
   if ((o.width && (*o.width < 1 || *o.width > 16384)) || (o.height && (*o.height < 1 || *o.height > 16384)))
     throw std::invalid_argument("--width/--height must be in 1..16384");
@@ -240,6 +322,9 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
           parseKeyChord(e.key).first == GLFW_KEY_UNKNOWN)
         throw InputError(script_->file + ":" + std::to_string(e.line) + ": unknown key '" + e.key +
                          "' (see docs/viewer.md)");
+      else if (e.kind == ScriptEvent::Kind::Set)
+        if (std::string error = settingError(e.key, e.value); !error.empty())
+          throw InputError(script_->file + ":" + std::to_string(e.line) + ": " + error);
   }
   if (!o.replay.empty()) replay_ = loadCameraPath(o.replay), replaying_ = true;
 
@@ -253,6 +338,8 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
   builder_ = o.builder;
   kernel_ = o.kernel;
   view_ = o.view;
+  aa_ = o.aa;
+  robust_ = o.robust;
   leafSize_ = o.leafSize;
   depth_ = o.depth.value_or(original_.settings.maxDepth);
   scale_ = o.resolutionScale;
@@ -292,7 +379,8 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
 Viewer::~Viewer() {
   if (!window_) return;
   glfwMakeContextCurrent(window_);
-  statsGpu_.reset();  // GL objects go before the context
+  smaa_.reset();  // GL objects go before the context
+  statsGpu_.reset();
   gpu_.reset();
   if (displayTex_) glDeleteTextures(1, &displayTex_);
   if (displayFbo_) glDeleteFramebuffers(1, &displayFbo_);
@@ -341,7 +429,9 @@ void Viewer::handleKey(int key, int mods) {
   switch (key) {
     case GLFW_KEY_B: cycle("builder", step); break;
     case GLFW_KEY_K: cycle("kernel", step); break;
-    case GLFW_KEY_L: cycle("leaf", step); break;
+    case GLFW_KEY_L: cycle("leaf_size", step); break;
+    case GLFW_KEY_M: cycle("aa", step); break;
+    case GLFW_KEY_T: cycle("robust", step); break;
     case GLFW_KEY_RIGHT_BRACKET: cycle("depth", 1); break;
     case GLFW_KEY_LEFT_BRACKET: cycle("depth", -1); break;
     case GLFW_KEY_V: cycle("view", step); break;
@@ -358,7 +448,7 @@ void Viewer::handleKey(int key, int mods) {
       break;
     }
     case GLFW_KEY_R: toggleRecording(); break;
-    case GLFW_KEY_O: startReplay(opt_.replay.empty() ? (opt_.record.empty() ? "camera_path.json" : opt_.record)
+    case GLFW_KEY_O: startReplay(opt_.replay.empty() ? (opt_.record.empty() ? "camera_path.txt" : opt_.record)
                                                      : opt_.replay);
       break;
     case GLFW_KEY_H: opt_.overlay = !opt_.overlay; break;
@@ -412,7 +502,9 @@ void Viewer::applyScript() {
         camera_.setCamera(c);
         break;
       }
+      case ScriptEvent::Kind::Set: set(e.key, e.value); break;
       case ScriptEvent::Kind::Screenshot: pendingScreenshot_ = e.path; break;
+      case ScriptEvent::Kind::WindowScreenshot: pendingWindowShot_ = e.path; break;
       case ScriptEvent::Kind::Quit: quit_ = true; break;
     }
   }
@@ -431,52 +523,54 @@ void Viewer::moveCamera(double dt) {
 
 // ---- configuration --------------------------------------------------------------
 
-void Viewer::cycle(const char* what, int step) {
-  const std::string w = what;
-  auto next = [&](const std::vector<std::string>& names, const std::string& cur) {
-    auto it = std::find(names.begin(), names.end(), cur);
-    const int n = int(names.size()), i = it == names.end() ? 0 : int(it - names.begin());
-    return names[size_t(((i + step) % n + n) % n)];
-  };
-  if (w == "builder") {
-    std::vector<std::string> names;
-    for (const BuilderInfo& b : builders()) names.push_back(b.name);
-    builder_ = next(names, builder_);
-    needRebuild_ = true;
-    logSwitch(w, builder_);
-  } else if (w == "kernel") {
-    std::vector<std::string> names;
-    for (const KernelInfo& k : kernels()) names.push_back(k.name);
-    kernel_ = next(names, kernel_);
-    needRenderer_ = true;
-    logSwitch(w, kernel_);
-  } else if (w == "leaf") {
-    const int next = step > 0 ? leafSize_ * 2 : leafSize_ / 2;
-    leafSize_ = std::clamp(next, 1, int(kMaxLeafSize));
-    needRebuild_ = true;
-    logSwitch("leaf_size", std::to_string(leafSize_));
-  } else if (w == "depth") {
-    depth_ = std::clamp(depth_ + step, 1, kMaxDepth);
-    needRenderer_ = true;
-    logSwitch(w, std::to_string(depth_));
-  } else if (w == "view") {
-    view_ = next(kViews, view_);
-    needRenderer_ = true;
-    logSwitch(w, view_);
-  } else if (w == "scale") {
+void Viewer::cycle(const std::string& what, int step) {
+  if (what == "leaf_size") {
+    set(what, std::to_string(std::clamp(step > 0 ? leafSize_ * 2 : leafSize_ / 2, 1, int(kMaxLeafSize))));
+  } else if (what == "depth") {
+    set(what, std::to_string(std::clamp(depth_ + step, 1, kMaxDepth)));
+  } else if (what == "scale") {
     auto it = std::lower_bound(kScales.begin(), kScales.end(), scale_ - 1e-4f);  // 1e-4: below any step gap
     int i = std::clamp(int(it - kScales.begin()) + step, 0, int(kScales.size()) - 1);
-    scale_ = kScales[size_t(i)];
-    needRenderer_ = true;
-    logSwitch(w, std::to_string(scale_));
+    set(what, shortest(kScales[size_t(i)]));
+  } else {
+    const std::vector<std::string> names = choices(what);
+    const std::string& cur = what == "builder" ? builder_ : what == "kernel" ? kernel_ : what == "view" ? view_
+                             : what == "aa"    ? aa_      : robust_;
+    auto it = std::find(names.begin(), names.end(), cur);
+    const int n = int(names.size()), i = it == names.end() ? 0 : int(it - names.begin());
+    set(what, names[size_t(((i + step) % n + n) % n)]);
   }
 }
 
+void Viewer::set(const std::string& what, const std::string& value) {
+  if (what == "builder") builder_ = value, needRebuild_ = true;
+  else if (what == "kernel") kernel_ = value, needRenderer_ = true;
+  else if (what == "leaf_size") leafSize_ = *parseNumber<int>(value), needRebuild_ = true;
+  else if (what == "depth") depth_ = *parseNumber<int>(value), needRenderer_ = true;
+  else if (what == "view") view_ = value, needRenderer_ = true;
+  else if (what == "scale") scale_ = *parseNumber<float>(value);  // ensureRenderers sees the new size
+  else if (what == "robust") robust_ = value, needRenderer_ = true;
+  else if (what == "aa") {
+    // SSAA lives in the tracer (recompile); SMAA is a post pass on the same traced frame.
+    if (ssaaGridOf(value) != ssaaGridOf(aa_)) needRenderer_ = true;
+    aa_ = value;
+    needSmaa_ = true;
+  }
+  logSwitch(what, value);
+}
+
 void Viewer::logSwitch(const std::string& what, const std::string& value) {
-  if (!switches_.empty()) switches_.back()["frame_ms_after"] = median(sinceSwitchMs_);
-  switches_.push_back({{"frame", frame_}, {"switch", what}, {"value", value},
-                       {"frame_ms_before", median(sinceSwitchMs_)}});
+  if (!switches_.empty()) {
+    switches_.back()["frame_ms_after"] = median(sinceSwitchMs_);
+    switches_.back()["aa_ms_after"] = median(sinceSwitchAaMs_);
+  }
+  switches_.push_back({{"frame", frame_},
+                       {"switch", what},
+                       {"value", value},
+                       {"frame_ms_before", median(sinceSwitchMs_)},
+                       {"aa_ms_before", median(sinceSwitchAaMs_)}});
   sinceSwitchMs_.clear();
+  sinceSwitchAaMs_.clear();
   status_ = what + " -> " + value;
 }
 
@@ -489,6 +583,8 @@ ShaderOptions Viewer::shaderOptions(bool countStats) const {
   so.reinhard = sc.settings.reinhard;
   so.bvhStackSize = stackSizeFor(std::max<uint32_t>(1, prepared_->packed.depth));
   so.countStats = countStats;
+  so.ssaaGrid = ssaaGridOf(aa_);
+  so.robust = parseRobustness(robust_);
   return so;
 }
 
@@ -527,6 +623,14 @@ void Viewer::ensureRenderers() {
     firstFramePending_ = true;
     statsStale_ = true;
   }
+  if (!isSmaa(aa_)) {
+    smaa_.reset();
+  } else if (needSmaa_ || !smaa_ || smaa_->width() != renderW_ || smaa_->height() != renderH_) {
+    smaa_.reset();
+    smaa_ = std::make_unique<SmaaPass>(renderW_, renderH_, SmaaSettings::preset(parseSmaaPreset(aa_.substr(5))));
+    firstFramePending_ = true;  // its passes compile at their first draw too
+  }
+  needSmaa_ = false;
 }
 
 // ---- frames -----------------------------------------------------------------------
@@ -535,24 +639,39 @@ void Viewer::renderFrame() {
   ensureRenderers();
   const Camera& cam = camera_.camera();
   gpu_->setCamera(cam);
-  const double ms = gpu_->drawFrame();
-  lastDrawMs_ = ms;
-  if (firstFramePending_) {  // llvmpipe compiles the shader here: not a frame time
+  const double traceMs = gpu_->drawFrame();
+  const bool heatmap = heatmapShown();
+  double aaMs = 0.0;
+  if (smaa_ && !heatmap) {  // timed like `bvhlab render`: the three passes, waited for
+    auto start = Clock::now();
+    smaa_->apply(gpu_->colorTexture());
+    glFinish();
+    aaMs = msSince(start);
+  }
+  const double ms = traceMs + aaMs;
+  lastDrawMs_ = traceMs;
+  lastAaMs_ = aaMs;
+  frameCounted_ = !firstFramePending_;
+  if (firstFramePending_) {  // llvmpipe compiles the shaders here: not a frame time
     firstFrameMs_ = ms;
     firstFramePending_ = false;
     if (!switches_.empty() && !switches_.back().contains("first_frame_ms")) switches_.back()["first_frame_ms"] = ms;
   } else {
     recentMs_.push_back(ms);
-    if (recentMs_.size() > kRollingWindow) recentMs_.pop_front();
+    recentAaMs_.push_back(aaMs);
+    if (recentMs_.size() > kRollingWindow) recentMs_.pop_front(), recentAaMs_.pop_front();
     graph_.push_back(float(median({recentMs_.begin(), recentMs_.end()})));
     if (graph_.size() > kGraphLength) graph_.erase(graph_.begin());
     sinceSwitchMs_.push_back(ms);
+    sinceSwitchAaMs_.push_back(aaMs);
   }
 
   // Statistics come from a separately compiled, instrumented renderer (as in `bvhlab render`): every
-  // frame in the visits view, otherwise after a change and then once a second.
+  // frame in the visits view; otherwise, only while someone looks at them (the overlay, --json),
+  // after a change and then once a second.
   const bool visits = view_ == "visits";
-  const bool refresh = visits || statsStale_ || (!script_ && msSince(lastStats_) > 1000.0);
+  const bool wanted = (imgui_ && opt_.overlay) || opt_.json;
+  const bool refresh = visits || (wanted && (statsStale_ || (!script_ && msSince(lastStats_) > 1000.0)));
   if (refresh && prepared_->soup.size() > 0) {
     if (!statsGpu_) {
       FrameOptions fo;
@@ -571,24 +690,42 @@ void Viewer::renderFrame() {
     lastStats_ = Clock::now();
     if (!visits) statsGpu_.reset();  // keep instrumentation out of memory between refreshes
   }
-  if (!visits || prepared_->soup.size() == 0) image_ = gpu_->readColor();
+  readbackMs_ = 0.0;
+  if (opt_.readbackPresent && !heatmap) {  // the old display path, for comparison
+    auto start = Clock::now();
+    image_ = readDisplayed();
+    readbackMs_ = msSince(start);
+  }
   if (recording_) recorded_.push_back({time_ - recordStart_, cam});
 }
 
+unsigned Viewer::displayedTexture() const { return smaa_ ? smaa_->outputTexture() : gpu_->colorTexture(); }
+
+std::vector<uint8_t> Viewer::readDisplayed() const {
+  if (heatmapShown()) return image_;
+  return smaa_ ? smaa_->readOutput() : gpu_->readColor();
+}
+
 void Viewer::present() {
-  // The renderer draws into its own FBO; its pixels come back through readColor and go up again as
-  // a texture that is blitted (scaled) to the window. A colour-texture accessor on GpuRenderer
-  // would save the round trip.
-  if (displayW_ != renderW_ || displayH_ != renderH_) {
-    if (displayTex_) glDeleteTextures(1, &displayTex_);
-    glCreateTextures(GL_TEXTURE_2D, 1, &displayTex_);
-    glTextureStorage2D(displayTex_, 1, GL_RGBA8, renderW_, renderH_);
-    glNamedFramebufferTexture(displayFbo_, GL_COLOR_ATTACHMENT0, displayTex_, 0);
-    displayW_ = renderW_;
-    displayH_ = renderH_;
+  // The frame's texture goes to the window by one scaling blit, without leaving the GPU. The heatmap
+  // (built on the CPU from the counters) and --readback-present go up through displayTex_ first.
+  unsigned source = 0;
+  if (heatmapShown() || opt_.readbackPresent) {
+    if (displayW_ != renderW_ || displayH_ != renderH_) {
+      if (displayTex_) glDeleteTextures(1, &displayTex_);
+      glCreateTextures(GL_TEXTURE_2D, 1, &displayTex_);
+      glTextureStorage2D(displayTex_, 1, GL_RGBA8, renderW_, renderH_);
+      displayW_ = renderW_;
+      displayH_ = renderH_;
+    }
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage2D(displayTex_, 0, 0, 0, renderW_, renderH_, GL_RGBA, GL_UNSIGNED_BYTE, image_.data());
+    source = displayTex_;
+  } else {
+    source = displayedTexture();
   }
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTextureSubImage2D(displayTex_, 0, 0, 0, renderW_, renderH_, GL_RGBA, GL_UNSIGNED_BYTE, image_.data());
+  // Attached every frame: a renderer or SMAA pass recreated since the last frame owns a new texture.
+  glNamedFramebufferTexture(displayFbo_, GL_COLOR_ATTACHMENT0, source, 0);
   int fbW = 0, fbH = 0;
   glfwGetFramebufferSize(window_, &fbW, &fbH);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
@@ -601,6 +738,7 @@ void Viewer::present() {
   // program after drawing, which would then be an invalid name.
   glUseProgram(0);
   if (imgui_) drawOverlay();
+  if (!pendingWindowShot_.empty()) saveWindowScreenshot(pendingWindowShot_), pendingWindowShot_.clear();
   checkGl("viewer present");
   glfwSwapBuffers(window_);
 }
@@ -613,17 +751,44 @@ void Viewer::drawOverlay() {
     ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowBgAlpha(0.6f);
     ImGui::Begin("bvhlab", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
-    const double med = recentMs_.empty() ? lastDrawMs_ : median({recentMs_.begin(), recentMs_.end()});
-    ImGui::Text("%.1f FPS  render %.2f ms (median of %zu)  loop %.2f ms", med > 0 ? 1000.0 / med : 0.0, med,
-                recentMs_.size(), lastLoopMs_);
+    const double med = recentMs_.empty() ? lastDrawMs_ + lastAaMs_ : median({recentMs_.begin(), recentMs_.end()});
+    const double aaMed = recentAaMs_.empty() ? lastAaMs_ : median({recentAaMs_.begin(), recentAaMs_.end()});
+    ImGui::Text("%.1f FPS  frame %.2f ms, of it AA %.2f ms (medians of %zu)", med > 0 ? 1000.0 / med : 0.0, med,
+                aaMed, recentMs_.size());
+    const double presentMed = median({recentPresentMs_.begin(), recentPresentMs_.end()});
+    ImGui::Text("loop %.2f ms, to the window %.2f ms (%s)", lastLoopMs_, presentMed,
+                opt_.readbackPresent ? "read back + upload" : "blit");
     if (!graph_.empty())
       ImGui::PlotLines("##ms", graph_.data(), int(graph_.size()), 0, "rolling median ms", 0.0f,
                        *std::max_element(graph_.begin(), graph_.end()) * 1.2f, ImVec2(320, 60));
     ImGui::Separator();
     const BuildStats& b = prepared_->stats;
-    ImGui::Text("[B] builder  %s   build %.1f ms (prepare %.1f ms)", builder_.c_str(), b.buildMs, prepareMs_);
-    ImGui::Text("[K] kernel   %s   first frame %.0f ms", kernel_.c_str(), firstFrameMs_);
-    ImGui::Text("[L] leaf %d   [ ] depth %d   [V] view %s", leafSize_, depth_, view_.c_str());
+    // One combo per named setting (the same values its key cycles through); choosing one switches live.
+    auto combo = [&](const char* label, const std::string& what, const std::string& current) {
+      ImGui::SetNextItemWidth(130);
+      if (ImGui::BeginCombo(label, current.c_str())) {
+        for (const std::string& c : choices(what)) {
+          const bool selected = c == current;
+          if (ImGui::Selectable(c.c_str(), selected) && !selected) set(what, c);
+          if (selected) ImGui::SetItemDefaultFocus();
+        }
+        ImGui::EndCombo();
+      }
+    };
+    combo("[B] builder", "builder", builder_);
+    ImGui::SameLine();
+    ImGui::Text("build %.1f ms (prepare %.1f ms)", b.buildMs, prepareMs_);
+    combo("[K] kernel", "kernel", kernel_);
+    ImGui::SameLine();
+    ImGui::Text("first frame %.0f ms", firstFrameMs_);
+    combo("[M] AA", "aa", aa_);
+    ImGui::SameLine();
+    ImGui::Text("AA pass %.2f ms", aaMed);
+    combo("[T] robust", "robust", robust_);
+    ImGui::SameLine();
+    ImGui::Text("frame %.2f ms", med);
+    combo("[V] view", "view", view_);
+    ImGui::Text("[L] leaf %d   [ ] depth %d", leafSize_, depth_);
     ImGui::Text("[,.] scale %.3f -> %dx%d", scale_, renderW_, renderH_);
     ImGui::Text("SAH %.2f  nodes %zu  leaves %zu  tree depth %u", b.sahCost, b.nodes, b.leaves, b.depth);
     if (rayStats_.valid)
@@ -635,6 +800,7 @@ void Viewer::drawOverlay() {
     ImGui::Text("%s%s%s", recording_ ? "REC  " : "", replaying_ ? "REPLAY  " : "", status_.c_str());
     ImGui::TextDisabled("%s", glRenderer_.c_str());
     ImGui::TextDisabled("Tab mouse look, WASD/QE move, wheel speed, P shot, R rec, O replay, Ctrl+1-4 mark");
+    ImGui::TextDisabled("Shift+key cycles backwards");
     ImGui::End();
   }
   ImGui::Render();
@@ -642,7 +808,20 @@ void Viewer::drawOverlay() {
 }
 
 void Viewer::saveScreenshot(const std::string& path) {
-  saveImageRgba8(path, renderW_, renderH_, image_);
+  saveImageRgba8(path, renderW_, renderH_, readDisplayed());
+  status_ = "saved " + path;
+}
+
+void Viewer::saveWindowScreenshot(const std::string& path) {
+  // The back buffer as it will be shown (upscaled frame + overlay), before the swap makes it undefined.
+  int fbW = 0, fbH = 0;
+  glfwGetFramebufferSize(window_, &fbW, &fbH);
+  std::vector<uint8_t> pixels(size_t(fbW) * size_t(fbH) * 4);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  glReadBuffer(GL_BACK);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, fbW, fbH, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+  saveImageRgba8(path, fbW, fbH, pixels);
   status_ = "saved " + path;
 }
 
@@ -655,7 +834,7 @@ void Viewer::toggleRecording() {
     return;
   }
   recording_ = false;
-  const std::string path = opt_.record.empty() ? "camera_path.json" : opt_.record;
+  const std::string path = opt_.record.empty() ? "camera_path.txt" : opt_.record;
   saveCameraPath(path, recorded_);
   status_ = "saved " + std::to_string(recorded_.size()) + " poses to " + path;
 }
@@ -688,17 +867,27 @@ int Viewer::run() {
       if (replayNext_ >= replay_.size()) replaying_ = false;  // the last pose is this frame's
     }
     renderFrame();
+    auto presentStart = Clock::now();
     present();
+    const double presentMs = readbackMs_ + msSince(presentStart);
     ++rendered_;
     if (!pendingScreenshot_.empty()) saveScreenshot(pendingScreenshot_), pendingScreenshot_.clear();
     time_ = script_ ? (frame_ + 1) * kScriptDt : time_ + dt;
     lastLoopMs_ = msSince(start);
+    if (frameCounted_) {
+      recentLoopMs_.push_back(lastLoopMs_);
+      recentPresentMs_.push_back(presentMs);
+      if (recentLoopMs_.size() > kRollingWindow) recentLoopMs_.pop_front(), recentPresentMs_.pop_front();
+    }
     if (opt_.frames > 0 && frame_ + 1 >= opt_.frames) break;
     if (opt_.frames == 0 && automatic && frame_ >= (script_ ? script_->lastFrame() : 0) && !replaying_) break;
   }
-  if (!opt_.screenshot.empty() && !image_.empty()) saveScreenshot(opt_.screenshot);
+  if (!opt_.screenshot.empty() && rendered_ > 0) saveScreenshot(opt_.screenshot);
   if (recording_) toggleRecording();
-  if (!switches_.empty()) switches_.back()["frame_ms_after"] = median(sinceSwitchMs_);
+  if (!switches_.empty()) {
+    switches_.back()["frame_ms_after"] = median(sinceSwitchMs_);
+    switches_.back()["aa_ms_after"] = median(sinceSwitchAaMs_);
+  }
 
   if (opt_.json) {
     const BuildStats& b = prepared_->stats;
@@ -710,12 +899,18 @@ int Viewer::run() {
                           {"leaf_size", leafSize_},
                           {"depth", depth_},
                           {"view", view_},
+                          {"aa", aa_},
+                          {"robust", robust_},
                           {"scale", scale_},
+                          {"present", opt_.readbackPresent ? "readback" : "blit"},
                           {"width", renderW_},
                           {"height", renderH_},
                           {"build_ms", b.buildMs},
                           {"sah_cost", b.sahCost},
                           {"frame_ms_median", median({recentMs_.begin(), recentMs_.end()})},
+                          {"aa_ms_median", median({recentAaMs_.begin(), recentAaMs_.end()})},
+                          {"loop_ms_median", median({recentLoopMs_.begin(), recentLoopMs_.end()})},
+                          {"present_ms_median", median({recentPresentMs_.begin(), recentPresentMs_.end()})},
                           {"node_visits_per_ray", rayStats_.visitsPerRay},
                           {"triangle_tests_per_ray", rayStats_.testsPerRay},
                           {"camera", cameraJson(camera_.camera())},

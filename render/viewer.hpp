@@ -1,6 +1,7 @@
 // `bvhlab view`: an interactive first-person viewer (GLFW window, Dear ImGui overlay) over the same
-// GpuRenderer that `bvhlab render` uses, with live switching of builder, kernel, leaf size, depth
-// and view. Keys, script format and camera-path format: docs/viewer.md.
+// GpuRenderer that `bvhlab render` uses, with live switching of builder, kernel, leaf size, depth,
+// view, anti-aliasing and robustness variant. Keys, script format and camera-path format:
+// docs/viewer.md.
 #pragma once
 #include <optional>
 #include <stdexcept>
@@ -19,6 +20,10 @@ struct ViewerOptions {
   std::optional<int> depth;
   std::string view = "shaded";        // shaded | normal | depth | primid | visits
   float resolutionScale = 1.0f;       // render at this fraction of the window, upscaled (0.05..1)
+  std::string aa = "none";            // none | smaa-low|medium|high|ultra | ssaa4 | ssaa16
+  std::string robust = "fast";        // one of robustnessNames() (traversal/kernels.hpp)
+  bool readbackPresent = false;       // display through a CPU read-back + upload (the old path; for
+                                      // measuring what the direct blit saves)
   std::optional<glm::vec3> eye, target, up;
   std::optional<float> fov;
   std::string script;      // scripted input (docs/viewer.md); '' = interactive

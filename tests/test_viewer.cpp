@@ -1,5 +1,6 @@
 // The viewer: its window-free parts in process, and `bvhlab view` end to end as a subprocess under
 // an X server (xvfb-run when DISPLAY is unset; skipped with a message when neither is there).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -93,6 +94,58 @@ std::string view(const std::string& prefix, const std::string& args) {
   return prefix + BVHLAB_BINARY + " view " + cubeMesh().string() + " --width 96 --height 64 " + args;
 }
 
+// The camera every end-to-end test uses: as a script line and as `render` flags.
+const char* kPoseLine = "0 pose eye 1.3 0.9 1.7 target 0 0.1 0 up 0 1 0 fov 42\n";
+const char* kPoseFlags = " --eye 1.3,0.9,1.7 --target 0,0.1,0 --up 0,1,0 --fov 42";
+
+// `bvhlab render` of the cube from kPoseFlags; the image goes to `out`.
+Result renderHeadless(const fs::path& out, const std::string& args, int width = 96, int height = 64) {
+  return shell(std::string(BVHLAB_BINARY) + " render " + cubeMesh().string() + " --width " + std::to_string(width) +
+               " --height " + std::to_string(height) + kPoseFlags + " --frames 1 --warmup 0 " + args + " -o " +
+               out.string());
+}
+
+struct ImageDiff {
+  double offFraction = 1.0;  // pixels whose largest channel difference exceeds the tolerance
+  double meanAbs = 255.0;    // mean |difference| over R, G, B
+  size_t changed = 0;        // pixels that differ at all
+};
+
+// RGB only: a window's default framebuffer need not store alpha.
+ImageDiff diffImages(const ImageRgba8& a, const ImageRgba8& b, int tolerance) {
+  ImageDiff d;
+  if (a.width != b.width || a.height != b.height || a.rgba.size() != b.rgba.size()) return d;
+  size_t off = 0, pixels = a.rgba.size() / 4;
+  double sum = 0.0;
+  for (size_t i = 0; i < pixels; ++i) {
+    int m = 0;
+    for (int c = 0; c < 3; ++c) {
+      int diff = std::abs(int(a.rgba[4 * i + c]) - int(b.rgba[4 * i + c]));
+      m = std::max(m, diff);
+      sum += diff;
+    }
+    off += m > tolerance;
+    d.changed += m > 0;
+  }
+  d.offFraction = double(off) / double(pixels);
+  d.meanAbs = sum / double(3 * pixels);
+  return d;
+}
+ImageDiff diffImages(const fs::path& a, const fs::path& b, int tolerance) {
+  return diffImages(loadImageRgba8(a), loadImageRgba8(b), tolerance);
+}
+
+// "Same pixels within the renderer's tolerance": at most 0.1% of pixels off by more than 3 steps of
+// 255 (the project's cross-driver tolerance) and a small mean difference. Both sides are llvmpipe
+// here, so in practice the images are identical.
+void expectSameImage(const fs::path& a, const fs::path& b) {
+  ASSERT_TRUE(fs::exists(a)) << a;
+  ASSERT_TRUE(fs::exists(b)) << b;
+  ImageDiff d = diffImages(a, b, 3);
+  EXPECT_LE(d.offFraction, 0.001) << a << " vs " << b;
+  EXPECT_LT(d.meanAbs, 0.5) << a << " vs " << b;
+}
+
 }  // namespace
 
 // ---- window-free parts -------------------------------------------------------------
@@ -134,25 +187,37 @@ TEST(CameraPath, RoundTripsExactly) {
     c.fovDeg = 50.0f + i / 3.0f;
     path.push_back({i / 30.0, c});
   }
-  fs::path file = tempDir() / "path.json";
+  fs::path file = tempDir() / "path.txt";
   saveCameraPath(file, path);
   CameraPath back = loadCameraPath(file);
   ASSERT_EQ(back.size(), path.size());
+  std::ifstream in(file);
+  size_t lines = 0;
+  for (std::string line; std::getline(in, line);) ++lines;
+  EXPECT_EQ(lines, path.size()) << "one pose per line";
   for (size_t i = 0; i < path.size(); ++i) {
     EXPECT_EQ(back[i].seconds, path[i].seconds);
     expectCameraEq(back[i].camera, path[i].camera);
   }
 }
 
-TEST(CameraPath, BadFileNamesFileAndPose) {
-  fs::path file = tempDir() / "bad_path.json";
-  writeFile(file, R"({"format": "bvhlab-camera-path", "version": 1, "poses": [{"t": 0, "eye": [0,0,0]}]})");
-  try {
-    loadCameraPath(file);
-    FAIL() << "no error";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("bad_path.json: poses[0]: missing \"target\""), std::string::npos) << e.what();
+TEST(CameraPath, BadFileNamesFileAndLine) {
+  const std::string good = "t 0 eye 0 0 1 target 0 0 0 up 0 1 0 fov 50\n";
+  for (const char* bad : {"t 0 eye 0 0 1 up 0 1 0 fov 50\n",             // missing target
+                          "t 0 eye 0 0 1 target 0 0 1 up 0 1 0 fov 50\n",  // eye == target
+                          "t 0 eye 0 0 1 target 0 0 0 up 0 0 0 fov 50\n",  // zero up
+                          "t 0 eye 0 0 1 target 0 0 0 up 0 1 0 fov 180\n", "t 0 eye 0 x 1 target 0 0 0 up 0 1 0 fov 5\n",
+                          "t 0 eye 0 0 1 target 0 0 0 up 0 1 0 fov 50 zoom 2\n", "t 0 t 1 eye 0 0 1 target 0 0 0\n"}) {
+    try {
+      parseCameraPath("# comment line\n" + good + bad, "p.txt");
+      ADD_FAILURE() << "no error for: " << bad;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("p.txt:3: ", 0), 0u) << e.what();
+    }
   }
+  EXPECT_THROW(parseCameraPath("# no poses\n\n", "p.txt"), InputError);
+  EXPECT_THROW(loadCameraPath(tempDir() / "missing.txt"), InputError);
+  EXPECT_EQ(parseCameraPath(good + "\n# end\n" + good, "p.txt").size(), 2u);
 }
 
 TEST(ViewerScript, ParsesEventsInFrameOrder) {
@@ -168,9 +233,21 @@ TEST(ViewerScript, ParsesEventsInFrameOrder) {
   EXPECT_EQ(s.lastFrame(), 9);
 }
 
+TEST(ViewerScript, SetAndWindowScreenshot) {
+  ViewerScript s = parseViewerScript("0 set aa smaa-high\n1 set robust watertight\n2 window-screenshot w.png\n", "s.txt");
+  ASSERT_EQ(s.events.size(), 3u);
+  EXPECT_EQ(s.events[0].kind, ScriptEvent::Kind::Set);
+  EXPECT_EQ(s.events[0].key, "aa");
+  EXPECT_EQ(s.events[0].value, "smaa-high");
+  EXPECT_EQ(s.events[1].value, "watertight");
+  EXPECT_EQ(s.events[2].kind, ScriptEvent::Kind::WindowScreenshot);
+  EXPECT_EQ(s.events[2].path, "w.png");
+}
+
 TEST(ViewerScript, ErrorsNameFileAndLine) {
   for (const char* bad : {"0 key B\nx key B\n", "0 key B\n1 jump\n", "0 key B\n1 pose eye 0 0 0 target 0 0 0\n",
-                          "0 key B\n1 hold W\n", "0 key B\n1 mouse 3 nan\n"}) {
+                          "0 key B\n1 hold W\n", "0 key B\n1 mouse 3 nan\n", "0 key B\n1 set colour red\n",
+                          "0 key B\n1 set aa\n", "0 key B\n1 window-screenshot\n"}) {
     try {
       parseViewerScript(bad, "s.txt");
       ADD_FAILURE() << "no error for: " << bad;
@@ -206,25 +283,9 @@ TEST(ViewCommand, ScriptedScreenshotEqualsHeadlessRender) {
                    " --width 96 --height 64 --eye 1.3,0.9,1.7 --target 0,0.1,0 --up 0,1,0 --fov 42 -o " +
                    (dir / "render.png").string());
   ASSERT_EQ(r.rc, 0) << r.err;
-  ImageRgba8 a = loadImageRgba8(dir / "view.png"), b = loadImageRgba8(dir / "render.png");
-  ASSERT_EQ(a.width, b.width);
-  ASSERT_EQ(a.height, b.height);
-  ASSERT_EQ(a.rgba.size(), b.rgba.size());
-  // Same shader, same camera, both llvmpipe here: expected identical. The tolerance (3 steps of 255) is
-  // the one the project uses across GL drivers, for a viewer on a GPU.
-  size_t off = 0, pixels = a.rgba.size() / 4;
-  double sum = 0.0;
-  for (size_t i = 0; i < pixels; ++i) {
-    int m = 0;
-    for (int c = 0; c < 3; ++c) {
-      int d = std::abs(int(a.rgba[4 * i + c]) - int(b.rgba[4 * i + c]));
-      m = std::max(m, d);
-      sum += d;
-    }
-    off += m > 3;
-  }
-  EXPECT_LE(double(off) / double(pixels), 0.001) << off << " pixels differ by more than 3";
-  EXPECT_LT(sum / double(3 * pixels), 0.5);
+  expectSameImage(dir / "view.png", dir / "render.png");
+  ImageRgba8 a = loadImageRgba8(dir / "view.png");
+  const size_t pixels = a.rgba.size() / 4;
   // ...and the image is not trivially equal: the cube covers part of the frame, the sky the rest.
   std::set<uint32_t> colors;
   for (size_t i = 0; i < pixels; ++i) colors.insert(a.rgba[4 * i] << 16 | a.rgba[4 * i + 1] << 8 | a.rgba[4 * i + 2]);
@@ -273,4 +334,126 @@ TEST(ViewCommand, RecordedPathReplaysToSamePoses) {
   EXPECT_NE(a.front().camera.fovDeg, a.back().camera.fovDeg);
   EXPECT_NE(glm::normalize(a.front().camera.target - a.front().camera.eye),
             glm::normalize(a.back().camera.target - a.back().camera.eye));
+}
+
+TEST(ViewCommand, ScriptedAaSwitchMatchesHeadlessAa) {
+  REQUIRE_VIEWER(prefix);
+  fs::path dir = tempDir();
+  const std::string d = dir.string() + "/";
+  writeFile(dir / "aa.txt", std::string(kPoseLine) + "0 screenshot " + d + "aa_none.png\n" +
+                                "1 set aa smaa-high\n1 screenshot " + d + "aa_smaa.png\n" +
+                                "3 set aa ssaa4\n3 screenshot " + d + "aa_ssaa4.png\n" + "5 key M\n");
+  Result v = shell(view(*prefix, "--json --frames 7 --script " + (dir / "aa.txt").string()));
+  ASSERT_EQ(v.rc, 0) << v.err;
+  nlohmann::json j = nlohmann::json::parse(v.out);
+  EXPECT_EQ(j["aa"], "ssaa16") << "M steps to the next mode after ssaa4";
+  ASSERT_EQ(j["switches"].size(), 3u);
+  EXPECT_EQ(j["switches"][0]["switch"], "aa");
+  EXPECT_EQ(j["switches"][0]["value"], "smaa-high");
+  EXPECT_GT(j["switches"][0]["aa_ms_after"].get<double>(), 0.0) << "the SMAA passes are timed apart";
+  EXPECT_EQ(j["switches"][1]["aa_ms_after"].get<double>(), 0.0) << "SSAA has no post pass";
+
+  for (const char* mode : {"none", "smaa-high", "ssaa4"}) {
+    const std::string name = std::string(mode) == "smaa-high" ? "smaa" : mode;
+    Result r = renderHeadless(dir / ("aa_render_" + name + ".png"), std::string("--aa ") + mode);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    SCOPED_TRACE(mode);
+    expectSameImage(dir / ("aa_" + name + ".png"), dir / ("aa_render_" + name + ".png"));
+  }
+  // The switch did change the image: SMAA touches the cube's edges, not most of the frame.
+  ImageDiff smaa = diffImages(dir / "aa_none.png", dir / "aa_smaa.png", 0);
+  EXPECT_GT(smaa.changed, 0u);
+  EXPECT_LT(smaa.changed, size_t(96 * 64 / 4));
+  EXPECT_GT(diffImages(dir / "aa_none.png", dir / "aa_ssaa4.png", 0).changed, 0u);
+}
+
+TEST(ViewCommand, ScriptedRobustnessSwitchMatchesHeadless) {
+  REQUIRE_VIEWER(prefix);
+  const std::vector<std::string>& names = robustnessNames();  // whatever variants traversal offers
+  ASSERT_FALSE(names.empty());
+  const std::string next = names[1 % names.size()], last = names.back();
+  fs::path dir = tempDir();
+  const std::string d = dir.string() + "/";
+  writeFile(dir / "robust.txt", std::string(kPoseLine) + "1 key T\n1 screenshot " + d + "robust_next.png\n" +
+                                    "3 set robust " + last + "\n3 screenshot " + d + "robust_last.png\n");
+  Result v = shell(view(*prefix, "--robust " + names[0] + " --json --frames 5 --script " + (dir / "robust.txt").string()));
+  ASSERT_EQ(v.rc, 0) << v.err;
+  nlohmann::json j = nlohmann::json::parse(v.out);
+  EXPECT_EQ(j["robust"], last);
+  ASSERT_EQ(j["switches"].size(), 2u);
+  EXPECT_EQ(j["switches"][0]["switch"], "robust");
+  EXPECT_EQ(j["switches"][0]["value"], next) << "T steps through robustnessNames() in order";
+  EXPECT_TRUE(j["switches"][0].contains("first_frame_ms")) << "the shader was reassembled";
+  for (const auto& [file, variant] : {std::pair{"robust_next", next}, {"robust_last", last}}) {
+    Result r = renderHeadless(dir / (std::string(file) + "_render.png"), "--robust " + variant);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    SCOPED_TRACE(variant);
+    expectSameImage(dir / (std::string(file) + ".png"), dir / (std::string(file) + "_render.png"));
+  }
+  Result bad = shell(view(*prefix, "--robust nope --frames 1"));
+  EXPECT_EQ(bad.rc, 1);
+  EXPECT_NE(bad.err.find(names[0]), std::string::npos) << "lists the valid variants: " << bad.err;
+}
+
+namespace {
+
+// Bilinear upscaling with GL's texel-centre convention and clamp-to-edge: what a linear-filtered
+// glBlitFramebuffer from src to a dstW x dstH window computes.
+ImageRgba8 upscaleBilinear(const ImageRgba8& src, int dstW, int dstH) {
+  ImageRgba8 out;
+  out.width = dstW;
+  out.height = dstH;
+  out.rgba.resize(size_t(dstW) * size_t(dstH) * 4);
+  auto texel = [&](int x, int y, int c) {
+    x = std::clamp(x, 0, src.width - 1);
+    y = std::clamp(y, 0, src.height - 1);
+    return double(src.rgba[(size_t(y) * size_t(src.width) + size_t(x)) * 4 + size_t(c)]);
+  };
+  for (int y = 0; y < dstH; ++y)
+    for (int x = 0; x < dstW; ++x) {
+      const double u = (x + 0.5) * src.width / dstW - 0.5, v = (y + 0.5) * src.height / dstH - 0.5;
+      const int x0 = int(std::floor(u)), y0 = int(std::floor(v));
+      const double fx = u - x0, fy = v - y0;
+      for (int c = 0; c < 4; ++c) {
+        const double top = texel(x0, y0, c) * (1 - fx) + texel(x0 + 1, y0, c) * fx;
+        const double bottom = texel(x0, y0 + 1, c) * (1 - fx) + texel(x0 + 1, y0 + 1, c) * fx;
+        out.rgba[(size_t(y) * size_t(dstW) + size_t(x)) * 4 + size_t(c)] = uint8_t(std::lround(top * (1 - fy) + bottom * fy));
+      }
+    }
+  return out;
+}
+
+}  // namespace
+
+TEST(ViewCommand, DirectBlitShowsTheHeadlessRender) {
+  REQUIRE_VIEWER(prefix);
+  fs::path dir = tempDir();
+  const std::string d = dir.string() + "/";
+  auto script = [&](const std::string& tag) {
+    fs::path p = dir / ("blit_" + tag + ".txt");
+    writeFile(p, std::string(kPoseLine) + "1 window-screenshot " + d + "win_" + tag + ".png\n");
+    return p.string();
+  };
+  // What the window shows (no overlay) is the render, pixel for pixel, with or without the read-back.
+  Result blit = shell(view(*prefix, "--no-overlay --frames 2 --script " + script("blit")));
+  ASSERT_EQ(blit.rc, 0) << blit.err;
+  Result readback = shell(view(*prefix, "--no-overlay --readback-present --frames 2 --script " + script("readback")));
+  ASSERT_EQ(readback.rc, 0) << readback.err;
+  Result r = renderHeadless(dir / "blit_render.png", "");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  expectSameImage(dir / "win_blit.png", dir / "blit_render.png");
+  EXPECT_EQ(diffImages(dir / "win_blit.png", dir / "win_readback.png", 0).changed, 0u);
+
+  // Half resolution: the 48x32 render, linearly upscaled to the 96x64 window by the blit.
+  Result half = shell(view(*prefix, "--no-overlay --scale 0.5 --frames 2 --script " + script("half")));
+  ASSERT_EQ(half.rc, 0) << half.err;
+  Result small = renderHeadless(dir / "blit_render_half.png", "", 48, 32);
+  ASSERT_EQ(small.rc, 0) << small.err;
+  ImageRgba8 window = loadImageRgba8(dir / "win_half.png");
+  ASSERT_EQ(window.width, 96);
+  ASSERT_EQ(window.height, 64);
+  // Tolerance 3: the blit filters in 8-bit fixed point, the reference in double.
+  ImageDiff d2 = diffImages(window, upscaleBilinear(loadImageRgba8(dir / "blit_render_half.png"), 96, 64), 3);
+  EXPECT_LE(d2.offFraction, 0.001);
+  EXPECT_LT(d2.meanAbs, 0.5);
 }
