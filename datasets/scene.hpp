@@ -104,6 +104,12 @@ struct RenderSettings {
 
 struct Scene {
   std::filesystem::path source;  // scene file (or mesh file) it came from
+  // World position of this scene's coordinate origin. Every position (camera, lights, object
+  // translations, baked mesh vertices) is stored relative to it. The loader sets it to the camera eye
+  // when the eye is 1024 or more from the world origin (camera-relative rendering, computed in double
+  // precision), else it stays 0. Mesh files hold their vertices in float already: a mesh whose own
+  // coordinates are far from its origin loses precision when it is read, before any rebasing.
+  glm::dvec3 origin{0.0};
   Camera camera;
   std::vector<Light> lights;
   World world;

@@ -207,6 +207,20 @@ class SceneReader {
     for (int i = 0; i < N; ++i) v[i] = float(number(*a->get(size_t(i)), name + "[" + std::to_string(i) + "]", range));
     return v;
   }
+  // A position, read in double precision and stored relative to the scene's origin (Scene::origin), so
+  // a scene far from the world origin keeps the float precision of the same scene near it.
+  std::optional<glm::vec3> getPoint(const toml::table& t, std::string_view key, const std::string& where) const {
+    const toml::node* n = t.get(key);
+    if (!n) return std::nullopt;
+    return glm::vec3(pointOf(*n, where + "." + std::string(key)) - scene_.origin);
+  }
+  glm::dvec3 pointOf(const toml::node& n, const std::string& name) const {
+    const toml::array* a = n.as_array();
+    if (!a || a->size() != 3) fail(n, name + " must be an array of 3 numbers");
+    glm::dvec3 v;
+    for (int i = 0; i < 3; ++i) v[i] = number(*a->get(size_t(i)), name + "[" + std::to_string(i) + "]");
+    return v;
+  }
   std::optional<glm::vec3> getVec3(const toml::table& t, std::string_view key, const std::string& where,
                                    Range range = kAny) const {
     const toml::node* n = t.get(key);
@@ -297,8 +311,17 @@ class SceneReader {
     const std::string w = "camera";
     checkKeys(t, {"eye", "target", "up", "fov"}, "[camera]");
     Camera& c = scene_.camera;
-    c.eye = requireVec3(t, "eye", w);
-    c.target = requireVec3(t, "target", w);
+    if (!t.get("eye")) failAt(t.source().begin.line, w + ": missing required key 'eye'");
+    if (!t.get("target")) failAt(t.source().begin.line, w + ": missing required key 'target'");
+    // Camera-relative coordinates for far scenes: every position is stored relative to the eye (the
+    // subtraction in double precision). Below kRebaseDistance the origin stays at 0, so scenes near the
+    // world origin keep their coordinates exactly; beyond it, float spacing (>= 2^-13 = 1.2e-4 at 1024)
+    // reaches the tracer's secondary-ray offsets and rounding of positions would show in the image.
+    const glm::dvec3 eye = pointOf(*t.get("eye"), w + ".eye");
+    constexpr double kRebaseDistance = 1024.0;
+    if (glm::any(glm::greaterThanEqual(glm::abs(eye), glm::dvec3(kRebaseDistance)))) scene_.origin = eye;
+    c.eye = *getPoint(t, "eye", w);
+    c.target = *getPoint(t, "target", w);
     c.up = getVec3(t, "up", w).value_or(glm::vec3(0, 1, 0));
     c.fovDeg = getFloat(t, "fov", w, c.fovDeg, Range{0.0, 180.0, true, true});
     const glm::vec3 view = c.target - c.eye;
@@ -361,7 +384,8 @@ class SceneReader {
     rejectForeignKeys(t, w, kind, {{"position", "point"}, {"direction", "directional"}});
     if (kind == "point") {
       l.kind = LightKind::Point;
-      l.position = requireVec3(t, "position", w);
+      if (!t.get("position")) failAt(t.source().begin.line, w + ": missing required key 'position'");
+      l.position = *getPoint(t, "position", w);
     } else {
       l.kind = LightKind::Directional;
       l.direction = requireVec3(t, "direction", w);
@@ -445,7 +469,8 @@ class SceneReader {
       o.material = defaultMaterial();
     }
 
-    const glm::vec3 translate = getVec3(t, "translate", w).value_or(glm::vec3(0.0f));
+    // World = translate + R S local, so subtracting the origin from the translation rebases the object.
+    const glm::vec3 translate = getPoint(t, "translate", w).value_or(glm::vec3(-scene_.origin));
     const glm::vec3 scale = t.get("scale") ? scalarOrVec<3>(*t.get("scale"), w + ".scale", kPositive) : glm::vec3(1.0f);
     o.transform = composeTransform(translate, glm::vec3(0.0f), scale);
     if (const toml::node* r = t.get("rotate")) {
