@@ -14,6 +14,7 @@
 #include "builders/builder.hpp"
 #include "datasets/scene.hpp"  // InputError
 #include "experiments/generated_scenes.hpp"
+#include "render/fly_camera.hpp"
 #if __has_include("traversal/kernels.hpp")
 #include "traversal/kernels.hpp"
 #define BVHLAB_HAVE_KERNEL_REGISTRY 1
@@ -59,8 +60,13 @@ std::string hashHex(std::string_view bytes) {
 }
 
 json RunRender::keyJson() const {
-  return json{{"width", width},   {"height", height},     {"warmup", warmup}, {"frames", frames},
-              {"backend", backend}, {"heatmaps", heatmaps}, {"env", env},       {"args", args}};
+  json key{{"width", width},     {"height", height},     {"warmup", warmup}, {"frames", frames},
+           {"backend", backend}, {"heatmaps", heatmaps}, {"env", env},       {"args", args}};
+  if (!cameraPath.empty()) {  // only when set: keys of configs without a path stay as they were
+    key["camera_path"] = cameraPath;
+    key["camera_path_hash"] = cameraPathHash;
+  }
+  return key;
 }
 
 const AxisValue* RunSpec::axis(std::string_view singular) const {
@@ -96,6 +102,7 @@ json RunSpec::toJson() const {
   }
   json r = render.keyJson();
   r["timeout_s"] = render.timeoutSeconds;
+  if (!render.cameraPathFile.empty()) r["camera_path_file"] = render.cameraPathFile.string();
   return json{{"index", index},   {"key", key},       {"axes", a},
               {"render", r},      {"sweeps", sweeps}, {"reference_key", referenceKey},
               {"reference_only", referenceOnly}};
@@ -120,6 +127,9 @@ RunSpec RunSpec::fromJson(const json& j) {
   s.render.env = r.at("env").get<std::map<std::string, std::string>>();
   s.render.args = r.at("args").get<std::vector<std::string>>();
   s.render.timeoutSeconds = r.value("timeout_s", s.render.timeoutSeconds);
+  s.render.cameraPath = r.value("camera_path", "");
+  s.render.cameraPathHash = r.value("camera_path_hash", "");
+  s.render.cameraPathFile = r.value("camera_path_file", "");
   s.sweeps = j.at("sweeps").get<std::vector<std::string>>();
   s.referenceKey = j.at("reference_key");
   s.referenceOnly = j.at("reference_only");
@@ -441,6 +451,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   std::vector<Sweep> sweeps;
   std::vector<Exclusion> exclusions;
   const toml::table* referenceTable = nullptr;
+  const toml::node* cameraPathNode = nullptr;
 
   auto readAxes = [&](const toml::table& t, const std::string& section, AxisMap& out,
                       const std::set<std::string>& skip) {
@@ -489,13 +500,33 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         } else if (rk == "env") {
           for (auto&& [name, value] : r.table(rv, key))
             out.env[std::string(name.str())] = r.string(value, key + "." + std::string(name.str()));
+        } else if (rk == "camera_path") {
+          out.cameraPath = r.string(rv, key);
+          if (out.cameraPath.empty()) r.fail(rv.source(), key, "empty path");
+          const fs::path resolved =
+              (fs::path(out.cameraPath).is_absolute() ? fs::path(out.cameraPath) : r.dir() / out.cameraPath)
+                  .lexically_normal();
+          std::ifstream in(resolved, std::ios::binary);
+          if (!in) r.fail(rv.source(), key, "camera path '" + out.cameraPath + "' not found (looked at " +
+                                                resolved.string() + ")");
+          std::ostringstream bytes;
+          bytes << in.rdbuf();
+          try {
+            parseCameraPath(bytes.str(), resolved.string());  // validated now, not when the run starts
+          } catch (const InputError& e) {
+            r.fail(rv.source(), key, e.what());
+          }
+          out.cameraPathFile = resolved;
+          out.cameraPathHash = hashHex(bytes.str());
+          cameraPathNode = &rv;
         } else if (rk == "args") {
           const toml::array* a = rv.as_array();
           if (!a) r.fail(rv.source(), key, "expected an array of strings, got " + typeName(rv));
           for (const toml::node& arg : *a) out.args.push_back(r.string(arg, key));
         } else
           r.fail(rk.source(), key,
-                 "unknown key; [render] has width, height, warmup, frames, backend, heatmaps, timeout_s, env, args");
+                 "unknown key; [render] has width, height, warmup, frames, backend, heatmaps, timeout_s, env, args, "
+                 "camera_path");
       }
     } else if (section == "axes") {
       readAxes(r.table(v, section), "axes", topAxes, {});
@@ -553,6 +584,16 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
       r.fail(root.source(), s.name == "main" ? "axes.scenes" : "sweep '" + s.name + "'.scenes",
              "missing: every run needs a scene (or mesh) file");
   }
+
+  // A camera path sets the camera of every frame: a scene's own camera override would be ignored.
+  if (cameraPathNode)
+    for (const Sweep& s : sweeps)
+      for (const AxisValue& v : s.axes.at("scene"))
+        for (const char* k : {"eye", "target", "up", "fov"})
+          if (v.value.is_object() && v.value.contains(k))
+            r.fail(cameraPathNode->source(), "render.camera_path",
+                   "scene '" + v.label + "' sets `" + k + "`, but the camera path sets every frame's camera; "
+                   "drop one of them");
 
   // Every exclusion label should name a value some sweep uses: a typo would silently exclude nothing.
   for (const Exclusion& ex : exclusions)

@@ -37,6 +37,10 @@ struct RunRender {
   std::map<std::string, std::string> env;     // extra environment for the renderer (LP_NUM_THREADS, ...)
   std::vector<std::string> args;              // extra renderer flags, appended verbatim
   double timeoutSeconds = 600.0;              // a run past this is killed and recorded as failed
+  // camera_path: frames are timed along a recorded camera path (`bvhlab render --camera-path`).
+  std::string cameraPath;                     // as written in the config ("" = the scene's camera)
+  std::filesystem::path cameraPathFile;       // resolved against the config's folder (not in the key)
+  std::string cameraPathHash;                 // FNV-1a 64 of the file: a re-recorded path is a new run
 
   nlohmann::json keyJson() const;
 };

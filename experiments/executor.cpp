@@ -74,6 +74,7 @@ std::vector<std::string> renderCommandLine(const fs::path& binary, const RunRequ
   for (const char* key : {"eye", "target", "up"})
     if (scene->value.contains(key)) argv.insert(argv.end(), {std::string("--") + key, vec3Flag(scene->value[key])});
   if (scene->value.contains("fov")) argv.insert(argv.end(), {"--fov", number(scene->value["fov"].get<double>())});
+  if (!r.cameraPathFile.empty()) argv.insert(argv.end(), {"--camera-path", r.cameraPathFile.string()});
 
   for (const auto& [name, value] : spec.axes) {
     const AxisInfo* axis = findAxis(name);

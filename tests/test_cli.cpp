@@ -159,3 +159,55 @@ TEST(Cli, SmaaIsTimedAndChangesOnlyEdgePixels) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Cli, CameraPathTimesFramesAlongThePathAndSavesPoseZero) {
+  // Three poses around shadows.toml's own view; the first is the one the saved image must show.
+  const fs::path path = writeTemp("orbit.txt",
+                                  "t 0 eye 0.5 3 6 target 0 0.5 0 up 0 1 0 fov 45\n"
+                                  "# a comment line is not a pose\n"
+                                  "t 0.033 eye 2 3 5.5 target 0 0.5 0 up 0 1 0 fov 45\n"
+                                  "t 0.067 eye 4 2.5 4 target 0 0.5 0 up 0 1 0 fov 50\n");
+  fs::path along = fs::temp_directory_path() / "bvhlab_cli_test/path_along.png";
+  fs::path pose0 = fs::temp_directory_path() / "bvhlab_cli_test/path_pose0.png";
+  const std::string common = " --width 64 --height 36 --warmup 1 ";
+  Result a = run("render " + scene("shadows.toml").string() + common + "--frames 5 --json --camera-path " +
+                 path.string() + " -o " + along.string());
+  ASSERT_EQ(a.code, 0) << a.err;
+  auto j = nlohmann::json::parse(a.out);
+  EXPECT_EQ(j["camera_path"], path.string());
+  std::ifstream in(path);
+  int poseLines = 0;
+  for (std::string line; std::getline(in, line);) poseLines += !line.empty() && line[0] != '#';
+  EXPECT_EQ(j["path_poses"], poseLines);
+  EXPECT_EQ(j["frames"], 5);  // the last timed frame is pose 1: the saved image must be drawn again
+  EXPECT_GT(j["frame_ms"].get<double>(), 0.0);
+
+  Result b = run("render " + scene("shadows.toml").string() + common +
+                 "--frames 1 --eye 0.5,3,6 --target 0,0.5,0 --up 0,1,0 --fov 45 -o " + pose0.string());
+  ASSERT_EQ(b.code, 0) << b.err;
+  bvhlab::ImageRgba8 ia = bvhlab::loadImageRgba8(along), ib = bvhlab::loadImageRgba8(pose0);
+  EXPECT_EQ(ia.rgba, ib.rgba) << "the saved image is pose 0's, whichever pose was timed last";
+}
+
+TEST(Cli, BadCameraPathNamesFileAndLine) {
+  const fs::path path = writeTemp("bad_orbit.txt",
+                                  "t 0 eye 0.5 3 6 target 0 0.5 0 up 0 1 0 fov 45\n"
+                                  "t 0.033 eye 2 3 5.5 target 0 0.5 0 up 0 1 0\n");
+  fs::path png = fs::temp_directory_path() / "bvhlab_cli_test/bad_path.png";
+  fs::remove(png);
+  Result r = run("render " + scene("shadows.toml").string() + " --camera-path " + path.string() + " -o " + png.string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find(path.string() + ":2: missing 'fov'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(png));
+  Result missing = run("render " + scene("shadows.toml").string() + " --camera-path /nonexistent/path.txt");
+  EXPECT_NE(missing.code, 0);
+  EXPECT_NE(missing.err.find("/nonexistent/path.txt"), std::string::npos) << missing.err;
+  Result both = run("render " + scene("shadows.toml").string() + " --camera-path " +
+                    writeTemp("ok.txt", "t 0 eye 0.5 3 6 target 0 0.5 0 up 0 1 0 fov 45\n").string() + " --eye 1,2,3");
+  EXPECT_NE(both.code, 0);
+  EXPECT_NE(both.err.find("--camera-path"), std::string::npos) << both.err;
+}
+
+}  // namespace

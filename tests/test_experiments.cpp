@@ -680,3 +680,86 @@ TEST_F(Experiments, SeedFiguresReportMirrorsFigures8To12AndOmitsPlotsWithoutData
 }
 
 }  // namespace
+
+namespace {
+
+// [render] camera_path: resolved against the config's folder, validated at load, part of the key,
+// passed to the renderer as --camera-path.
+TEST_F(Experiments, CameraPathIsResolvedKeyedAndPassedToTheRenderer) {
+  const std::string pose = "t 0 eye 0 0 3 target 0 0 0 up 0 1 0 fov 45\n";
+  writeText(root / "m.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  writeText(root / "paths" / "fly.txt", pose + "t 0.5 eye 1 0 3 target 0 0 0 up 0 1 0 fov 45\n");
+  const std::string axes = "[axes]\nscenes = 'm.off'\nkernels = ['stack-ordered', 'stackless']\n";
+  writeText(root / "plain.toml", axes);
+  writeText(root / "cfg.toml", "[render]\ncamera_path = 'paths/fly.txt'\n" + axes);
+  const ExperimentConfig plain = loadExperimentConfig(root / "plain.toml", kNames);
+  const ExperimentConfig cfg = loadExperimentConfig(root / "cfg.toml", kNames);
+  ASSERT_EQ(cfg.runs.size(), 2u);
+  EXPECT_EQ(cfg.runs[0].render.cameraPath, "paths/fly.txt");
+  EXPECT_EQ(cfg.runs[0].render.cameraPathFile, (root / "paths" / "fly.txt").lexically_normal());
+  EXPECT_NE(cfg.runs[0].key, plain.runs[0].key) << "the camera path is part of the run key";
+  EXPECT_FALSE(plain.runs[0].render.keyJson().contains("camera_path")) << "keys without a path are unchanged";
+
+  // A plan round trip keeps it; the command line carries the resolved file.
+  const RunSpec back = RunSpec::fromJson(cfg.runs[0].toJson());
+  EXPECT_EQ(back.key, cfg.runs[0].key);
+  EXPECT_EQ(back.keyJson(), cfg.runs[0].keyJson());
+  RunRequest request{back, root / "a.png", {}, "", ""};
+  const std::vector<std::string> argv = renderCommandLine("bvhlab", request);
+  auto flag = std::find(argv.begin(), argv.end(), "--camera-path");
+  ASSERT_NE(flag, argv.end());
+  ASSERT_NE(flag + 1, argv.end());
+  EXPECT_EQ(fs::path(*(flag + 1)), (root / "paths" / "fly.txt").lexically_normal());
+
+  // Re-recording the path (same name, new poses) makes new runs: old results are not reused.
+  writeText(root / "paths" / "fly.txt", pose);
+  EXPECT_NE(loadExperimentConfig(root / "cfg.toml", kNames).runs[0].key, cfg.runs[0].key);
+}
+
+TEST_F(Experiments, BadCameraPathInAConfigNamesFileLineAndKey) {
+  writeText(root / "m.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  writeText(root / "broken.txt", "t 0 eye 0 0 3 target 0 0 0 up 0 1 0 fov 45\nt 1 eye 0 0 3 target 0 0 0 up 0 1 0\n");
+  const std::string axes = "[axes]\nscenes = 'm.off'\n";
+  struct Case {
+    std::string render, expect;
+  };
+  for (const Case& c : {Case{"camera_path = 'missing.txt'", "not found"},
+                        Case{"camera_path = 'broken.txt'", "broken.txt:2: missing 'fov'"},
+                        Case{"camera_path = ''", "empty path"},
+                        Case{"camera_path = 3", "expected a string"}}) {
+    writeText(root / "cfg.toml", "[render]\nwidth = 64\n" + c.render + "\n" + axes);
+    try {
+      loadExperimentConfig(root / "cfg.toml", kNames);
+      ADD_FAILURE() << "no error for " << c.render;
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind((root / "cfg.toml").string() + ":3: render.camera_path: ", 0), 0u) << what;
+      EXPECT_NE(what.find(c.expect), std::string::npos) << what;
+    }
+  }
+  // A scene's own camera would be silently replaced by the path: refused.
+  writeText(root / "ok.txt", "t 0 eye 0 0 3 target 0 0 0 up 0 1 0 fov 45\n");
+  writeText(root / "cfg.toml", "[render]\ncamera_path = 'ok.txt'\n[axes]\nscenes = [{ file = 'm.off', eye = [0, 0, 2] }]\n");
+  try {
+    loadExperimentConfig(root / "cfg.toml", kNames);
+    ADD_FAILURE() << "no error for a scene camera + camera_path";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind((root / "cfg.toml").string() + ":2: render.camera_path: ", 0), 0u) << e.what();
+  }
+}
+
+TEST(ExperimentConfigs, FlythroughConfigLoads) {
+  const fs::path config = fs::path(BVHLAB_SOURCE_DIR) / "experiments" / "configs" / "flythrough.toml";
+  if (!fs::exists(fs::path(BVHLAB_SOURCE_DIR) / "datasets" / "cache" / "meshes" / "bunny00.off"))
+    GTEST_SKIP() << "bunny00.off not fetched (bash datasets/fetch.sh)";
+  const ExperimentConfig cfg = loadExperimentConfig(config);
+  ASSERT_FALSE(cfg.runs.empty());
+  for (const RunSpec& run : cfg.runs) {
+    EXPECT_FALSE(run.render.cameraPath.empty());
+    EXPECT_TRUE(fs::is_regular_file(run.render.cameraPathFile)) << run.render.cameraPathFile;
+  }
+  EXPECT_GE(cfg.axisLabels.at("builder").size(), 2u);
+  EXPECT_GE(cfg.axisLabels.at("kernel").size(), 2u);
+}
+
+}  // namespace
