@@ -2,10 +2,13 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "datasets/scene.hpp"  // InputError
 #include "experiments/generated_scenes.hpp"
@@ -75,6 +78,87 @@ class Progress {
   size_t total_;
   bool shown_ = false;
 };
+
+// ---- the hard-case suite next to a robustness sweep --------------------------------------------------
+// When the sweep's runs (reference-only ones aside) take more than one value on the robust axis, the
+// sweep also records what those variants do on the hard-case suite (`bvhlab hard-cases`, one child
+// process for all of them) in DIR/hard_cases.json, which the report's robustness table reads:
+//   {"status": "ok"|"failed", "variants": [names], "command", "log" (stderr tail), "error" (failed),
+//    "result": the command's JSON (render/hard_cases_command.hpp), "started_at", "wall_s",
+//    "git_commit", "machine", "config_hash"}
+// A failure is recorded, not fatal; it is retried on the next invocation like a failed run.
+
+const char* const kHardCasesFile = "hard_cases.json";
+
+std::vector<std::string> sweptRobustness(const ExperimentConfig& config) {
+  std::vector<std::string> names;
+  for (const RunSpec& run : config.runs) {
+    const AxisValue* robust = run.axis("robust");
+    if (run.referenceOnly || !robust) continue;
+    if (std::find(names.begin(), names.end(), robust->label) == names.end()) names.push_back(robust->label);
+  }
+  return names;
+}
+
+// The kernel and builder the robust sweep renders with (its first run's; the command's defaults when
+// the config leaves them to the renderer).
+std::vector<std::string> hardCasesSettings(const ExperimentConfig& config) {
+  std::vector<std::string> args;
+  for (const RunSpec& run : config.runs) {
+    if (run.referenceOnly || !run.axis("robust")) continue;
+    if (const AxisValue* k = run.axis("kernel")) args.insert(args.end(), {"--kernel", k->label});
+    if (const AxisValue* b = run.axis("builder"); b && b->value.contains("name"))
+      args.insert(args.end(), {"--builder", b->value["name"].get<std::string>()});
+    break;
+  }
+  return args;
+}
+
+void recordHardCases(const ExperimentConfig& config, const SweepDir& dir, const RunOptions& options,
+                     const std::string& commit, const json& machine) {
+  const std::vector<std::string> variants = sweptRobustness(config);
+  if (variants.size() < 2) return;
+  const fs::path file = dir.root / kHardCasesFile;
+  if (fs::exists(file)) {
+    try {
+      std::ifstream in(file);
+      const json old = json::parse(in);
+      if (old.value("variants", json()) == json(variants) &&
+          (old.value("status", "") == "ok" || !options.retryFailed))
+        return;
+    } catch (const std::exception&) {
+      // unreadable: redo it
+    }
+  }
+  const fs::path binary = options.binary.empty() ? fs::read_symlink("/proc/self/exe") : options.binary;
+  std::vector<std::string> argv = {binary.string(), "hard-cases", "--json", "-", "--gpu", "--backend",
+                                   config.render.backend};
+  for (const std::string& a : hardCasesSettings(config)) argv.push_back(a);
+  for (const std::string& v : variants) argv.insert(argv.end(), {"--robust", v});
+
+  json record = {{"variants", variants},     {"command", shellQuote(argv)}, {"started_at", utcNow()},
+                 {"git_commit", commit},     {"machine", machine},          {"config_hash", config.hash}};
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    ProcessOptions po;
+    po.env = config.render.env;
+    po.timeoutSeconds = config.render.timeoutSeconds;
+    const ProcessResult p = runProcess(argv, po);
+    record["log"] = tail(p.err);
+    if (!p.ok()) throw std::runtime_error("bvhlab hard-cases " + p.status());
+    json result = json::parse(p.out);  // throws on anything but one JSON document
+    if (!result.is_object() || !result.contains("variants"))
+      throw std::runtime_error("bvhlab hard-cases printed no result object");
+    record["status"] = "ok";
+    record["result"] = std::move(result);
+  } catch (const std::exception& e) {
+    record["status"] = "failed";
+    record["error"] = e.what();
+    std::cerr << "bvhlab run: hard cases failed (recorded in " << file.string() << "): " << e.what() << "\n";
+  }
+  record["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  writeFileAtomic(file, record.dump(1) + "\n");
+}
 
 }  // namespace
 
@@ -175,6 +259,9 @@ SweepOutcome runSweep(const RunOptions& options) {
     outcome.summary = writeResults(dir, plan, records, &cache);
   }
   progress.finish();
+  // Once per sweep (shard 0 of a sharded one), and only when the runs go to real child processes:
+  // an injected executor (tests) has no renderer to ask.
+  if (!options.executor && options.shardIndex == 0) recordHardCases(config, dir, options, commit, machine);
   outcome.summary = writeResults(dir, plan, records, &cache);
   return outcome;
 }
@@ -226,6 +313,22 @@ json mergeSweeps(const std::vector<fs::path>& dirs, const fs::path& out) {
         }
       writeFileAtomic(target.record(key), record.dump(1) + "\n");
     }
+  }
+  // The hard-case results come with the shard that ran them (shard 0): the first input with an ok one.
+  for (const SweepDir& in : inputs) {
+    const fs::path from = in.root / kHardCasesFile;
+    if (in.root == target.root || !fs::exists(from)) continue;
+    std::ifstream f(from);
+    std::stringstream text;
+    text << f.rdbuf();
+    bool ok = false;
+    try {
+      ok = json::parse(text.str()).value("status", "") == "ok";
+    } catch (const std::exception&) {
+    }
+    if (!ok && fs::exists(target.root / kHardCasesFile)) continue;
+    writeFileAtomic(target.root / kHardCasesFile, text.str());
+    if (ok) break;
   }
   return writeResults(target);
 }
