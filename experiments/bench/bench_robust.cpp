@@ -1,8 +1,6 @@
 // Frame time of the GLSL tracer per robustness variant (traversal/robustness.hpp) on the bunny and on
-// the report's scene, as a ratio to the fast variant measured in the same process: the "accuracy
-// costs time" table of issue 4. Each benchmark builds its shader once, draws warm-up frames (llvmpipe
-// compiles at the first draw) and times frames; the counter x_fast is this variant's median frame time
-// over the fast variant's (fast runs first per scene). A summary table is printed at the end.
+// the report's scene, as a ratio to the fast variant measured in the same process, frames interleaved:
+// the "accuracy costs time" table of issue 4. A summary table is printed at the end.
 //   ./build/experiments/bench/bench_robust [--benchmark_filter=bunny]
 #include <algorithm>
 #include <cstdio>
@@ -44,13 +42,17 @@ double median(std::vector<double> v) {
   return n == 0 ? 0.0 : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
 }
 
-// Median frame ms by scene and variant, for x_fast and the summary.
+// Median frame ms by scene and variant, for the summary.
 std::map<std::string, std::map<std::string, double>>& medians() {
   static std::map<std::string, std::map<std::string, double>> m;
   return m;
 }
 
-void renderVariant(benchmark::State& state, const char* label, const char* file, const char* variant) {
+// All variants of one scene in one benchmark, interleaved: every iteration (a round) draws one frame of
+// each variant, starting with a different one each round, so load drift on a busy machine hits every
+// variant alike and the ratios to fast compare frames taken moments apart. The iteration time is the
+// round's total; the counters are each variant's median frame ms and its ratio to fast's.
+void renderVariants(benchmark::State& state, const char* label, const char* file) {
   context();
   PreparedScene* p = nullptr;
   try {
@@ -59,40 +61,51 @@ void renderVariant(benchmark::State& state, const char* label, const char* file,
     state.SkipWithError(e.what());  // e.g. the bunny is not fetched (bash datasets/fetch.sh)
     return;
   }
-  ShaderOptions o;
-  o.maxDepth = p->scene.settings.maxDepth;
-  o.bvhStackSize = stackSizeFor(std::max<uint32_t>(1, p->packed.depth));
-  o.robust = parseRobustness(variant);
   FrameOptions f;
   f.width = 640;
   f.height = 360;
   f.camera = p->scene.camera;
   f.exposure = p->scene.settings.exposure;
-  GpuRenderer r(*p, o, f);
-  for (int i = 0; i < 2; ++i) r.drawFrame();  // warm-up: JIT compile
-  std::vector<double> ms;
-  for (auto _ : state) {
-    ms.push_back(r.drawFrame());
-    state.SetIterationTime(ms.back() / 1000.0);
+  const std::vector<Robustness>& variants = robustnessVariants();
+  std::vector<std::unique_ptr<GpuRenderer>> renderers;
+  for (Robustness v : variants) {
+    ShaderOptions o;
+    o.maxDepth = p->scene.settings.maxDepth;
+    o.bvhStackSize = stackSizeFor(std::max<uint32_t>(1, p->packed.depth));
+    o.robust = v;
+    renderers.push_back(std::make_unique<GpuRenderer>(*p, o, f));
+    for (int i = 0; i < 2; ++i) renderers.back()->drawFrame();  // warm-up: llvmpipe compiles at the first draw
   }
-  const double m = median(ms);
-  medians()[label][variant] = m;
-  const auto& sceneMedians = medians()[label];
-  if (auto fast = sceneMedians.find("fast"); fast != sceneMedians.end() && fast->second > 0.0)
-    state.counters["x_fast"] = m / fast->second;
-  state.counters["median_ms"] = m;
+  std::vector<std::vector<double>> ms(variants.size());
+  size_t round = 0;
+  for (auto _ : state) {
+    double total = 0.0;
+    for (size_t k = 0; k < variants.size(); ++k) {
+      const size_t i = (round + k) % variants.size();
+      ms[i].push_back(renderers[i]->drawFrame());
+      total += ms[i].back();
+    }
+    ++round;
+    state.SetIterationTime(total / 1000.0);
+  }
+  const double fast = median(ms[0]);  // robustnessVariants() starts with fast
+  for (size_t i = 0; i < variants.size(); ++i) {
+    const std::string name = robustnessName(variants[i]);
+    const double m = median(ms[i]);
+    medians()[label][name] = m;
+    state.counters[name + "_ms"] = m;
+    if (fast > 0.0) state.counters[name + "_x_fast"] = m / fast;
+  }
 }
 
 void registerAll() {
   const std::pair<const char*, const char*> scenes[] = {{"bunny", "datasets/cache/meshes/bunny00.off"},
                                                          {"report", "datasets/scenes/report.toml"}};
   for (const auto& [label, file] : scenes)
-    for (const std::string& v : robustnessNames())
-      benchmark::RegisterBenchmark((std::string(label) + "/" + v).c_str(), renderVariant, label, file,
-                                   v.c_str())  // the name table is static: the pointer stays valid
-          ->UseManualTime()
-          ->Unit(benchmark::kMillisecond)
-          ->Iterations(7);
+    benchmark::RegisterBenchmark(label, renderVariants, label, file)
+        ->UseManualTime()
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(9);
 }
 
 }  // namespace
