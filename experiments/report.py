@@ -20,6 +20,9 @@ import platform
 import statistics
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from report_robust import section_robustness  # noqa: E402  (experiments/report_robust.py, next to this file)
+
 try:
     import matplotlib
 
@@ -982,6 +985,8 @@ def build(root):
     section_images(body, data)
     section_builder_table(body, data)
     section_knobs(body, knobs)
+    if len(data.values(data.ok, "robust")) > 1 or os.path.isfile(os.path.join(root, "hard_cases.json")):
+        section_robustness(body, data, root)
     section_failed(body, data)
     section_all_rows(body, data)
     section_provenance(body, data)
