@@ -505,34 +505,35 @@ struct FamilyMeasurement {
   const char* why;
 };
 const FamilyMeasurement kFamilyMeasurements[] = {
-    {"acne_large_1e4", true, true, "epsilon 0.02 / 0.0 %, ULP 0.00 / 0.0 %",
-     "The loader stores positions relative to the eye (5.2e4 from the origin here), so the floor lies at "
-     "y = -1.6e4 in the tracer's coordinates and both offsets are relative to the hit point's size. (Before "
-     "camera-relative loading the ULP offset failed here with 11.4 / 9.1 %: self-shadowing speckle on the "
-     "floor y = 0, whose |p.y| < 1/32 got the absolute 1/65536 while p = o + t d carried ~1e-3 of error.)"},
-    {"acne_far_1e5", true, true, "epsilon 0.02 / 0.0 %, ULP 0.00 / 0.0 %",
+    {"acne_large_1e4", true, true, "epsilon 0.01 / 0.0 %, ULP 0.00 / 0.0 %",
+     "The loader stores positions relative to the eye (5.2e4 from the origin here), and both offsets scale "
+     "with the hit point's magnitude max|o| + t|d|. (Before camera-relative loading the ULP offset failed "
+     "here with 11.4 / 9.1 %: self-shadowing speckle on the floor y = 0, whose |p.y| < 1/32 got the absolute "
+     "1/65536 while p = o + t d carried ~1e-3 of error.)"},
+    {"acne_far_1e5", true, true, "epsilon 0.01 / 0.0 %, ULP 0.00 / 0.0 %",
      "Camera-relative loading removes the offset: the scene is rendered as if at the origin. (Before it, "
      "14.7 / 24.9 % and 12.9 / 22.7 %: offsets of 10 and 2 units.)"},
-    {"far_1e4", true, true, "epsilon 0.03 / 0.0 %, ULP 0.00 / 0.0 %",
+    {"far_1e4", true, true, "epsilon 0.02 / 0.0 %, ULP 0.00 / 0.0 %",
      "Camera-relative loading (before it: 7.8 / 10.2 % and 5.7 / 7.6 %, offsets of 1 and 0.25 units jumping "
      "the thin pane and contact shadows)."},
-    {"far_1e5", true, true, "epsilon 0.03 / 0.0 %, ULP 0.00 / 0.0 %",
+    {"far_1e5", true, true, "epsilon 0.02 / 0.0 %, ULP 0.00 / 0.0 %",
      "Camera-relative loading (before it: 13.3 / 16.2 % and 14.4 / 16.0 %)."},
-    {"far_1e6", true, true, "epsilon 0.03 / 0.0 %, ULP 0.00 / 0.0 %",
+    {"far_1e6", true, true, "epsilon 0.02 / 0.0 %, ULP 0.00 / 0.0 %",
      "Camera-relative loading reads the file's coordinates in double, so even the tessellated ball, whose "
      "vertices are baked from a unit-scale mesh file, keeps its shape (before it: 24.4 / 26.2 % in every "
      "variant, the input rounded to 1/16)."},
-    {"scale_1e-4", false, false, "epsilon 7.46 / 9.6 %, ULP 4.89 / 6.8 %",
-     "Absolute floors: the epsilon offset's 1e-4 is the size of the whole scene, the ULP offset's 1/65536 "
-     "(below |p_i| = 1/32, i.e. everywhere here) is 15 % of it. Secondary rays start past contact shadows "
-     "and through the thin pane."},
-    {"scale_1e-2", false, true, "epsilon 0.76 / 0.9 %, ULP 0.09 / 0.2 %",
-     "The epsilon offset's floor of 1e-4 is 1 % of the scene: contact shadows shift by a pixel or two."},
-    {"scale_1e2", true, false, "epsilon 0.01 / 0.0 %, ULP 5.24 / 4.2 %",
-     "The ULP offset's floor acne: the eye is 690 from the origin, below the loader's rebasing distance "
-     "(1024), so the floor is still y = 0 where |p.y| < 1/32 gets the absolute 1/65536, while p = o + t d "
-     "carries an error of about eps * 690 in y: self-shadowing speckle on the floor. The epsilon offset, "
-     "1e-4 (1 + max |p_i|), is driven by the large x and z and clears it."},
+    {"scale_1e-4", true, true, "epsilon 0.00 / 0.0 %, ULP 0.00 / 0.0 %",
+     "Offsets proportional to the hit point's magnitude max|o| + t|d| (shade.glsl's hitMagnitude). Before, "
+     "with absolute floors, 7.46 / 9.6 % and 4.89 / 6.8 %: the epsilon offset's 1e-4 (1 + max|p|) was the "
+     "size of the whole scene, the ULP offset's 1/65536 (below |p_i| = 1/32, i.e. everywhere here) 15 % of "
+     "it; secondary rays started past contact shadows and through the thin pane."},
+    {"scale_1e-2", true, true, "epsilon 0.00 / 0.0 %, ULP 0.00 / 0.0 %",
+     "Magnitude-relative offsets (before: the epsilon offset's floor of 1e-4 was 1 % of the scene, 0.76 / "
+     "0.9 %: contact shadows shifted by a pixel or two)."},
+    {"scale_1e2", true, true, "epsilon 0.00 / 0.0 %, ULP 0.00 / 0.0 %",
+     "Magnitude-relative offsets. Before, the ULP offset's floor acne (5.24 / 4.2 %): the eye is 690 from "
+     "the origin, below the loader's rebasing distance (1024), so the floor is y = 0 where |p.y| < 1/32 got "
+     "the absolute 1/65536 while p = o + t d carries an error of about eps * 690 in y."},
     {"scale_1e4", true, true, "epsilon 0.02 / 0.0 %, ULP 0.00 / 0.0 %",
      "Rebased to the eye like acne_large_1e4 (before camera-relative loading, the ULP offset failed with "
      "11.7 / 9.7 %, the floor acne of scale_1e2)."},
@@ -675,8 +676,8 @@ std::vector<HardScene> makeHardScenes() {
     h.spec.description = "base.toml moved to " + vec(h.offset) + " (unit scale).";
     h.provokes = "base.toml moved to " + vec(h.offset) + ": float spacing at " + number(d) + " is " +
                  number(std::ldexp(1.0, int(std::floor(std::log2(d))) - 23)) +
-                 ", so every coordinate (camera, hit points, mesh vertices) is rounded to that grid, and both "
-                 "offsets grow with |p|: epsilon 1e-4 (1 + |p|), ULP 256 ulps of |p|.";
+                 ", so every coordinate (camera, hit points, mesh vertices) would be rounded to that grid (the "
+                 "loader rebases it to the eye in double precision).";
     h.correct = "The image of base.toml.";
     out.push_back(h);
   }
@@ -689,8 +690,8 @@ std::vector<HardScene> makeHardScenes() {
     h.spec.description = "base.toml scaled by " + number(k) + " about the origin.";
     h.provokes = "base.toml scaled by " + number(k) +
                  " about the origin (camera, lights and geometry together). Relative rounding is the same at every "
-                 "scale; what does not scale is an absolute constant (the epsilon offset's 1e-4 floor, the ULP "
-                 "offset's 1/65536 below |p_i| = 1/32).";
+                 "scale; what does not scale is an absolute constant in an offset (both offsets are multiples of "
+                 "the hit point's magnitude max|o| + t|d| for that reason).";
     h.correct = "The image of base.toml.";
     out.push_back(h);
   }
@@ -722,8 +723,9 @@ std::vector<GeneratedFile> hardSceneFiles() {
       "triangle soups, CGAL oracle) are `datasets/hard_cases.hpp`, tested by `tests/test_robust.cpp`.\n\n"
       "Variants: `--robust` takes every name of `robustnessNames()` (`traversal/kernels.hpp`). Three knobs: the "
       "triangle test (Moller-Trumbore or watertight), the box test (slab or Ize's robust slabs) and the origin "
-      "offset of secondary rays (`epsilon`: `p + 1e-4 (1 + max|p_i|) n`, or `ulp`: Waechter & Binder's integer "
-      "offset of 256 ulps per unit normal component, 1/65536 absolute below |p_i| = 1/32). Analytic scenes use "
+      "offset of secondary rays (`epsilon`: `p + 1e-4 m n`, or `ulp`: Waechter & Binder's integer offset of 256 "
+      "ulps per unit normal component, m/65536 absolute below |p_i| = m/32), where m = max|o| + t|d| is the "
+      "magnitude the hit point p = o + t d was computed from (shade.glsl's hitMagnitude). Analytic scenes use "
       "no triangle or box test, so for them only the offset differs.\n\n";
   readme +=
       "## How the tests judge them\n\n"
@@ -753,12 +755,13 @@ std::vector<GeneratedFile> hardSceneFiles() {
                 " | " + m.numbers + " |\n";
     }
   readme +=
-      "\nThe loader stores a scene whose eye is 1024 or more from the world origin relative to the eye "
-      "(`Scene::origin`, subtraction in double): every far copy then renders like the reference in every "
-      "variant. What remains is what no rebasing fixes, the absolute constants of the offsets: at scale 1e-4 "
-      "both offsets are as large as the scene, at 1e-2 the epsilon offset's 1e-4 floor still shows, and at "
-      "scale 1e2 (eye 690 away, not rebased) the ULP offset's 1/65536 near y = 0 is smaller than the error of "
-      "o + t d, whose error grows with the distance travelled rather than with |p|.\n\n";
+      "\nTwo changes made every copy match. (1) The loader stores a scene whose eye is 1024 or more from the "
+      "world origin relative to the eye (`Scene::origin`, subtraction in double), so far copies render like "
+      "the reference. (2) Both offsets scale with m = max|o| + t|d| instead of holding absolute constants "
+      "(before: epsilon 1e-4 (1 + max|p|), ULP 1/65536 below |p_i| = 1/32): at scale 1e-4 those constants "
+      "were as large as the scene, at 1e-2 the epsilon floor still showed, and at scale 1e2 (eye 690 away, not "
+      "rebased) the ULP floor near y = 0 was smaller than the error of o + t d, which grows with the distance "
+      "travelled rather than with |p|. The numbers before each change are in the entries below.\n\n";
   readme += "## Scenes\n\n| scene | provokes | reference |\n|---|---|---|\n";
   for (const HardScene& h : scenes) {
     std::string first = h.spec.description;

@@ -204,9 +204,11 @@ void secondaryRays(const glsl::Storage& storage, const hard::HardCase& c, Robust
       if (!finite(ng) || !finite(p)) continue;  // a closed case has no zero-area triangle; be safe
       const vec3 nIn = glm::dot(dir, ng) < 0.0f ? ng : -ng;  // faces the ray: points into the mesh
       glsl::MeshHit next;
-      const glsl::Ray reflected{offsetRayOrigin(p, nIn, variant.offset), glm::reflect(dir, nIn)};
+      // shade.glsl's hitMagnitude of the primary ray.
+      const float magnitude = std::max({std::abs(primary.origin.x), std::abs(primary.origin.y), std::abs(primary.origin.z)}) + hit.t * glm::length(primary.dir);
+      const glsl::Ray reflected{offsetRayOrigin(p, nIn, magnitude, variant.offset), glm::reflect(dir, nIn)};
       const bool reflectedHit = closest(storage, reflected, 0.0f, glsl::INF, next, counters);
-      const glsl::Ray outgoing{offsetRayOrigin(p, -nIn, variant.offset), dir};
+      const glsl::Ray outgoing{offsetRayOrigin(p, -nIn, magnitude, variant.offset), dir};
       const bool outgoingHit = any(storage, outgoing, 0.0f, glsl::INF, counters);
       n.secondaryRays += 2;
       n.secondarySelfHits += (reflectedHit && next.tri == hit.tri) + outgoingHit;

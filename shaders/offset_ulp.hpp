@@ -10,12 +10,12 @@ constexpr float kOffsetUlpOrigin = 1.0f / 32.0f;
 constexpr float kOffsetUlpFloatScale = 1.0f / 65536.0f;
 constexpr float kOffsetUlpIntScale = 256.0f;
 
-inline vec3 offsetRayOriginUlp(vec3 p, vec3 n) {
+inline vec3 offsetRayOriginUlp(vec3 p, vec3 n, float magnitude) {
   ivec3 ulps = ivec3(kOffsetUlpIntScale * n);
   ivec3 bitsOffset = mix(ulps, -ulps, lessThan(p, vec3(0.0f)));
   vec3 pUlp = intBitsToFloat(floatBitsToInt(p) + bitsOffset);
-  vec3 pAbsolute = p + kOffsetUlpFloatScale * n;
-  return mix(pUlp, pAbsolute, lessThan(abs(p), vec3(kOffsetUlpOrigin)));
+  vec3 pAbsolute = p + (kOffsetUlpFloatScale * magnitude) * n;
+  return mix(pUlp, pAbsolute, lessThan(abs(p), vec3(kOffsetUlpOrigin * magnitude)));
 }
 
 }  // namespace bvhlab::glsl

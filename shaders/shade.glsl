@@ -2,17 +2,22 @@
 // with a hard shadow ray. Secondary-ray origins are offset here. C++ mirror: shaders/tracer.hpp.
 
 // Secondary rays start a small distance off the surface so they do not re-hit it ("acne").
-// The offset is relative: float spacing at |p| is |p| * 2^-23 ~ 1.2e-7 |p|, and intersection
-// error is a few hundred ulps of the coordinates, so 1e-4 * (1 + max|p|) clears it with margin
-// while staying far below any feature size the shipped scenes have.
+// A hit point p = o + t d carries rounding error of a few ulps of the magnitudes it was computed
+// from, max|o| + t |d| (>= max|p|), plus the intersection's own error in t, a few hundred ulps of
+// the same: whatever the scene's scale, the error is relative to this magnitude. So the offset is
+// 1e-4 of it: far above 2^-23 ~ 1.2e-7 relative spacing, far below any feature the scenes have at
+// their scale. (An absolute term such as 1e-4 * (1 + max|p|) breaks scenes scaled to 1e-4.)
 #define RAY_OFFSET_SCALE 1e-4
 
-vec3 offsetRayOrigin(vec3 p, vec3 towards) {
+float hitMagnitude(Ray ray, float t) {
+  return max(max(abs(ray.origin.x), abs(ray.origin.y)), abs(ray.origin.z)) + t * length(ray.dir);
+}
+
+vec3 offsetRayOrigin(vec3 p, vec3 towards, float magnitude) {
 #ifdef RAY_OFFSET_ULP
-  return offsetRayOriginUlp(p, towards);  // --robust watertight: Waechter & Binder's ULP-based offset
+  return offsetRayOriginUlp(p, towards, magnitude);  // --robust *ulp*: Waechter & Binder's ULP offset
 #else
-  float scale = RAY_OFFSET_SCALE * (1.0 + max(max(abs(p.x), abs(p.y)), abs(p.z)));
-  return p + towards * scale;
+  return p + towards * (RAY_OFFSET_SCALE * magnitude);
 #endif
 }
 
@@ -24,8 +29,8 @@ vec3 surfaceAlbedo(MaterialData m, vec2 uv) {
   return albedo;
 }
 
-// n faces the incoming ray (the caller flips it); p is the hit point.
-vec3 shadeLocal(MaterialData m, vec3 albedo, vec3 p, vec3 n, vec3 viewDir) {
+// n faces the incoming ray (the caller flips it); p is the hit point, magnitude its hitMagnitude.
+vec3 shadeLocal(MaterialData m, vec3 albedo, vec3 p, float magnitude, vec3 n, vec3 viewDir) {
   vec3 color = m.emission.rgb + albedo * m.lighting.y * u_ambient.rgb;
 #ifdef HAS_LIGHTS
   for (int i = 0; i < NUM_LIGHTS; ++i) {
@@ -43,7 +48,7 @@ vec3 shadeLocal(MaterialData m, vec3 albedo, vec3 p, vec3 n, vec3 viewDir) {
     float nDotL = dot(n, toLight);
     if (nDotL > 0.0) {
 #ifdef HAS_SHADOWS
-      vec3 origin = offsetRayOrigin(p, n);
+      vec3 origin = offsetRayOrigin(p, n, magnitude);
       // The shadow ray stops at the light; origin moved by the offset, so measure from it.
       float tLight = light.position.w > 0.5 ? INF : length(light.position.xyz - origin);
       if (occluded(Ray(origin, toLight), tLight)) continue;

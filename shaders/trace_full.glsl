@@ -29,16 +29,17 @@ vec3 radiance(Ray primary) {
     MaterialData m = u_materials[h.material];
     vec3 dir = normalize(v.ray.dir);
     vec3 p = v.ray.origin + h.t * v.ray.dir;
+    float magnitude = hitMagnitude(v.ray, h.t);
     Scatter s = scatterAt(m, h, dir);
-    if (s.kLocal > 0.0) color += v.weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, s.n, dir);
+    if (s.kLocal > 0.0) color += v.weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, magnitude, s.n, dir);
 #if MAX_DEPTH > 1
     if (v.depth >= MAX_DEPTH) continue;
     vec3 wt = v.weight * s.kt;
     if (max(max(wt.r, wt.g), wt.b) > MIN_BRANCH_WEIGHT)
-      stack[sp++] = PathVertex(Ray(offsetRayOrigin(p, -s.n), s.refracted), wt, v.depth + 1);
+      stack[sp++] = PathVertex(Ray(offsetRayOrigin(p, -s.n, magnitude), s.refracted), wt, v.depth + 1);
     vec3 wr = v.weight * s.kr;
     if (max(max(wr.r, wr.g), wr.b) > MIN_BRANCH_WEIGHT)
-      stack[sp++] = PathVertex(Ray(offsetRayOrigin(p, s.n), reflect(dir, s.n)), wr, v.depth + 1);
+      stack[sp++] = PathVertex(Ray(offsetRayOrigin(p, s.n, magnitude), reflect(dir, s.n)), wr, v.depth + 1);
 #endif
   }
   return color;

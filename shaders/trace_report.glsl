@@ -12,7 +12,7 @@ vec3 reflectedColor(Ray ray) {
   MaterialData m = u_materials[h.material];
   vec3 dir = normalize(ray.dir);
   Scatter s = scatterAt(m, h, dir);
-  return shadeLocal(m, surfaceAlbedo(m, h.uv), ray.origin + h.t * ray.dir, s.n, dir);
+  return shadeLocal(m, surfaceAlbedo(m, h.uv), ray.origin + h.t * ray.dir, hitMagnitude(ray, h.t), s.n, dir);
 }
 
 vec3 radiance(Ray primary) {
@@ -28,17 +28,18 @@ vec3 radiance(Ray primary) {
     MaterialData m = u_materials[h.material];
     vec3 dir = normalize(ray.dir);
     vec3 p = ray.origin + h.t * ray.dir;
+    float magnitude = hitMagnitude(ray, h.t);
     Scatter s = scatterAt(m, h, dir);
-    if (s.kLocal > 0.0) color += weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, s.n, dir);
+    if (s.kLocal > 0.0) color += weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, magnitude, s.n, dir);
     if (depth == MAX_DEPTH) break;
-    Ray reflected = Ray(offsetRayOrigin(p, s.n), reflect(dir, s.n));
+    Ray reflected = Ray(offsetRayOrigin(p, s.n, magnitude), reflect(dir, s.n));
     if (s.kr > 0.0 && s.kt > 0.0) {
       color += weight * s.kr * reflectedColor(reflected);
       weight *= s.kt;
-      ray = Ray(offsetRayOrigin(p, -s.n), s.refracted);
+      ray = Ray(offsetRayOrigin(p, -s.n, magnitude), s.refracted);
     } else if (s.kt > 0.0) {
       weight *= s.kt;
-      ray = Ray(offsetRayOrigin(p, -s.n), s.refracted);
+      ray = Ray(offsetRayOrigin(p, -s.n, magnitude), s.refracted);
     } else if (s.kr > 0.0) {
       weight *= s.kr;
       ray = reflected;

@@ -192,7 +192,13 @@ struct Tracer {
   }
 
   // ---- shade.glsl -------------------------------------------------------------------------
-  vec3 offsetRayOrigin(vec3 p, vec3 towards) const { return bvhlab::offsetRayOrigin(p, towards, options.robust.offset); }
+  static float hitMagnitude(const Ray& ray, float t) {
+    return max(max(abs(ray.origin.x), abs(ray.origin.y)), abs(ray.origin.z)) + t * length(ray.dir);
+  }
+
+  vec3 offsetRayOrigin(vec3 p, vec3 towards, float magnitude) const {
+    return bvhlab::offsetRayOrigin(p, towards, magnitude, options.robust.offset);
+  }
 
   vec3 surfaceAlbedo(const MaterialData& m, vec2 uv) const {
     vec3 albedo = vec3(m.color);
@@ -204,7 +210,7 @@ struct Tracer {
     return albedo;
   }
 
-  vec3 shadeLocal(const MaterialData& m, vec3 albedo, vec3 p, vec3 n, vec3 viewDir) {
+  vec3 shadeLocal(const MaterialData& m, vec3 albedo, vec3 p, float magnitude, vec3 n, vec3 viewDir) {
     vec3 color = vec3(m.emission) + albedo * m.lighting.y * vec3(data.ambient);
     for (int i = 0; i < NUM_LIGHTS; ++i) {
       const LightData& light = data.lights[size_t(i)];
@@ -220,7 +226,7 @@ struct Tracer {
       }
       float nDotL = dot(n, toLight);
       if (nDotL > 0.0f) {
-        vec3 origin = offsetRayOrigin(p, n);
+        vec3 origin = offsetRayOrigin(p, n, magnitude);
         float tLight = light.position.w > 0.5f ? INF : length(vec3(light.position) - origin);
         if (occluded(Ray{origin, toLight}, tLight)) continue;
         vec3 h = normalize(toLight - viewDir);
@@ -282,16 +288,17 @@ struct Tracer {
       const MaterialData& m = data.materials[size_t(h.material)];
       vec3 dir = normalize(v.ray.dir);
       vec3 p = v.ray.origin + h.t * v.ray.dir;
+      float magnitude = hitMagnitude(v.ray, h.t);
       Scatter s = scatterAt(m, h, dir);
-      if (s.kLocal > 0.0f) color += v.weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, s.n, dir);
+      if (s.kLocal > 0.0f) color += v.weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, magnitude, s.n, dir);
       if (MAX_DEPTH > 1) {
         if (v.depth >= MAX_DEPTH) continue;
         vec3 wt = v.weight * s.kt;
         if (max(max(wt.r, wt.g), wt.b) > MIN_BRANCH_WEIGHT)
-          stack[size_t(sp++)] = PathVertex{Ray{offsetRayOrigin(p, -s.n), s.refracted}, wt, v.depth + 1};
+          stack[size_t(sp++)] = PathVertex{Ray{offsetRayOrigin(p, -s.n, magnitude), s.refracted}, wt, v.depth + 1};
         vec3 wr = v.weight * s.kr;
         if (max(max(wr.r, wr.g), wr.b) > MIN_BRANCH_WEIGHT)
-          stack[size_t(sp++)] = PathVertex{Ray{offsetRayOrigin(p, s.n), reflect(dir, s.n)}, wr, v.depth + 1};
+          stack[size_t(sp++)] = PathVertex{Ray{offsetRayOrigin(p, s.n, magnitude), reflect(dir, s.n)}, wr, v.depth + 1};
       }
     }
     return color;
@@ -304,7 +311,7 @@ struct Tracer {
     const MaterialData& m = data.materials[size_t(h.material)];
     vec3 dir = normalize(ray.dir);
     Scatter s = scatterAt(m, h, dir);
-    return shadeLocal(m, surfaceAlbedo(m, h.uv), ray.origin + h.t * ray.dir, s.n, dir);
+    return shadeLocal(m, surfaceAlbedo(m, h.uv), ray.origin + h.t * ray.dir, hitMagnitude(ray, h.t), s.n, dir);
   }
 
   vec3 radianceReport(Ray primary) {
@@ -320,17 +327,18 @@ struct Tracer {
       const MaterialData& m = data.materials[size_t(h.material)];
       vec3 dir = normalize(ray.dir);
       vec3 p = ray.origin + h.t * ray.dir;
+      float magnitude = hitMagnitude(ray, h.t);
       Scatter s = scatterAt(m, h, dir);
-      if (s.kLocal > 0.0f) color += weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, s.n, dir);
+      if (s.kLocal > 0.0f) color += weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, magnitude, s.n, dir);
       if (depth == MAX_DEPTH) break;
-      Ray reflected = Ray{offsetRayOrigin(p, s.n), reflect(dir, s.n)};
+      Ray reflected = Ray{offsetRayOrigin(p, s.n, magnitude), reflect(dir, s.n)};
       if (s.kr > 0.0f && s.kt > 0.0f) {
         color += weight * s.kr * reflectedColor(reflected);
         weight *= s.kt;
-        ray = Ray{offsetRayOrigin(p, -s.n), s.refracted};
+        ray = Ray{offsetRayOrigin(p, -s.n, magnitude), s.refracted};
       } else if (s.kt > 0.0f) {
         weight *= s.kt;
-        ray = Ray{offsetRayOrigin(p, -s.n), s.refracted};
+        ray = Ray{offsetRayOrigin(p, -s.n, magnitude), s.refracted};
       } else if (s.kr > 0.0f) {
         weight *= s.kr;
         ray = reflected;
@@ -414,11 +422,10 @@ struct Tracer {
 }  // namespace
 }  // namespace glsl
 
-glm::vec3 offsetRayOrigin(glm::vec3 p, glm::vec3 towards, OriginOffset offset) {
+glm::vec3 offsetRayOrigin(glm::vec3 p, glm::vec3 towards, float magnitude, OriginOffset offset) {
   using namespace glsl;
-  if (offset == OriginOffset::Ulp) return offsetRayOriginUlp(p, towards);  // #ifdef RAY_OFFSET_ULP
-  float scale = RAY_OFFSET_SCALE * (1.0f + max(max(abs(p.x), abs(p.y)), abs(p.z)));
-  return p + towards * scale;
+  if (offset == OriginOffset::Ulp) return offsetRayOriginUlp(p, towards, magnitude);  // #ifdef RAY_OFFSET_ULP
+  return p + towards * (RAY_OFFSET_SCALE * magnitude);
 }
 
 ReferenceImage renderReference(const Scene& scene, const SceneData& data, const PackedBvh& bvh,

@@ -21,9 +21,10 @@ struct ReferenceImage {
 };
 
 // shade.glsl's offsetRayOrigin: a secondary ray's origin, p moved off the surface towards `towards`
-// (the side the new ray leaves into) by the fixed relative epsilon or, with OriginOffset::Ulp
-// (RAY_OFFSET_ULP), by Waechter & Binder's ULP offset (shaders/offset_ulp.glsl).
-glm::vec3 offsetRayOrigin(glm::vec3 p, glm::vec3 towards, OriginOffset offset);
+// (the side the new ray leaves into) by 1e-4 of `magnitude` or, with OriginOffset::Ulp (RAY_OFFSET_ULP),
+// by Waechter & Binder's ULP offset with its absolute branch scaled by `magnitude`
+// (shaders/offset_ulp.glsl). magnitude = max|o| + t |d| of the ray that found p (hitMagnitude).
+glm::vec3 offsetRayOrigin(glm::vec3 p, glm::vec3 towards, float magnitude, OriginOffset offset);
 
 // Renders with the C++ mirror on all cores.
 ReferenceImage renderReference(const Scene& scene, const SceneData& data, const PackedBvh& bvh,

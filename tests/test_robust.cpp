@@ -311,12 +311,14 @@ TEST(Robust, UlpOffsetMovesEveryCoordinateTowardsN) {
   for (vec3 p : {vec3(1.0f, -2.0f, 1e6f), vec3(-3e-3f, 5e4f, -7e5f), vec3(0.0f, -0.0f, 1e-20f)}) {
     const vec3 n = glm::normalize(vec3(0.6f, -0.48f, 0.64f));
     for (float s : {1.0f, -1.0f}) {
-      const vec3 q = glsl::offsetRayOriginUlp(p, s * n);
+      // As the hit of a ray from the origin: hitMagnitude = max|p|, at least 1 (the chapter's scale).
+      const float magnitude = std::max({1.0f, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+      const vec3 q = glsl::offsetRayOriginUlp(p, s * n, magnitude);
       for (int k = 0; k < 3; ++k) {
         ASSERT_TRUE(std::isfinite(q[k]));
         EXPECT_GT((q[k] - p[k]) * s * n[k], 0.0f) << "component " << k << " of " << p[k];
         // At most 256 ulps (plus the absolute offset near 0): a tiny move, not a jump.
-        EXPECT_LE(std::abs(q[k] - p[k]), 256.0f * std::abs(p[k]) * 1.2e-7f + 1.0f / 65536.0f);
+        EXPECT_LE(std::abs(q[k] - p[k]), 256.0f * std::abs(p[k]) * 1.2e-7f + magnitude / 65536.0f);
       }
     }
   }
@@ -338,7 +340,10 @@ TEST(Robust, UlpOffsetAvoidsSelfIntersectionAtEveryScale) {
       if (glm::dot(n, r.dir) > 0.0f) n = -n;  // facing the ray
       const vec3 p = (1.0f - h.bary.x - h.bary.y) * a + h.bary.x * b + h.bary.y * d;
       const vec3 dir = glm::reflect(glm::normalize(r.dir), n);
-      const vec3 origins[3] = {p, offsetRayOrigin(p, n, OriginOffset::Epsilon), glsl::offsetRayOriginUlp(p, n)};
+      const float magnitude = std::max({std::abs(r.origin.x), std::abs(r.origin.y), std::abs(r.origin.z)}) +
+                              h.t * glm::length(r.dir);  // shade.glsl's hitMagnitude
+      const vec3 origins[3] = {p, offsetRayOrigin(p, n, magnitude, OriginOffset::Epsilon),
+                               glsl::offsetRayOriginUlp(p, n, magnitude)};
       ++spawned;
       for (int k = 0; k < 3; ++k) {
         float t;
