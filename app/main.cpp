@@ -22,8 +22,9 @@ using namespace bvhlab;
 
 namespace {
 
-glm::vec3 parseVec3(const std::string& s, const char* flag) {
-  glm::vec3 v;
+// Parsed in double: --eye/--target of a far scene keep the precision the scene loader has.
+glm::dvec3 parseVec3(const std::string& s, const char* flag) {
+  glm::dvec3 v;
   char c1, c2;
   std::istringstream in(s);
   if (!(in >> v.x >> c1 >> v.y >> c2 >> v.z) || c1 != ',' || c2 != ',' || !in.eof() ||
@@ -178,13 +179,13 @@ int main(int argc, char** argv) {
     if (render->parsed()) {
       if (!eye.empty()) rc.eye = parseVec3(eye, "--eye");
       if (!target.empty()) rc.target = parseVec3(target, "--target");
-      if (!up.empty()) rc.up = parseVec3(up, "--up");
+      if (!up.empty()) rc.up = glm::vec3(parseVec3(up, "--up"));
       return runRender(rc);
     }
     if (viewCmd->parsed()) {
       if (!viewEye.empty()) vo.eye = parseVec3(viewEye, "--eye");
       if (!viewTarget.empty()) vo.target = parseVec3(viewTarget, "--target");
-      if (!viewUp.empty()) vo.up = parseVec3(viewUp, "--up");
+      if (!viewUp.empty()) vo.up = glm::vec3(parseVec3(viewUp, "--up"));
       return runViewer(vo);
     }
     if (runCmd->parsed()) {

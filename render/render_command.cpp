@@ -52,8 +52,9 @@ int runRender(const RenderCommand& cmd) {
   if (cmd.height) s.height = *cmd.height;
   if (cmd.depth) s.maxDepth = *cmd.depth;
   if (cmd.exposure) s.exposure = *cmd.exposure;
-  if (cmd.eye) scene.camera.eye = *cmd.eye;
-  if (cmd.target) scene.camera.target = *cmd.target;
+  // --eye/--target are world coordinates; a far scene is stored relative to Scene::origin.
+  if (cmd.eye) scene.camera.eye = glm::vec3(*cmd.eye - scene.origin);
+  if (cmd.target) scene.camera.target = glm::vec3(*cmd.target - scene.origin);
   if (cmd.up) scene.camera.up = *cmd.up;
   if (cmd.fov) scene.camera.fovDeg = *cmd.fov;
   if (s.width < 1 || s.height < 1 || s.width > 16384 || s.height > 16384)

@@ -23,7 +23,8 @@ struct RenderCommand {
   int bins = 0;
   std::string storage = "tbo";
   std::string branching = "full";
-  std::optional<glm::vec3> eye, target, up;
+  std::optional<glm::dvec3> eye, target;  // world coordinates (a far scene is stored relative to its origin)
+  std::optional<glm::vec3> up;
   std::optional<float> fov;
   std::optional<float> exposure;
   std::string aa = "none";          // none | smaa | smaa-PRESET | ssaa4 | ssaa16 (regular 2x2 / 4x4 grid in the tracer)

@@ -330,8 +330,9 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
 
   glfw_ = std::make_unique<GlfwSession>();  // no display: say so before loading anything
   original_ = loadInput(o.input);
-  if (o.eye) original_.camera.eye = *o.eye;
-  if (o.target) original_.camera.target = *o.target;
+  // --eye/--target are world coordinates; a far scene is stored relative to Scene::origin.
+  if (o.eye) original_.camera.eye = glm::vec3(*o.eye - original_.origin);
+  if (o.target) original_.camera.target = glm::vec3(*o.target - original_.origin);
   if (o.up) original_.camera.up = *o.up;
   if (o.fov) original_.camera.fovDeg = *o.fov;
   camera_.setCamera(original_.camera);

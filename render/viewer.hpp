@@ -24,7 +24,8 @@ struct ViewerOptions {
   std::string robust = "fast";        // one of robustnessNames() (traversal/kernels.hpp)
   bool readbackPresent = false;       // display through a CPU read-back + upload (the old path; for
                                       // measuring what the direct blit saves)
-  std::optional<glm::vec3> eye, target, up;
+  std::optional<glm::dvec3> eye, target;  // world coordinates (a far scene is stored relative to its origin)
+  std::optional<glm::vec3> up;
   std::optional<float> fov;
   std::string script;      // scripted input (docs/viewer.md); '' = interactive
   int frames = 0;          // stop after this many frames (0 = when the window closes / the script ends)

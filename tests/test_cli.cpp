@@ -210,4 +210,19 @@ TEST(Cli, BadCameraPathNamesFileAndLine) {
   EXPECT_NE(both.err.find("--camera-path"), std::string::npos) << both.err;
 }
 
+// A far scene is stored relative to its eye (camera-relative loading); --eye/--target still take world
+// coordinates, parsed in double: giving the file's own camera reproduces the file's image exactly.
+TEST(Cli, EyeAndTargetOfAFarSceneAreWorldCoordinates) {
+  const fs::path far = fs::path(BVHLAB_SOURCE_DIR) / "datasets/hard/far_1e6.toml";
+  const fs::path dir = fs::temp_directory_path() / "bvhlab_cli_test";
+  fs::create_directories(dir);
+  const fs::path a = dir / "far_file_camera.png", b = dir / "far_flag_camera.png";
+  Result r1 = run("render " + far.string() + " --width 64 --height 40 -o " + a.string());
+  ASSERT_EQ(r1.code, 0) << r1.err;
+  Result r2 = run("render " + far.string() + " --width 64 --height 40 --eye 1e6,500002.2,-999993.5 "
+                  "--target 1e6,500000.5,-1e6 -o " + b.string());
+  ASSERT_EQ(r2.code, 0) << r2.err;
+  EXPECT_EQ(bvhlab::loadImageRgba8(a).rgba, bvhlab::loadImageRgba8(b).rgba);
+}
+
 }  // namespace
