@@ -21,7 +21,7 @@ struct ViewerOptions {
   std::string view = "shaded";        // shaded | normal | depth | primid | visits
   float resolutionScale = 1.0f;       // render at this fraction of the window, upscaled (0.05..1)
   std::string aa = "none";            // none | smaa-low|medium|high|ultra | ssaa4 | ssaa16
-  std::string robust = "fast";        // one of robustnessNames() (traversal/kernels.hpp)
+  std::string robust = "watertight";  // one of robustnessNames() (traversal/kernels.hpp); default as render's
   bool readbackPresent = false;       // display through a CPU read-back + upload (the old path; for
                                       // measuring what the direct blit saves)
   std::optional<glm::dvec3> eye, target;  // world coordinates (a far scene is stored relative to its origin)

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <string>
 
+#include <unistd.h>  // getpid
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -20,8 +22,23 @@ struct Result {
   std::string out, err;
 };
 
+// One directory per test process: CTest runs the cases of this file in parallel processes, which must
+// not share captured stdout/stderr or inputs.
+fs::path testDir() {
+  static const fs::path dir = fs::temp_directory_path() / ("bvhlab_cli_test_" + std::to_string(::getpid()));
+  return dir;
+}
+
+struct RemoveTestDir : ::testing::Environment {
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(testDir(), ec);
+  }
+};
+[[maybe_unused]] ::testing::Environment* const kRemoveTestDir = ::testing::AddGlobalTestEnvironment(new RemoveTestDir);
+
 Result run(const std::string& args) {
-  fs::path dir = fs::temp_directory_path() / "bvhlab_cli_test";
+  fs::path dir = testDir();
   fs::create_directories(dir);
   fs::path out = dir / "stdout", err = dir / "stderr";
   std::string cmd = std::string(BVHLAB_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
@@ -36,14 +53,14 @@ Result run(const std::string& args) {
 fs::path scene(const std::string& name) { return fs::path(BVHLAB_SOURCE_DIR) / "datasets/scenes" / name; }
 
 fs::path writeTemp(const std::string& name, const std::string& text) {
-  fs::path p = fs::temp_directory_path() / "bvhlab_cli_test" / name;
+  fs::path p = testDir() / name;
   fs::create_directories(p.parent_path());
   std::ofstream(p) << text;
   return p;
 }
 
 TEST(Cli, RenderJsonHasTheContractKeys) {
-  fs::path png = fs::temp_directory_path() / "bvhlab_cli_test/sphere.png";
+  fs::path png = testDir() / "sphere.png";
   fs::remove(png);
   Result r = run("render " + scene("sphere.toml").string() + " -o " + png.string() +
                  " --json --width 64 --height 36 --frames 2 --warmup 1");
@@ -59,8 +76,8 @@ TEST(Cli, RenderJsonHasTheContractKeys) {
 }
 
 TEST(Cli, EglAndOsmesaGiveTheSameImage) {
-  fs::path a = fs::temp_directory_path() / "bvhlab_cli_test/osmesa.png";
-  fs::path b = fs::temp_directory_path() / "bvhlab_cli_test/egl.png";
+  fs::path a = testDir() / "osmesa.png";
+  fs::path b = testDir() / "egl.png";
   Result ra = run("render " + scene("shadows.toml").string() + " -o " + a.string() + " --width 64 --height 36 --frames 1 --warmup 0");
   ASSERT_EQ(ra.code, 0) << ra.err;
   Result rb = run("render " + scene("shadows.toml").string() + " -o " + b.string() +
@@ -93,7 +110,7 @@ class CliBadInput : public ::testing::TestWithParam<BadInput> {};
 TEST_P(CliBadInput, OneLineErrorNonZeroExitNoOutputFile) {
   const BadInput& b = GetParam();
   fs::path input = writeTemp(b.name, b.text);
-  fs::path png = fs::temp_directory_path() / "bvhlab_cli_test/should_not_exist.png";
+  fs::path png = testDir() / "should_not_exist.png";
   fs::remove(png);
   Result r = run("render " + input.string() + " -o " + png.string() + " --width 32 --height 18");
   EXPECT_NE(r.code, 0);
@@ -135,8 +152,8 @@ TEST(Cli, MissingInputNamesThePath) {
 namespace {
 
 TEST(Cli, SmaaIsTimedAndChangesOnlyEdgePixels) {
-  fs::path none = fs::temp_directory_path() / "bvhlab_cli_test/aa_none.png";
-  fs::path smaa = fs::temp_directory_path() / "bvhlab_cli_test/aa_smaa.png";
+  fs::path none = testDir() / "aa_none.png";
+  fs::path smaa = testDir() / "aa_smaa.png";
   std::string common = " --width 96 --height 54 --frames 1 --warmup 1 --json";
   Result a = run("render " + scene("shadows.toml").string() + " -o " + none.string() + common);
   Result b = run("render " + scene("shadows.toml").string() + " -o " + smaa.string() + common + " --aa smaa");
@@ -169,8 +186,8 @@ TEST(Cli, CameraPathTimesFramesAlongThePathAndSavesPoseZero) {
                                   "# a comment line is not a pose\n"
                                   "t 0.033 eye 2 3 5.5 target 0 0.5 0 up 0 1 0 fov 45\n"
                                   "t 0.067 eye 4 2.5 4 target 0 0.5 0 up 0 1 0 fov 50\n");
-  fs::path along = fs::temp_directory_path() / "bvhlab_cli_test/path_along.png";
-  fs::path pose0 = fs::temp_directory_path() / "bvhlab_cli_test/path_pose0.png";
+  fs::path along = testDir() / "path_along.png";
+  fs::path pose0 = testDir() / "path_pose0.png";
   const std::string common = " --width 64 --height 36 --warmup 1 ";
   Result a = run("render " + scene("shadows.toml").string() + common + "--frames 5 --json --camera-path " +
                  path.string() + " -o " + along.string());
@@ -195,7 +212,7 @@ TEST(Cli, BadCameraPathNamesFileAndLine) {
   const fs::path path = writeTemp("bad_orbit.txt",
                                   "t 0 eye 0.5 3 6 target 0 0.5 0 up 0 1 0 fov 45\n"
                                   "t 0.033 eye 2 3 5.5 target 0 0.5 0 up 0 1 0\n");
-  fs::path png = fs::temp_directory_path() / "bvhlab_cli_test/bad_path.png";
+  fs::path png = testDir() / "bad_path.png";
   fs::remove(png);
   Result r = run("render " + scene("shadows.toml").string() + " --camera-path " + path.string() + " -o " + png.string());
   EXPECT_EQ(r.code, 1);
@@ -214,7 +231,7 @@ TEST(Cli, BadCameraPathNamesFileAndLine) {
 // coordinates, parsed in double: giving the file's own camera reproduces the file's image exactly.
 TEST(Cli, EyeAndTargetOfAFarSceneAreWorldCoordinates) {
   const fs::path far = fs::path(BVHLAB_SOURCE_DIR) / "datasets/hard/far_1e6.toml";
-  const fs::path dir = fs::temp_directory_path() / "bvhlab_cli_test";
+  const fs::path dir = testDir();
   fs::create_directories(dir);
   const fs::path a = dir / "far_file_camera.png", b = dir / "far_flag_camera.png";
   Result r1 = run("render " + far.string() + " --width 64 --height 40 -o " + a.string());

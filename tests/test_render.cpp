@@ -62,7 +62,12 @@ TEST_P(SceneTest, SpecialisedSourceLacksUnusedModules) {
     EXPECT_EQ(s.hasModule(kindModules[k]), f.kinds[k]) << kindModules[k];
     EXPECT_EQ(s.source.find(kindFunctions[k]) != std::string::npos, f.kinds[k]) << kindFunctions[k];
   }
-  EXPECT_EQ(s.hasModule("ray_triangle.glsl"), f.mesh);
+  const ShaderOptions used = optionsFor(*p);
+  EXPECT_EQ(s.hasModule(used.robust.triangle == TriangleTest::Watertight ? "ray_triangle_watertight.glsl"
+                                                                          : "ray_triangle.glsl"),
+            f.mesh);
+  EXPECT_FALSE(s.hasModule(used.robust.triangle == TriangleTest::Watertight ? "ray_triangle.glsl"
+                                                                             : "ray_triangle_watertight.glsl"));
   EXPECT_EQ(s.source.find("bool traceClosest(") != std::string::npos, f.mesh);
   EXPECT_EQ(s.hasModule("textures.glsl"), f.textures);
   EXPECT_EQ(s.hasModule("world_map.glsl"), f.world == WorldKind::Map);
