@@ -3,14 +3,21 @@
 //    exact centre with pixel centres on its edges) must see the mesh in EVERY pixel whenever the
 //    variant has both the watertight triangle test and Ize's box test; the other variants' leak counts
 //    are measured and printed, not hidden. Hit ids match the C++ mirror's;
-//  - every variant's GLSL renders a small scene with mesh reflection and refraction like its mirror.
+//  - every variant's GLSL renders a small scene with mesh reflection and refraction like its mirror;
+//  - the watertight test's double-precision fallback decides rays whose float edge function rounds to 0
+//    (GLSL and mirror), on cases where dropping the fallback would give a wrong hit.
+#include <cmath>
 #include <iostream>
+#include <random>
 
+#include <glad/gl.h>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "datasets/hard_cases.hpp"
 #include "render/hard_cases_command.hpp"
 #include "render_fixture.hpp"
+#include "shaders/assemble.hpp"
+#include "traversal/ray_triangle_watertight.hpp"
 
 namespace bvhlab::test {
 namespace {
@@ -103,6 +110,130 @@ TEST(RobustGpu, EveryVariantMatchesItsMirrorWithSecondaryRays) {
     std::cout << "[ mirror   ] " << robustnessName(r) << ": mean |GLSL - mirror| " << d.meanAbs << ", within 3: "
               << d.within3 << "; mean |variant - fast| " << compareRgba(gpu.rgba, fastImage).meanAbs << "\n";
   }
+}
+
+// ---- the watertight test's double fallback (Woop et al. 2013, section 3.4) ------------------------
+
+struct FallbackCase {
+  glm::vec3 v0, v1, v2;
+  bool exactHit;  // the exact answer: the signs of the edge functions in exact arithmetic
+};
+
+// Rays along +z from the origin: the ray frame is the identity (kz = 2, shear 0), so the edge functions
+// are 2D cross products of the vertices' x, y. v1 and v2 lie on opposite sides of the origin on a line
+// through it (v2 = -s v1), then v2.x moves by a few ulps: the exact edge function of (v1, v2) is a tiny
+// non-zero number, and the float one is 0 whenever both products round to the same float. v0 is off
+// that line, so the other two edge functions have one clear sign: the ray hits iff the tiny one agrees.
+// Only cases whose float edge function is exactly 0 are kept; the vertex order is rotated so the zero
+// falls on each of the three edge functions.
+std::vector<FallbackCase> fallbackCases() {
+  std::mt19937 rng(20130821u);
+  std::uniform_real_distribution<float> coord(0.5f, 2.0f), scale(0.5f, 2.0f), off(0.3f, 1.5f);
+  std::uniform_int_distribution<int> ulps(-3, 3);
+  std::vector<FallbackCase> out;
+  for (int trial = 0; trial < 200000 && out.size() < 600; ++trial) {
+    const glm::vec2 b(coord(rng), coord(rng));
+    glm::vec2 c = -scale(rng) * b;
+    const int k = ulps(rng);
+    if (k == 0) continue;
+    for (int i = 0; i < std::abs(k); ++i) c.x = std::nextafter(c.x, k > 0 ? INFINITY : -INFINITY);
+    const float uFloat = c.x * b.y - c.y * b.x;  // the kernel's u for (v0, v1, v2) = (a, b, c)
+    // Products of two floats are exact in double (48 significant bits), and the difference of two such
+    // products keeps its sign: exact sign, as the fallback's argument says.
+    const double uExact = double(c.x) * double(b.y) - double(c.y) * double(b.x);
+    if (uFloat != 0.0f || uExact == 0.0) continue;
+    const glm::vec2 perp = glm::normalize(glm::vec2(-b.y, b.x)) * off(rng) * (trial % 2 ? 1.0f : -1.0f);
+    const glm::vec2 a = 0.5f * (b + c) + perp;
+    const double vExact = double(a.x) * double(c.y) - double(a.y) * double(c.x);
+    const double wExact = double(b.x) * double(a.y) - double(b.y) * double(a.x);
+    if (!((vExact > 0.0 && wExact > 0.0) || (vExact < 0.0 && wExact < 0.0))) continue;
+    const bool hit = (uExact > 0.0) == (vExact > 0.0);
+    const glm::vec3 A(a, 1.0f), B(b, 1.0f), C(c, 1.0f);
+    switch (out.size() % 3) {  // the same triangle with the zero on u, w or v
+      case 0: out.push_back({A, B, C, hit}); break;
+      case 1: out.push_back({B, C, A, hit}); break;
+      default: out.push_back({C, A, B, hit}); break;
+    }
+  }
+  return out;
+}
+
+const char* const kFallbackMain = R"(
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) readonly buffer TriBuffer { vec4 tris[]; };
+layout(std430, binding = 1) writeonly buffer HitBuffer { uint hits[]; };
+uniform int u_count;
+void main() {
+  int i = int(gl_GlobalInvocationID.x);
+  if (i >= u_count) return;
+  float t;
+  vec2 bary;
+  Ray ray = Ray(vec3(0.0), vec3(0.0, 0.0, 1.0));
+  hits[i] = intersectTriangle(ray, tris[3 * i].xyz, tris[3 * i + 1].xyz, tris[3 * i + 2].xyz, 0.0, 10.0, t, bary)
+                ? 1u : 0u;
+}
+)";
+
+std::vector<bool> fallbackOnGpu(const std::vector<FallbackCase>& cases) {
+  const std::string source = "#version 450 core\n" + glslModule("common.glsl") +
+                             glslModule("ray_triangle_watertight.glsl") + kFallbackMain;
+  const char* text = source.c_str();
+  const GLuint program = glCreateShaderProgramv(GL_COMPUTE_SHADER, 1, &text);
+  GLint ok = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[4096];
+    glGetProgramInfoLog(program, sizeof log, nullptr, log);
+    glDeleteProgram(program);
+    throw std::runtime_error(std::string("fallback compute: ") + log);
+  }
+  std::vector<glm::vec4> in;
+  for (const FallbackCase& c : cases)
+    for (glm::vec3 v : {c.v0, c.v1, c.v2}) in.emplace_back(v, 0.0f);
+  GLuint buffers[2];
+  glCreateBuffers(2, buffers);
+  glNamedBufferData(buffers[0], GLsizeiptr(in.size() * sizeof(glm::vec4)), in.data(), GL_STATIC_DRAW);
+  glNamedBufferData(buffers[1], GLsizeiptr(cases.size() * sizeof(GLuint)), nullptr, GL_STATIC_READ);
+  glUseProgram(program);
+  glUniform1i(glGetUniformLocation(program, "u_count"), GLint(cases.size()));
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffers[0]);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, buffers[1]);
+  glDispatchCompute(GLuint((cases.size() + 63) / 64), 1, 1);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  std::vector<GLuint> out(cases.size());
+  glGetNamedBufferSubData(buffers[1], 0, GLsizeiptr(out.size() * sizeof(GLuint)), out.data());
+  checkGl("fallback dispatch");
+  glDeleteBuffers(2, buffers);
+  glDeleteProgram(program);
+  return std::vector<bool>(out.begin(), out.end());
+}
+
+TEST(RobustGpu, WatertightDoubleFallbackDecidesEdgeFunctionsThatRoundToZero) {
+  glContext();
+  const std::vector<FallbackCase> cases = fallbackCases();
+  int misses = 0;
+  for (const FallbackCase& c : cases) misses += !c.exactHit;
+  // Every kept case has a float edge function of exactly 0, which the float-only test counts as "on the
+  // edge" (inside): without the fallback every one of them would hit, so the exact misses are the cases
+  // that fail if the fallback goes.
+  ASSERT_GE(cases.size(), 300u);
+  ASSERT_GE(misses, 50);
+  ASSERT_GE(int(cases.size()) - misses, 50);
+  const std::vector<bool> gpu = fallbackOnGpu(cases);
+  int gpuWrong = 0, mirrorWrong = 0;
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const FallbackCase& c = cases[i];
+    float t;
+    glm::vec2 bary;
+    const bool mirror = glsl::watertight::intersectTriangle(glsl::Ray{glm::vec3(0.0f), glm::vec3(0.0f, 0.0f, 1.0f)},
+                                                            c.v0, c.v1, c.v2, 0.0f, 10.0f, t, bary);
+    mirrorWrong += mirror != c.exactHit;
+    gpuWrong += gpu[i] != c.exactHit;
+  }
+  std::cout << "[ fallback ] " << cases.size() << " rays with a float edge function of 0 (" << misses
+            << " exact misses): mirror wrong " << mirrorWrong << ", GLSL wrong " << gpuWrong << "\n";
+  EXPECT_EQ(mirrorWrong, 0);
+  EXPECT_EQ(gpuWrong, 0);
 }
 
 }  // namespace
