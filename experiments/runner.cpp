@@ -259,9 +259,10 @@ SweepOutcome runSweep(const RunOptions& options) {
     outcome.summary = writeResults(dir, plan, records, &cache);
   }
   progress.finish();
-  // Once per sweep (shard 0 of a sharded one), and only when the runs go to real child processes:
-  // an injected executor (tests) has no renderer to ask.
-  if (!options.executor && options.shardIndex == 0) recordHardCases(config, dir, options, commit, machine);
+  // Once per sweep (shard 0 of a sharded one), and only when there is a real renderer to ask: the runs
+  // go to child processes, or an injected executor (tests) comes with an explicit binary.
+  if ((!options.executor || !options.binary.empty()) && options.shardIndex == 0)
+    recordHardCases(config, dir, options, commit, machine);
   outcome.summary = writeResults(dir, plan, records, &cache);
   return outcome;
 }

@@ -20,7 +20,8 @@ struct RunOptions {
   int shardCount = 1;
   bool retryFailed = true;       // failed runs are redone on the next invocation (false: kept as failed)
   bool report = true;            // write DIR/report.html at the end (needs /usr/bin/python3 + matplotlib)
-  std::filesystem::path binary;  // renderer; "" = this executable
+  std::filesystem::path binary;  // renderer; "" = this executable (also runs `hard-cases` for robust
+                                 // sweeps, even with an injected executor when set explicitly)
   RunExecutor executor;          // empty = subprocessExecutor(binary)
   std::optional<KnownNames> names;  // names to validate against; empty = registeredNames()
   bool progress = true;          // progress line on stderr (only when stderr is a terminal)

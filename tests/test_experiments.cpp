@@ -77,7 +77,8 @@ struct FakeRenderer {
     const std::string aa = text("aa", "none");
     const int noise = aa == "none" ? 24 : aa == "smaa" ? 10 : aa == "ssaa4" ? 4 : 0;
     ms *= aa == "smaa" ? 1.1 : aa == "ssaa4" ? 4.0 : aa == "ssaa16" ? 16.0 : 1.0;
-    ms *= text("robust", "fast") == "watertight" ? 1.05 : 1.0;
+    const std::string robust = text("robust", "fast");
+    ms *= robust == "watertight" ? 1.05 : robust == "tri" ? 1.04 : 1.0;
     ms *= text("kernel", "stack-ordered") == "stackless" ? 1.2 : 1.0;
     const double sah = (builder == "median" ? 44.0 : 34.5) * leafPenalty;
 
@@ -108,7 +109,8 @@ struct FakeRenderer {
                 {"node_visits_p95", 1.5 * sah},
                 {"triangle_tests_per_ray", leaf * 1.5},
                 {"triangles", triangles},
-                {"mesh_rays", w * h}};
+                {"mesh_rays", w * h},
+                {"aa_ms", aa == "smaa" ? json(0.1 * ms) : json(nullptr)}};
   }
 };
 
@@ -664,6 +666,45 @@ TEST_F(Experiments, ReportHasEveryPlotTableAndFinding) {
   // Every run appears in the full table.
   for (const json& row : readJsonFile(out / "results.json")["rows"])
     EXPECT_NE(html.find(row["key"].get<std::string>()), std::string::npos);
+}
+
+// The accuracy-vs-time sections: the anti-aliasing table (both time judgements, the edge/non-edge error
+// split, crops) and the robustness table, whose hard-case columns come from the real `bvhlab hard-cases`
+// run by the sweep (DIR/hard_cases.json) while the frame times are the fake's.
+TEST_F(Experiments, AccuracyReportHasTheAntiAliasingAndRobustnessTables) {
+  if (!reportToolsAvailable()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)";
+  FakeRenderer fake;
+  const fs::path out = root / "out";
+  RunOptions o = options(kFixtures / "accuracy.toml", out, fake);
+  o.binary = BVHLAB_BINARY;
+  runSweep(o);
+  const json hard = readJsonFile(out / "hard_cases.json");
+  ASSERT_EQ(hard.value("status", ""), "ok") << hard.dump(1);
+  EXPECT_EQ(hard["variants"], json({"fast", "tri", "watertight"}));
+  const json& variants = hard["result"]["variants"];
+  const auto total = [&](const std::string& v, const char* key) {
+    for (const json& x : variants)
+      if (x.value("robust", "") == v) return x["total"].value(key, -1);
+    return -1;
+  };
+  EXPECT_EQ(total("watertight", "leaks"), 0);
+  EXPECT_GT(total("fast", "leaks"), 0);
+
+  const std::string html = readText(writeReport(out));
+  for (const char* id : {"id=\"antialiasing\"", "id=\"aa-", "id=\"robustness\"", "id=\"robustness-table-1\""})
+    EXPECT_NE(html.find(id), std::string::npos) << id;
+  // The fake's smaa frame is 1.1x none's and ssaa4 4x: added time (1.1 - 1) / (4 - 1) = 0.0333.
+  EXPECT_NE(html.find("added time / SSAA 4×"), std::string::npos);
+  EXPECT_NE(html.find("<td>0.0333</td>"), std::string::npos);
+  EXPECT_NE(html.find("of the error lies in the"), std::string::npos) << "the edge / non-edge split";
+  // The robustness table: the fake's ratio to fast, and the hard cases' leak counts per variant.
+  const size_t table = html.find("id=\"robustness-table-1\"");
+  ASSERT_NE(table, std::string::npos);
+  const std::string rows = html.substr(table, html.find("</table>", table) - table);
+  for (const char* v : {"<b>fast</b>", "<b>tri</b>", "<b>watertight</b>"}) EXPECT_NE(rows.find(v), std::string::npos) << v;
+  EXPECT_NE(rows.find("<td>1.05</td>"), std::string::npos) << "watertight's time ratio to fast";
+  EXPECT_NE(rows.find("<td>" + std::to_string(total("fast", "leaks")) + "</td>"), std::string::npos) << rows;
+  EXPECT_NE(html.find("watertight takes 1.05× the fast variant's frame time and leaks 0"), std::string::npos);
 }
 
 TEST_F(Experiments, SeedFiguresReportMirrorsFigures8To12AndOmitsPlotsWithoutData) {
