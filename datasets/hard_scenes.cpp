@@ -721,7 +721,7 @@ std::vector<GeneratedFile> hardSceneFiles() {
       "watertight -o out.png --json`; `nonfinite_pixels` in the JSON counts pixels whose radiance was NaN or "
       "infinite before tone mapping (8-bit images cannot show them). The ray-level cases (single rays against "
       "triangle soups, CGAL oracle) are `datasets/hard_cases.hpp`, tested by `tests/test_robust.cpp`.\n\n"
-      "Variants: `--robust` takes every name of `robustnessNames()` (`traversal/kernels.hpp`). Three knobs: the "
+      "Variants: `--robust` takes every name of `robustnessNames()` (`traversal/robustness.hpp`). Three knobs: the "
       "triangle test (Moller-Trumbore or watertight), the box test (slab or Ize's robust slabs) and the origin "
       "offset of secondary rays (`epsilon`: `p + 1e-4 m n`, or `ulp`: Waechter & Binder's integer offset of 256 "
       "ulps per unit normal component, m/65536 absolute below |p_i| = m/32), where m = max|o| + t|d| is the "

@@ -47,11 +47,18 @@ struct ShaderOptions {
   bool reinhard = false;
   bool uber = false;
   int ssaaGrid = 1;  // shaded view: ssaaGrid^2 regular sub-pixel rays per pixel (1 = off)
-  // Triangle test, box test and secondary-ray offset, each on its own. Default: all robust. Measured on a
-  // quiet 2-core machine (bench_robust, same run): 1.18x fast's frame time on the bunny (75k triangles,
-  // primary rays), 1.04x on the report scene; fast leaks rays through shared edges (27 of 227,529 GLSL
-  // rays from inside closed meshes; a dark pixel on the bunny's default 640x360 view) and loses
-  // reflected rays far from the origin. `--robust fast` is the seed's Moller-Trumbore setting.
+  // Triangle test, box test and secondary-ray offset, each on its own. Default: all three robust
+  // ("watertight"), chosen on these measurements (bench_robust, quiet 2-core machine, one process,
+  // frames interleaved; `bvhlab hard-cases --gpu`):
+  //  - cost: 1.30x fast's frame time on the bunny (75k triangles), 1.12x on the report scene; all of it
+  //    is the watertight triangle test (tri alone 1.31x / 1.11x; box and ulp alone within +-4% of fast);
+  //  - triangles + boxes: 0 of 33,154 must-hit rays leak (fast: 1,337; watertight triangles with plain
+  //    boxes still 142, lost to boxes the slab test culls), 0 of 227,529 GLSL pixels from inside closed
+  //    meshes (fast: 27), 0 hit/miss disagreements with the exact oracle (fast: 136 of 3,350);
+  //  - ULP offset: 2,091 of 15,376 reflected rays inside closed meshes lost (epsilon: 3,840), equal on the
+  //    far/scaled scenes; its known cost is acne_zoom (telephoto from 1e4): 13 of 690 face pixels wrong
+  //    where epsilon has none (datasets/hard/README.md). `--robust tri+box` keeps the epsilon offset.
+  // `--robust fast` is the seed's Moller-Trumbore setting.
   Robustness robust = Robustness::Watertight;
 };
 

@@ -28,8 +28,8 @@ struct Robustness {
   BoxTest box = BoxTest::Slab;
   OriginOffset offset = OriginOffset::Epsilon;
 
-  static const Robustness Fast;        // every knob cheap (the default)
-  static const Robustness Watertight;  // every knob robust
+  static const Robustness Fast;        // every knob cheap (the seed's; `--robust fast`)
+  static const Robustness Watertight;  // every knob robust (the renderer's default: shaders/assemble.hpp)
 
   friend constexpr bool operator==(const Robustness&, const Robustness&) = default;
   // Which of the four (triangle test, box test) instantiations of a kernel mirror this variant runs:
