@@ -282,11 +282,25 @@ std::vector<InsideView> insideViews() {
     c.fovDeg = 120.0f;
     return c;
   };
+  // Every closed case of the ray-level suite, at the offsets and scales the suite copies them to (plus
+  // 1e-3 and 1e3): the GLSL must not leak where the mirror does not.
+  const hard::HardCase* octahedron = nullptr;
+  static const std::vector<hard::HardCase> suite = hard::makeHardCases();
+  for (const hard::HardCase& c : suite)
+    if (c.name == "duplicated-vertices") octahedron = &c;
+  if (!octahedron) throw std::logic_error("hard-case suite lost its duplicated-vertices case");
+  out.push_back({"octahedron_soup_unit", *octahedron, offCentre(vec3(0.0f), 0.5f)});
   for (const auto& [name, base] : {std::pair{"cube", cube}, std::pair{"sphere", sphere}}) {
     out.push_back({std::string(name) + "_unit", base, offCentre(vec3(0.0f), 1.0f)});
     for (auto [tag, offset, scale] : {std::tuple{"far1e4", vec3(1e4f, -2e4f, 3e4f), 1.0f},
-                                      std::tuple{"tiny1e-3", vec3(0.0f), 1e-3f},
-                                      std::tuple{"huge1e3", vec3(0.0f), 1e3f}})
+                                      std::tuple{"far1e5", vec3(1e5f, -5e4f, 2.5e4f), 1.0f},
+                                      std::tuple{"far1e6", vec3(1e6f, -5e5f, 2.5e5f), 1.0f},
+                                      std::tuple{"scale1e-4", vec3(0.0f), 1e-4f},
+                                      std::tuple{"scale1e-3", vec3(0.0f), 1e-3f},
+                                      std::tuple{"scale1e-2", vec3(0.0f), 1e-2f},
+                                      std::tuple{"scale1e2", vec3(0.0f), 1e2f},
+                                      std::tuple{"scale1e3", vec3(0.0f), 1e3f},
+                                      std::tuple{"scale1e4", vec3(0.0f), 1e4f}})
       out.push_back({std::string(name) + "_" + tag, hard::transformed(base, offset, scale), offCentre(offset, scale)});
   }
   // From the exact centre towards the face z = -1, 90 degrees: pixel centre i lies at

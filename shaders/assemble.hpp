@@ -53,7 +53,7 @@ struct ShaderOptions {
   //  - cost: 1.30x fast's frame time on the bunny (75k triangles), 1.12x on the report scene; all of it
   //    is the watertight triangle test (tri alone 1.31x / 1.11x; box and ulp alone within +-4% of fast);
   //  - triangles + boxes: 0 of 33,154 must-hit rays leak (fast: 1,337; watertight triangles with plain
-  //    boxes still 142, lost to boxes the slab test culls), 0 of 227,529 GLSL pixels from inside closed
+  //    boxes still 142, lost to boxes the slab test culls), 0 of 556,182 GLSL pixels from inside closed
   //    meshes (fast: 27), 0 hit/miss disagreements with the exact oracle (fast: 136 of 3,350);
   //  - ULP offset: 2,091 of 15,376 reflected rays inside closed meshes lost (epsilon: 3,840), equal on the
   //    far/scaled scenes; its known cost is acne_zoom (telephoto from 1e4): 13 of 690 face pixels wrong
