@@ -100,6 +100,7 @@ int main(int argc, char** argv) {
   render->add_option("--exposure", rc.exposure, "exposure multiplier");
   render->add_option("--aa", rc.aa, "anti-aliasing: none | smaa | smaa-low|medium|high|ultra | ssaa4 | ssaa16");
   render->add_option("--smaa-preset", rc.smaaPreset, "SMAA quality: low | medium | high | ultra");
+  render->add_option("--smaa-edges", rc.smaaEdges, "SMAA edge detection: luma (default) | color");
   render->add_option("--robust", rc.robust, "fast | tri | box | ulp | tri+box | tri+ulp | box+ulp | watertight (default: watertight triangles, Ize boxes, ULP offsets; fast = the seed's)");
   render->add_flag("--cpu", rc.cpu, "render with the C++ mirror instead of OpenGL");
   render->add_option("--camera-path", rc.cameraPath, "time frames along a recorded camera path (image: pose 0)");

@@ -38,6 +38,7 @@ const std::vector<AxisInfo>& experimentAxes() {
       {"branching", "branching", "--branching"},
       {"views", "view", "--view"},
       {"uber", "uber", "--uber"},
+      {"smaa_edges", "smaa_edges", "--smaa-edges"},
   };
   return axes;
 }
@@ -157,6 +158,7 @@ const std::vector<std::string>& kRobustness = robustnessNames();
 const std::vector<std::string> kRobustness = {"fast", "watertight"};
 #endif
 const std::vector<std::string> kBranching = {"full", "report"};
+const std::vector<std::string> kSmaaEdges = {"luma", "color"};
 const std::vector<std::string> kViews = {"shaded", "normal", "depth", "primid", "visits"};
 const std::vector<std::string> kBackends = {"osmesa", "egl"};
 
@@ -256,6 +258,7 @@ class ConfigReader {
                                             : a == "aa"     ? kAntialiasing
                                             : a == "robust" ? kRobustness
                                             : a == "branching" ? kBranching
+                                            : a == "smaa_edges" ? kSmaaEdges
                                                                : kViews;
     std::string v = oneOf(node, key, valid, std::string(a).c_str());
     return {v, v, {}};

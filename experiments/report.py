@@ -39,7 +39,7 @@ except ImportError as e:  # pragma: no cover - depends on the machine
     )
     sys.exit(3)
 
-AXES = ["scene", "builder", "kernel", "leaf_size", "depth", "storage", "aa", "robust", "branching", "view", "uber"]
+AXES = ["scene", "builder", "kernel", "leaf_size", "depth", "storage", "aa", "robust", "branching", "view", "uber", "smaa_edges"]
 NUMERIC_AXES = {"leaf_size", "depth"}
 # Axes whose cost the findings report as a time ratio against the first value in the config.
 KNOBS = ["aa", "robust", "depth", "storage", "branching", "uber", "kernel", "view"]

@@ -83,7 +83,11 @@ int runRender(const RenderCommand& cmd) {
   so.ssaaGrid = cmd.aa == "ssaa4" ? 2 : cmd.aa == "ssaa16" ? 4 : 1;
   const bool smaaOn = cmd.aa == "smaa" || smaaNamed;
   const std::string smaaPreset = smaaNamed ? cmd.aa.substr(5) : cmd.smaaPreset;
-  const SmaaSettings smaaSettings = SmaaSettings::preset(parseSmaaPreset(smaaPreset));
+  SmaaSettings smaaSettings = SmaaSettings::preset(parseSmaaPreset(smaaPreset));
+  if (cmd.smaaEdges == "color")
+    smaaSettings.edgeMode = SmaaEdgeMode::Color;
+  else if (cmd.smaaEdges != "luma")
+    throw std::invalid_argument("--smaa-edges: unknown mode '" + cmd.smaaEdges + "' (valid: luma, color)");
   if (smaaOn && cmd.cpu) throw std::invalid_argument("--aa smaa runs on the GPU only (no --cpu)");
 
   BuildOptions bo;
@@ -208,6 +212,7 @@ int runRender(const RenderCommand& cmd) {
     }
     if (smaaOn) {
       out["smaa_preset"] = smaaPreset;
+      out["smaa_edges"] = cmd.smaaEdges;
       out["aa_ms"] = median(aaTimes);
     }
     out["builder"] = cmd.builder;

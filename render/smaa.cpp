@@ -105,12 +105,13 @@ SmaaPass::SmaaPass(int width, int height, const SmaaSettings& settings)
   weightsTex_ = makeTarget(GL_RGBA16F, width, height, &weightsFbo_);
   outputTex_ = makeTarget(GL_RGBA8, width, height, &outputFbo_);
 
-  const smaa::AreaTexture area = smaa::makeOrthogonalAreaTexture();
+  // Generated once per process, on first use (the same for every size and preset).
+  static const smaa::AreaTexture area = smaa::makeOrthogonalAreaTexture();
   glCreateTextures(GL_TEXTURE_2D, 1, &areaTex_);
   glTextureStorage2D(areaTex_, 1, GL_RG32F, area.width, area.height);
   glTextureSubImage2D(areaTex_, 0, 0, 0, area.width, area.height, GL_RG, GL_FLOAT, area.texels.data());
 
-  const smaa::DiagonalAreaTexture areaDiag = smaa::makeDiagonalAreaTexture();
+  static const smaa::DiagonalAreaTexture areaDiag = smaa::makeDiagonalAreaTexture();
   glCreateTextures(GL_TEXTURE_2D, 1, &areaDiagTex_);
   glTextureStorage2D(areaDiagTex_, 1, GL_RGBA32F, areaDiag.width, areaDiag.height);
   glTextureSubImage2D(areaDiagTex_, 0, 0, 0, areaDiag.width, areaDiag.height, GL_RGBA, GL_FLOAT,
@@ -118,7 +119,7 @@ SmaaPass::SmaaPass(int width, int height, const SmaaSettings& settings)
   glTextureParameteri(areaDiagTex_, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(areaDiagTex_, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
 
-  const smaa::SearchTexture search = smaa::makeSearchTexture();
+  static const smaa::SearchTexture search = smaa::makeSearchTexture();
   glCreateTextures(GL_TEXTURE_2D, 1, &searchTex_);
   glTextureStorage2D(searchTex_, 1, GL_R8UI, search.width, search.height);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);

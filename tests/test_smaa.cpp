@@ -248,6 +248,26 @@ TEST(SmaaPasses, SingleVerticalEdgeGivesEdgesOnlyAlongIt) {
   EXPECT_EQ(out, img);
 }
 
+// Colour edge detection sees an edge between two colours of (nearly) equal luma, which luma detection
+// cannot: (200, 40, 100) and (40, 90, 60) differ by 1.1/255 in Rec. 709 luma and by 160/255 in red.
+TEST(SmaaPasses, ColourEdgeDetectionFindsEdgesOfEqualLuma) {
+  context();
+  const int w = 32, h = 20, column = 13;
+  const auto img = makeImage(w, h, [&](int x, int) {
+    return x < column ? glm::u8vec4(200, 40, 100, 255) : glm::u8vec4(40, 90, 60, 255);
+  });
+  SmaaSettings luma = SmaaSettings::preset(SmaaPreset::High), colour = luma;
+  colour.edgeMode = SmaaEdgeMode::Color;
+  SmaaPass byLuma(w, h, luma), byColour(w, h, colour);
+  EXPECT_EQ(byLuma.apply(img), img);
+  for (const glm::vec2& e : byLuma.readEdges()) EXPECT_EQ(e, glm::vec2(0.0f));
+  byColour.apply(img);
+  const std::vector<glm::vec2> edges = byColour.readEdges();
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      EXPECT_EQ(edges[size_t(y) * w + x], glm::vec2(x == column ? 1.0f : 0.0f, 0.0f)) << x << "," << y;
+}
+
 TEST(SmaaPasses, StairStepGetsTheWeightsTheAreaTexturePredicts) {
   context();
   // White where y >= x/step + base, black below: horizontal lines of `step` pixels joined by
