@@ -817,7 +817,9 @@ def seed_sections(page, data):
 def aa_preset(row):
     """'smaa' runs name their preset in smaa_preset; show them as smaa-PRESET like the axis values."""
     v = label(row, "aa")
-    return "smaa-%s" % row["smaa_preset"] if v == "smaa" and row.get("smaa_preset") else v
+    v = "smaa-%s" % row["smaa_preset"] if v == "smaa" and row.get("smaa_preset") else v
+    # Colour edge detection is a variant of the SMAA mode, not another scene setting (luma: the default).
+    return v + " (colour edges)" if v.startswith("smaa") and row.get("smaa_edges") == "color" else v
 
 
 def worst_window(diff, frac=6):
@@ -848,7 +850,7 @@ def section_antialiasing(page, data):
            "compares what each mode adds to the frame without AA, (t − t_none) / (t_SSAA4 − t_none), which "
            "is the anti-aliasing's own cost.")
     by_key = {r.get("key"): r for r in data.ok}
-    others = [a for a in AXES if a not in ("aa",)]
+    others = [a for a in AXES if a not in ("aa", "smaa_edges")]
     for combo, members in sorted(group(rows, lambda r: tuple(label(r, a) for a in others)).items(),
                                  key=lambda kv: [str(x) for x in kv[0]]):
         modes = {}
@@ -857,7 +859,7 @@ def section_antialiasing(page, data):
         if len(modes) < 2:
             continue
         scene = label(members[0], "scene")
-        varying = [a for a in data.varying(rows, exclude=("aa",))]
+        varying = [a for a in data.varying(rows, exclude=("aa", "smaa_edges"))]
         title = describe(members[0], varying) or scene
         page.add("<h3>%s</h3>" % html.escape(title))
         none, ssaa4 = modes.get("none"), modes.get("ssaa4")
