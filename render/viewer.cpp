@@ -569,9 +569,14 @@ void Viewer::logSwitch(const std::string& what, const std::string& value) {
                        {"switch", what},
                        {"value", value},
                        {"frame_ms_before", median(sinceSwitchMs_)},
+                       {"frames_before", sinceSwitchMs_.size()},
                        {"aa_ms_before", median(sinceSwitchAaMs_)}});
   sinceSwitchMs_.clear();
   sinceSwitchAaMs_.clear();
+  // The rolling median restarts with the new setting (the graph keeps the history, so the step shows):
+  // otherwise a slow setting's median would show the old one's time for half a window.
+  recentMs_.clear();
+  recentAaMs_.clear();
   status_ = what + " -> " + value;
 }
 
@@ -762,6 +767,17 @@ void Viewer::drawOverlay() {
     if (!graph_.empty())
       ImGui::PlotLines("##ms", graph_.data(), int(graph_.size()), 0, "rolling median ms", 0.0f,
                        *std::max_element(graph_.begin(), graph_.end()) * 1.2f, ImVec2(320, 60));
+    // The last switch's effect: the median before it against the median of the frames since.
+    if (!switches_.empty()) {
+      const nlohmann::json& s = switches_.back();
+      const double before = s.value("frame_ms_before", 0.0), after = median(sinceSwitchMs_);
+      if (before > 0.0 && !sinceSwitchMs_.empty())
+        ImGui::Text("last switch %s -> %s: %.2f -> %.2f ms (%.2fx; medians of %zu and %zu frames)",
+                    s.value("switch", "").c_str(), s.value("value", "").c_str(), before, after, after / before,
+                    s.value("frames_before", size_t(0)), sinceSwitchMs_.size());
+      else
+        ImGui::Text("last switch %s -> %s: measuring", s.value("switch", "").c_str(), s.value("value", "").c_str());
+    }
     ImGui::Separator();
     const BuildStats& b = prepared_->stats;
     // One combo per named setting (the same values its key cycles through); choosing one switches live.

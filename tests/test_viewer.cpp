@@ -367,6 +367,34 @@ TEST(ViewCommand, ScriptedAaSwitchMatchesHeadlessAa) {
   EXPECT_GT(diffImages(dir / "aa_none.png", dir / "aa_ssaa4.png", 0).changed, 0u);
 }
 
+// The visit heatmap in the viewer is `render --view visits` of the same kernel, and switching the kernel
+// live changes it the way the headless kernels differ (the shader was reassembled, not just renamed).
+TEST(ViewCommand, ScriptedHeatmapAndKernelSwitchMatchHeadlessVisits) {
+  REQUIRE_VIEWER(prefix);
+  fs::path dir = tempDir();
+  const std::string d = dir.string() + "/";
+  writeFile(dir / "heat.txt", std::string(kPoseLine) + "1 set view visits\n2 screenshot " + d + "heat_ordered.png\n" +
+                                  "3 set kernel stack-unordered\n4 screenshot " + d + "heat_unordered.png\n" +
+                                  "5 key V\n");
+  Result v = shell(view(*prefix, "--kernel stack-ordered --leaf-size 1 --json --frames 7 --script " +
+                                     (dir / "heat.txt").string()));
+  ASSERT_EQ(v.rc, 0) << v.err;
+  nlohmann::json j = nlohmann::json::parse(v.out);
+  EXPECT_EQ(j["view"], "shaded") << "V steps from the last view (visits) back to the first";
+  EXPECT_EQ(j["kernel"], "stack-unordered");
+  for (const char* kernel : {"stack-ordered", "stack-unordered"}) {
+    SCOPED_TRACE(kernel);
+    const std::string name = std::string(kernel) == "stack-ordered" ? "ordered" : "unordered";
+    Result r = renderHeadless(dir / ("heat_render_" + name + ".png"),
+                              std::string("--view visits --leaf-size 1 --kernel ") + kernel);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    expectSameImage(dir / ("heat_" + name + ".png"), dir / ("heat_render_" + name + ".png"));
+  }
+  EXPECT_GT(diffImages(dir / "heat_render_ordered.png", dir / "heat_render_unordered.png", 0).changed, 0u)
+      << "the two kernels visit different numbers of nodes somewhere";
+  EXPECT_GT(diffImages(dir / "heat_ordered.png", dir / "heat_unordered.png", 0).changed, 0u);
+}
+
 TEST(ViewCommand, ScriptedRobustnessSwitchMatchesHeadless) {
   REQUIRE_VIEWER(prefix);
   const std::vector<std::string>& names = robustnessNames();  // whatever variants traversal offers
