@@ -42,12 +42,15 @@
 
 #include <glad/gl.h>
 
+#include "gl_compute.hpp"
 #include "render/gl_context.hpp"
 #include "shaders/primitives.hpp"
 
 namespace {
 
 using bvhlab::glsl::Ray;
+using bvhlab::test::compileCompute;
+using bvhlab::test::dispatchCompute;
 using glm::dvec2;
 using glm::dvec3;
 using glm::vec2;
@@ -1050,32 +1053,6 @@ void main() {
 }
 )";
 
-GLuint compileCompute(const std::string& source) {
-  GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
-  const char* text = source.c_str();
-  glShaderSource(shader, 1, &text, nullptr);
-  glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[4096];
-    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-    glDeleteShader(shader);
-    throw std::runtime_error(std::string("compute shader: ") + log);
-  }
-  GLuint program = glCreateProgram();
-  glAttachShader(program, shader);
-  glLinkProgram(program);
-  glDeleteShader(shader);
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[4096];
-    glGetProgramInfoLog(program, sizeof log, nullptr, log);
-    glDeleteProgram(program);
-    throw std::runtime_error(std::string("compute program: ") + log);
-  }
-  return program;
-}
 
 // Runs the GLSL functions on the GPU for every case (shape per case) and returns their results.
 std::vector<Hit> traceOnGpu(const std::vector<Shape>& shapes, const std::vector<Case>& cases) {
@@ -1089,20 +1066,8 @@ std::vector<Hit> traceOnGpu(const std::vector<Shape>& shapes, const std::vector<
     in.emplace_back(c.ray.dir, c.tMax);
     in.emplace_back(float(kind), s.radii.x, s.radii.y, s.kind == Kind::InfinitePlane ? 1.0f : 0.0f);
   }
-  GLuint buffers[2];
-  glCreateBuffers(2, buffers);
-  glNamedBufferData(buffers[0], GLsizeiptr(in.size() * sizeof(glm::vec4)), in.data(), GL_STATIC_DRAW);
-  glNamedBufferData(buffers[1], GLsizeiptr(cases.size() * 2 * sizeof(glm::vec4)), nullptr, GL_STATIC_READ);
-  glUseProgram(program);
-  glUniform1i(glGetUniformLocation(program, "u_count"), GLint(cases.size()));
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffers[0]);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, buffers[1]);
-  glDispatchCompute(GLuint((cases.size() + 63) / 64), 1, 1);
-  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  std::vector<glm::vec4> out(cases.size() * 2);
-  glGetNamedBufferSubData(buffers[1], 0, GLsizeiptr(out.size() * sizeof(glm::vec4)), out.data());
-  bvhlab::checkGl("primitive cross-check dispatch");
-  glDeleteBuffers(2, buffers);
+  const std::vector<glm::vec4> out =
+      dispatchCompute<glm::vec4>(program, in, cases.size() * 2, cases.size(), "primitive cross-check dispatch");
   std::vector<Hit> hits(cases.size());
   for (size_t i = 0; i < cases.size(); ++i) {
     hits[i].hit = out[2 * i].x > 0.5f;

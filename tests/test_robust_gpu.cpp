@@ -15,6 +15,7 @@
 
 #include "datasets/hard_cases.hpp"
 #include "render/hard_cases_command.hpp"
+#include "gl_compute.hpp"
 #include "render_fixture.hpp"
 #include "shaders/assemble.hpp"
 #include "traversal/ray_triangle_watertight.hpp"
@@ -177,33 +178,11 @@ void main() {
 std::vector<bool> fallbackOnGpu(const std::vector<FallbackCase>& cases) {
   const std::string source = "#version 450 core\n" + glslModule("common.glsl") +
                              glslModule("ray_triangle_watertight.glsl") + kFallbackMain;
-  const char* text = source.c_str();
-  const GLuint program = glCreateShaderProgramv(GL_COMPUTE_SHADER, 1, &text);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[4096];
-    glGetProgramInfoLog(program, sizeof log, nullptr, log);
-    glDeleteProgram(program);
-    throw std::runtime_error(std::string("fallback compute: ") + log);
-  }
+  const GLuint program = compileCompute(source);
   std::vector<glm::vec4> in;
   for (const FallbackCase& c : cases)
     for (glm::vec3 v : {c.v0, c.v1, c.v2}) in.emplace_back(v, 0.0f);
-  GLuint buffers[2];
-  glCreateBuffers(2, buffers);
-  glNamedBufferData(buffers[0], GLsizeiptr(in.size() * sizeof(glm::vec4)), in.data(), GL_STATIC_DRAW);
-  glNamedBufferData(buffers[1], GLsizeiptr(cases.size() * sizeof(GLuint)), nullptr, GL_STATIC_READ);
-  glUseProgram(program);
-  glUniform1i(glGetUniformLocation(program, "u_count"), GLint(cases.size()));
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffers[0]);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, buffers[1]);
-  glDispatchCompute(GLuint((cases.size() + 63) / 64), 1, 1);
-  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  std::vector<GLuint> out(cases.size());
-  glGetNamedBufferSubData(buffers[1], 0, GLsizeiptr(out.size() * sizeof(GLuint)), out.data());
-  checkGl("fallback dispatch");
-  glDeleteBuffers(2, buffers);
+  const std::vector<GLuint> out = dispatchCompute<GLuint>(program, in, cases.size(), cases.size(), "fallback dispatch");
   glDeleteProgram(program);
   return std::vector<bool>(out.begin(), out.end());
 }

@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "gl_compute.hpp"
 #include "builders/builder.hpp"
 #include "datasets/mesh_io.hpp"
 #include "layout/layout.hpp"
@@ -33,6 +34,7 @@ namespace bvhlab {
 namespace {
 
 using glsl::Counters;
+using test::compileCompute;
 using glsl::MeshHit;
 using glsl::Ray;
 
@@ -694,31 +696,6 @@ void main() {
 }
 )";
 
-GLuint compileCompute(const std::string& source) {
-  GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
-  const char* text = source.c_str();
-  glShaderSource(shader, 1, &text, nullptr);
-  glCompileShader(shader);
-  GLint ok = 0;
-  char log[4096] = {};
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-    glDeleteShader(shader);
-    throw std::runtime_error(std::string("compute shader: ") + log);
-  }
-  GLuint program = glCreateProgram();
-  glAttachShader(program, shader);
-  glLinkProgram(program);
-  glDeleteShader(shader);
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    glGetProgramInfoLog(program, sizeof log, nullptr, log);
-    glDeleteProgram(program);
-    throw std::runtime_error(std::string("compute program: ") + log);
-  }
-  return program;
-}
 
 // The three streams as GL textures of one storage kind, bound to units 0..2.
 struct GlStreams {
