@@ -336,6 +336,23 @@ TEST(ViewCommand, RecordedPathReplaysToSamePoses) {
             glm::normalize(a.back().camera.target - a.back().camera.eye));
 }
 
+// Ctrl+N stores the camera as bookmark N (and prints it as render flags); N flies back to it.
+TEST(ViewCommand, BookmarkKeysStoreAndRecallTheCamera) {
+  REQUIRE_VIEWER(prefix);
+  fs::path dir = tempDir();
+  writeFile(dir / "marks.txt", "0 pose eye 1.5 1 2 target 0 0 0 fov 50\n0 key CTRL+2\n1 hold W 3\n2 mouse 30 5\n"
+                               "5 key 2\n6 key 3\n");
+  Result v = shell(view(*prefix, "--script " + (dir / "marks.txt").string() + " --frames 7 --record " +
+                                     (dir / "marks.path").string()));
+  ASSERT_EQ(v.rc, 0) << v.err;
+  EXPECT_NE(v.err.find("bookmark 2: --eye 1.5,1,2 --target 0,0,0"), std::string::npos) << v.err;
+  const CameraPath path = loadCameraPath(dir / "marks.path");
+  ASSERT_EQ(path.size(), 7u);
+  EXPECT_NE(path[4].camera.eye, path[0].camera.eye) << "the flight moved away from the bookmark";
+  expectCameraEq(path[5].camera, path[0].camera);  // key 2 recalls it
+  expectCameraEq(path[6].camera, path[5].camera);  // bookmark 3 was never stored: nothing happens
+}
+
 TEST(ViewCommand, ScriptedAaSwitchMatchesHeadlessAa) {
   REQUIRE_VIEWER(prefix);
   fs::path dir = tempDir();
