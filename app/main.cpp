@@ -14,6 +14,8 @@
 #include "layout/layout.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/hard_cases_command.hpp"
+#include "render/measure_command.hpp"
+#include "render/render_cli.hpp"
 #include "render/render_command.hpp"
 #include "render/viewer.hpp"
 #include "traversal/kernels.hpp"
@@ -21,17 +23,6 @@
 using namespace bvhlab;
 
 namespace {
-
-// Parsed in double: --eye/--target of a far scene keep the precision the scene loader has.
-glm::dvec3 parseVec3(const std::string& s, const char* flag) {
-  glm::dvec3 v;
-  char c1, c2;
-  std::istringstream in(s);
-  if (!(in >> v.x >> c1 >> v.y >> c2 >> v.z) || c1 != ',' || c2 != ',' || !in.eof() ||
-      !std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
-    throw std::invalid_argument(std::string(flag) + " expects three finite numbers x,y,z (got '" + s + "')");
-  return v;
-}
 
 int buildCommand(const std::string& mesh, const std::string& builder, int leafSize, int bins, bool json) {
   Scene scene = loadInput(mesh);
@@ -73,37 +64,15 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   RenderCommand rc;
-  std::string eye, target, up;
   auto* render = app.add_subcommand("render", "render a scene file or a bare mesh (OBJ/OFF/PLY/STL)");
-  render->add_option("input", rc.input, "scene .toml or mesh file")->required();
-  render->add_option("-o,--output", rc.output, "write the image here (PNG)");
-  render->add_flag("--json", rc.json, "print one JSON object with timings and statistics");
-  render->add_option("--width", rc.width, "image width");
-  render->add_option("--height", rc.height, "image height");
-  render->add_option("--depth", rc.depth, "max path depth (the report's recursion depth)");
-  render->add_option("--frames", rc.frames, "timed frames after warm-up (median reported)");
-  render->add_option("--warmup", rc.warmup, "untimed warm-up frames (llvmpipe compiles at the first draw)");
-  render->add_option("--backend", rc.backend, "osmesa | egl");
-  render->add_option("--view", rc.view, "shaded | normal | depth | primid | visits");
-  render->add_option("--visits-out", rc.visitsOutput, "also write the node-visit heatmap here");
-  render->add_flag("--uber", rc.uber, "compile every module in (no specialisation)");
-  render->add_option("--builder", rc.builder, "BVH builder (see `bvhlab builders`)");
-  render->add_option("--kernel", rc.kernel, "traversal kernel (see `bvhlab kernels`)");
-  render->add_option("--leaf-size", rc.leafSize, "max triangles per BVH leaf");
-  render->add_option("--bins", rc.bins, "bins for sah-binned (0 = default)");
-  render->add_option("--storage", rc.storage, "tbo | tex2d");
-  render->add_option("--branching", rc.branching, "full (both Fresnel branches) | report (Algorithm 1)");
-  render->add_option("--eye", eye, "camera position x,y,z");
-  render->add_option("--target", target, "camera target x,y,z");
-  render->add_option("--up", up, "camera up x,y,z");
-  render->add_option("--fov", rc.fov, "vertical field of view in degrees");
-  render->add_option("--exposure", rc.exposure, "exposure multiplier");
-  render->add_option("--aa", rc.aa, "anti-aliasing: none | smaa | smaa-low|medium|high|ultra | ssaa4 | ssaa16");
-  render->add_option("--smaa-preset", rc.smaaPreset, "SMAA quality: low | medium | high | ultra");
-  render->add_option("--smaa-edges", rc.smaaEdges, "SMAA edge detection: luma (default) | color");
-  render->add_option("--robust", rc.robust, "fast | tri | box | ulp | tri+box | tri+ulp | box+ulp | watertight (default: watertight triangles, Ize boxes, ULP offsets; fast = the seed's)");
-  render->add_flag("--cpu", rc.cpu, "render with the C++ mirror instead of OpenGL");
-  render->add_option("--camera-path", rc.cameraPath, "time frames along a recorded camera path (image: pose 0)");
+  RenderCliText renderText;
+  addRenderOptions(*render, rc, renderText);
+
+  MeasureCommand mc;
+  auto* measureCmd = app.add_subcommand(
+      "measure", "time a group of renders interleaved in one process (what `bvhlab run` calls; experiments/README.md)");
+  measureCmd->add_option("spec", mc.spec, "group file (JSON: the runs' render arguments and the [measure] settings)")
+      ->required();
 
   std::string mesh, builder = "sah-binned";
   int leafSize = 4, bins = 0;
@@ -178,11 +147,10 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (render->parsed()) {
-      if (!eye.empty()) rc.eye = parseVec3(eye, "--eye");
-      if (!target.empty()) rc.target = parseVec3(target, "--target");
-      if (!up.empty()) rc.up = glm::vec3(parseVec3(up, "--up"));
+      applyRenderCliText(rc, renderText);
       return runRender(rc);
     }
+    if (measureCmd->parsed()) return runMeasure(mc);
     if (viewCmd->parsed()) {
       if (!viewEye.empty()) vo.eye = parseVec3(viewEye, "--eye");
       if (!viewTarget.empty()) vo.target = parseVec3(viewTarget, "--target");

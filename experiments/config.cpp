@@ -67,7 +67,19 @@ json RunRender::keyJson() const {
     key["camera_path"] = cameraPath;
     key["camera_path_hash"] = cameraPathHash;
   }
+  // How long a run is measured is part of what it is (a 2% interval is not a 5% one).
+  key["max_frames"] = maxFrames;
+  key["target_ci_pct"] = targetCiPct;
   return key;
+}
+
+json RunRender::groupJson() const {
+  json g = keyJson();
+  g["group_size"] = groupSize;
+  g["aa_control"] = aaControl;
+  g["interleave"] = interleave;
+  g["timeout_s"] = timeoutSeconds;
+  return g;
 }
 
 const AxisValue* RunSpec::axis(std::string_view singular) const {
@@ -101,8 +113,7 @@ json RunSpec::toJson() const {
     if (!value.file.empty()) v["file"] = value.file.string();
     a.push_back(v);
   }
-  json r = render.keyJson();
-  r["timeout_s"] = render.timeoutSeconds;
+  json r = render.groupJson();
   if (!render.cameraPathFile.empty()) r["camera_path_file"] = render.cameraPathFile.string();
   return json{{"index", index},   {"key", key},       {"axes", a},
               {"render", r},      {"sweeps", sweeps}, {"reference_key", referenceKey},
@@ -128,6 +139,11 @@ RunSpec RunSpec::fromJson(const json& j) {
   s.render.env = r.at("env").get<std::map<std::string, std::string>>();
   s.render.args = r.at("args").get<std::vector<std::string>>();
   s.render.timeoutSeconds = r.value("timeout_s", s.render.timeoutSeconds);
+  s.render.maxFrames = r.value("max_frames", s.render.frames);
+  s.render.targetCiPct = r.value("target_ci_pct", s.render.targetCiPct);
+  s.render.groupSize = r.value("group_size", s.render.groupSize);
+  s.render.aaControl = r.value("aa_control", s.render.aaControl);
+  s.render.interleave = r.value("interleave", s.render.interleave);
   s.render.cameraPath = r.value("camera_path", "");
   s.render.cameraPathHash = r.value("camera_path_hash", "");
   s.render.cameraPathFile = r.value("camera_path_file", "");
@@ -455,6 +471,8 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   std::vector<Exclusion> exclusions;
   const toml::table* referenceTable = nullptr;
   const toml::node* cameraPathNode = nullptr;
+  const toml::node *framesNode = nullptr, *measureMinNode = nullptr, *maxFramesNode = nullptr;
+  std::optional<int> measureMin;
 
   auto readAxes = [&](const toml::table& t, const std::string& section, AxisMap& out,
                       const std::set<std::string>& skip) {
@@ -494,7 +512,10 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         if (rk == "width") out.width = int(r.integer(rv, key, 1, 16384));
         else if (rk == "height") out.height = int(r.integer(rv, key, 1, 16384));
         else if (rk == "warmup") out.warmup = int(r.integer(rv, key, 0, 1000000));
-        else if (rk == "frames") out.frames = int(r.integer(rv, key, 1, 1000000));
+        else if (rk == "frames") {
+          framesNode = &rv;
+          out.frames = int(r.integer(rv, key, 1, 1000000));
+        }
         else if (rk == "backend") out.backend = r.oneOf(rv, key, kBackends, "backend");
         else if (rk == "heatmaps") out.heatmaps = r.boolean(rv, key);
         else if (rk == "timeout_s") {
@@ -530,6 +551,30 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
           r.fail(rk.source(), key,
                  "unknown key; [render] has width, height, warmup, frames, backend, heatmaps, timeout_s, env, args, "
                  "camera_path");
+      }
+    } else if (section == "measure") {
+      for (auto&& [mk, mv] : r.table(v, section)) {
+        const std::string key = "measure." + std::string(mk.str());
+        RunRender& out = cfg.render;
+        if (mk == "min_frames") {
+          measureMinNode = &mv;
+          measureMin = int(r.integer(mv, key, 1, 1000000));
+        } else if (mk == "max_frames") {
+          maxFramesNode = &mv;
+          out.maxFrames = int(r.integer(mv, key, 1, 1000000));
+        } else if (mk == "target_ci_pct") {
+          out.targetCiPct = r.number(mv, key);
+          if (!(out.targetCiPct > 0.0 && out.targetCiPct <= 100.0)) r.fail(mv.source(), key, "must be in (0, 100]");
+        } else if (mk == "group_size") {
+          out.groupSize = int(r.integer(mv, key, 1, 100000));
+        } else if (mk == "aa_control") {
+          out.aaControl = r.boolean(mv, key);
+        } else if (mk == "interleave") {
+          out.interleave = r.boolean(mv, key);
+        } else {
+          r.fail(mk.source(), key,
+                 "unknown key; [measure] has min_frames, max_frames, target_ci_pct, group_size, aa_control, interleave");
+        }
       }
     } else if (section == "axes") {
       readAxes(r.table(v, section), "axes", topAxes, {});
@@ -574,9 +619,21 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         exclusions.push_back(std::move(ex));
       }
     } else {
-      r.fail(k.source(), section, "unknown section; a config has [experiment], [render], [axes], [[sweep]], [[exclude]]");
+      r.fail(k.source(), section, "unknown section; a config has [experiment], [render], [measure], [axes], [[sweep]], [[exclude]]");
     }
   }
+
+  // [measure] min_frames is [render] frames by another name: one value, given in one place.
+  if (measureMin) {
+    if (framesNode && *measureMin != cfg.render.frames)
+      r.fail(measureMinNode->source(), "measure.min_frames",
+             "[render] frames = " + std::to_string(cfg.render.frames) + " says otherwise; give it in one place");
+    cfg.render.frames = *measureMin;
+  }
+  if (!maxFramesNode) cfg.render.maxFrames = std::max(cfg.render.maxFrames, cfg.render.frames);
+  if (cfg.render.maxFrames < cfg.render.frames)
+    r.fail(maxFramesNode->source(), "measure.max_frames",
+           std::to_string(cfg.render.maxFrames) + " is below min_frames " + std::to_string(cfg.render.frames));
 
   if (sweeps.empty()) sweeps.push_back(Sweep{"main", {}});
   for (Sweep& s : sweeps) {
@@ -685,7 +742,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         if (it != ref.axes.end()) it->second = value;
         else ref.axes.emplace_back(name, value);
       }
-      if (frames) ref.render.frames = *frames;
+      if (frames) ref.render.frames = ref.render.maxFrames = *frames;  // a reference is drawn, not timed
       if (warmup) ref.render.warmup = *warmup;
       finishRun(ref);
       auto it = byKey.find(ref.key);

@@ -31,7 +31,14 @@ struct AxisValue {
 // Settings shared by every run of a config ([render]); all but the timeout are part of the run key.
 struct RunRender {
   int width = 320, height = 180;
-  int warmup = 2, frames = 10;
+  int warmup = 2, frames = 10;  // frames = [measure] min_frames: timed rounds before the interval is checked
+  // [measure]: a group of runs (experiments/README.md) renders rounds until every run's 95% interval
+  // of the median frame time is within ±targetCiPct % of it, or maxFrames rounds.
+  int maxFrames = 100;
+  double targetCiPct = 2.0;
+  int groupSize = 64;     // most runs measured together by one process (memory: one tree + program each)
+  bool aaControl = true;  // measure one run of each group twice (the A/A control: the noise floor)
+  bool interleave = true; // false: every run is its own `bvhlab render` process (isolation, no pairing)
   std::string backend = "osmesa";
   bool heatmaps = true;                       // ask for --visits-out next to every image
   std::map<std::string, std::string> env;     // extra environment for the renderer (LP_NUM_THREADS, ...)
@@ -43,6 +50,8 @@ struct RunRender {
   std::string cameraPathHash;                 // FNV-1a 64 of the file: a re-recorded path is a new run
 
   nlohmann::json keyJson() const;
+  // Runs with the same scene and equal groupJson() are timed together, frames interleaved.
+  nlohmann::json groupJson() const;
 };
 
 struct RunSpec {

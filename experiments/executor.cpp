@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "experiments/process.hpp"
+#include "experiments/sweep_dir.hpp"
 
 namespace bvhlab {
 
@@ -124,6 +125,72 @@ RunExecutor subprocessExecutor(fs::path binary) {
                        (shown.empty() ? std::string(": stdout was empty") : ": " + shown));
     }
     return result;
+  };
+}
+
+json measureSpec(const fs::path& binary, const GroupRequest& request) {
+  if (request.runs.empty()) throw std::invalid_argument("an empty group");
+  const RunRender& r = request.runs.front().spec.render;
+  json runs = json::array();
+  for (const RunRequest& run : request.runs) {
+    std::vector<std::string> argv = renderCommandLine(binary, run);
+    argv.erase(argv.begin(), argv.begin() + 2);  // the binary and "render": measure takes render's arguments
+    runs.push_back({{"key", run.spec.key}, {"args", argv}});
+  }
+  return {{"session", request.session},         {"min_frames", r.frames},
+          {"max_frames", r.maxFrames},          {"target_ci_pct", r.targetCiPct},
+          {"aa_control", r.aaControl},          {"runs", runs}};
+}
+
+GroupExecutor subprocessGroupExecutor(fs::path binary) {
+  if (binary.empty()) binary = fs::read_symlink("/proc/self/exe");
+  return [binary](GroupRequest& request) -> json {
+    const json spec = measureSpec(binary, request);
+    const fs::path file = request.workDir / ("group-" + request.session + ".json");
+    writeFileAtomic(file, spec.dump(1) + "\n", false);
+    const std::vector<std::string> argv = {binary.string(), "measure", file.string()};
+    request.command = shellQuote(argv);
+    const RunRender& r = request.runs.front().spec.render;
+    ProcessOptions options;
+    options.env = r.env;
+    options.timeoutSeconds = r.timeoutSeconds * double(request.runs.size());
+    const ProcessResult p = runProcess(argv, options);
+    request.log = p.err;
+    std::error_code ec;
+    fs::remove(file, ec);
+
+    json result;
+    try {
+      result = json::parse(p.out);
+    } catch (const json::parse_error&) {
+    }
+    if (p.timedOut) throw RunFailure("measure timed out after " + number(options.timeoutSeconds) + " s");
+    if (!p.ok()) {
+      const std::string why = summaryLine(p.err);
+      throw RunFailure("measure " + p.status() + (why.empty() ? "" : ": " + why));
+    }
+    if (!result.is_object() || !result.contains("runs") || !result["runs"].is_object())
+      throw RunFailure("measure printed no result object" +
+                       (p.out.empty() ? std::string(": stdout was empty") : ": " + p.out.substr(0, 200)));
+    return result["runs"];
+  };
+}
+
+GroupExecutor sequentialGroupExecutor(RunExecutor run) {
+  return [run](GroupRequest& request) -> json {
+    json out = json::object();
+    for (RunRequest& r : request.runs) {
+      try {
+        json result = run(r);
+        if (!result.is_object()) throw RunFailure("the executor returned no JSON object");
+        out[r.spec.key] = std::move(result);
+      } catch (const RunFailure& f) {
+        out[r.spec.key] = {{"error", f.what()}, {"result", f.partialResult}};
+      } catch (const std::exception& e) {
+        out[r.spec.key] = {{"error", e.what()}};
+      }
+    }
+    return out;
   };
 }
 

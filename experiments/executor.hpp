@@ -41,4 +41,30 @@ std::vector<std::string> renderCommandLine(const std::filesystem::path& binary, 
 // and the telling line of stderr: the last mentioning "error", else the first). `binary` empty = this executable (/proc/self/exe).
 RunExecutor subprocessExecutor(std::filesystem::path binary = {});
 
+// ---- groups: runs timed together, frames interleaved (render/measure_command.hpp) -----------------
+// The runner hands every pending run of a shard to a GroupExecutor, grouped by scene and render
+// settings (RunRender::groupJson), at most [measure] group_size runs per group.
+struct GroupRequest {
+  std::vector<RunRequest> runs;
+  std::string session;              // a new id per group execution: frames pair only within a session
+  std::filesystem::path workDir;    // where the executor may write its group file
+  // Filled by the executor, kept in every run's record:
+  std::string command;
+  std::string log;
+};
+
+// Returns an object with one entry per run key: the renderer's JSON object for that run, or
+// {"error": "why", "result": whatever it measured}. A run missing from the object failed with
+// "no result". Throwing fails every run of the group with the message (a crash, a timeout).
+using GroupExecutor = std::function<nlohmann::json(GroupRequest&)>;
+
+// The group file `bvhlab measure` reads (format in render/measure_command.hpp).
+nlohmann::json measureSpec(const std::filesystem::path& binary, const GroupRequest& request);
+
+// `BINARY measure GROUPFILE` as a child process; the timeout is the runs' timeout_s times their count.
+GroupExecutor subprocessGroupExecutor(std::filesystem::path binary = {});
+// Runs a group one run at a time through a RunExecutor (no interleaving, no pairing): what an
+// injected per-run executor (tests) gets.
+GroupExecutor sequentialGroupExecutor(RunExecutor run);
+
 }  // namespace bvhlab

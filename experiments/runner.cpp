@@ -57,27 +57,54 @@ std::string duration(double seconds) {
   return buf;
 }
 
+// Progress on stderr: on a terminal one live line, rewritten; otherwise (CI, a log file) one line per
+// finished run, so a long sweep shows it is alive.
 class Progress {
  public:
-  Progress(bool enabled, size_t total) : enabled_(enabled && ::isatty(STDERR_FILENO)), total_(total) {}
+  Progress(bool enabled, size_t total) : enabled_(enabled), tty_(::isatty(STDERR_FILENO)), total_(total) {}
   void update(size_t done, double secondsPerRun, size_t remaining, const std::string& what) {
     if (!enabled_) return;
     std::string eta = secondsPerRun > 0.0 ? " eta " + duration(secondsPerRun * double(remaining)) : "";
     std::string line = "[" + std::to_string(done) + "/" + std::to_string(total_) + "]" + eta + "  " + what;
+    if (!tty_) {
+      std::fprintf(stderr, "bvhlab run: %s\n", line.c_str());
+      return;
+    }
     if (line.size() > 110) line = line.substr(0, 107) + "...";
     std::fprintf(stderr, "\r\033[K%s", line.c_str());
     std::fflush(stderr);
     shown_ = true;
   }
+  // One line per finished run when stderr is not a terminal: what it measured, with its interval.
+  void finished(size_t done, const RunSpec& run, const json& result) {
+    if (!enabled_ || tty_) return;
+    char buf[160] = "";
+    const auto number = [&](const char* k) { return result.contains(k) && result[k].is_number() ? result[k].get<double>() : -1.0; };
+    if (number("frame_ms_ci_low") >= 0.0)
+      std::snprintf(buf, sizeof buf, "%.3g ms [%.3g, %.3g], %d frames", number("frame_ms"), number("frame_ms_ci_low"),
+                    number("frame_ms_ci_high"), int(number("frames")));
+    else if (number("frame_ms") >= 0.0)
+      std::snprintf(buf, sizeof buf, "%.3g ms, %d frames", number("frame_ms"), int(number("frames")));
+    std::fprintf(stderr, "bvhlab run: [%zu/%zu] ok %s: %s\n", done, total_, run.describe().c_str(), buf);
+  }
   void finish() {
     if (shown_) std::fprintf(stderr, "\r\033[K");
+    shown_ = false;
   }
 
  private:
-  bool enabled_;
+  bool enabled_, tty_;
   size_t total_;
   bool shown_ = false;
 };
+
+// A new id for each group execution (frames pair only within one): 16 hex digits from the clock,
+// the process id and a counter, so two shards started in the same second still differ.
+std::string newSessionId() {
+  static unsigned counter = 0;
+  const auto now = std::chrono::system_clock::now().time_since_epoch().count();
+  return hashHex(std::to_string(now) + "/" + std::to_string(::getpid()) + "/" + std::to_string(counter++));
+}
 
 // ---- the hard-case suite next to a robustness sweep --------------------------------------------------
 // When the sweep's runs (reference-only ones aside) take more than one value on the robust axis, the
@@ -196,66 +223,119 @@ SweepOutcome runSweep(const RunOptions& options) {
 
   std::map<std::string, json> records = readRecords(dir);
   ImageErrorCache cache;
-  Progress progress(options.progress, mine.size());
-  double spentSeconds = 0.0;
-  size_t done = 0;
+  // Interleaved groups go to `bvhlab measure` (or an injected group executor); a per-run executor
+  // (tests) or [measure] interleave = false gets groups of one run, each its own process.
+  const GroupExecutor interleaved = options.groupExecutor ? options.groupExecutor : subprocessGroupExecutor(options.binary);
+  const GroupExecutor oneByOne =
+      sequentialGroupExecutor(options.executor ? options.executor : subprocessExecutor(options.binary));
+  const auto alone = [&](const RunSpec& run) {
+    return (options.executor && !options.groupExecutor) || !run.render.interleave;
+  };
+
+  // Pending runs, grouped: runs with the same scene and render settings are timed by one process,
+  // frames interleaved, at most group_size at a time (experiments/README.md, "Measurement").
+  std::vector<std::vector<const RunSpec*>> groups;
+  std::map<std::string, size_t> openGroup;  // group signature -> index of its last (not full) group
   for (const RunSpec* run : mine) {
     auto it = records.find(run->key);
     if (it != records.end() && (it->second["status"] == "ok" || !options.retryFailed)) {
       ++outcome.skipped;
-      ++done;
       continue;
     }
+    const AxisValue* scene = run->axis("scene");
+    const std::string signature = (scene ? scene->value.dump() : std::string()) + run->render.groupJson().dump();
+    auto g = openGroup.find(signature);
+    if (g == openGroup.end() || groups[g->second].size() >= size_t(run->render.groupSize) || alone(*run)) {
+      groups.emplace_back();
+      g = openGroup.insert_or_assign(signature, groups.size() - 1).first;
+    }
+    groups[g->second].push_back(run);
+  }
+
+  Progress progress(options.progress, mine.size());
+  double spentSeconds = 0.0;
+  size_t done = outcome.skipped;
+  for (size_t gi = 0; gi < groups.size(); ++gi) {
+    const std::vector<const RunSpec*>& group = groups[gi];
     const size_t remaining = mine.size() - done;
     progress.update(done, outcome.executed ? spentSeconds / double(outcome.executed) : 0.0, remaining,
-                    run->describe());
+                    "group " + std::to_string(gi + 1) + "/" + std::to_string(groups.size()) + ": " +
+                        std::to_string(group.size()) + " runs, " + group.front()->describe());
 
-    RunRequest request{*run, dir.image(run->key), run->render.heatmaps ? dir.visitsImage(run->key) : fs::path(), "", ""};
-    std::error_code ec;
-    fs::remove(request.image, ec);  // a stale image from an earlier attempt must not pass as this run's
-    if (!request.visitsImage.empty()) fs::remove(request.visitsImage, ec);
-
-    json record = {{"key", run->key},
-                   {"params", run->toJson()},
-                   {"config_name", config.name},
-                   {"config_hash", config.hash},
-                   {"git_commit", commit},
-                   {"machine", machine},
-                   {"started_at", utcNow()}};
+    GroupRequest request;
+    request.session = newSessionId();
+    request.workDir = dir.root;
+    for (const RunSpec* run : group) {
+      request.runs.push_back(
+          RunRequest{*run, dir.image(run->key), run->render.heatmaps ? dir.visitsImage(run->key) : fs::path(), "", ""});
+      std::error_code ec;
+      fs::remove(request.runs.back().image, ec);  // a stale image from an earlier attempt must not pass as this run's
+      if (!request.runs.back().visitsImage.empty()) fs::remove(request.runs.back().visitsImage, ec);
+    }
+    const std::string startedAt = utcNow();
     const auto start = std::chrono::steady_clock::now();
+    json results;
+    std::string groupError;
     try {
-      json result = executor(request);
-      if (!result.is_object()) throw RunFailure("the executor returned no JSON object");
-      record["status"] = "ok";
-      record["result"] = std::move(result);
-    } catch (const RunFailure& f) {
-      record["status"] = "failed";
-      record["error"] = f.what();
-      if (!f.partialResult.is_null()) record["result"] = f.partialResult;
+      results = (alone(*group.front()) ? oneByOne : interleaved)(request);
+      if (!results.is_object()) throw RunFailure("the group executor returned no JSON object");
     } catch (const std::exception& e) {
-      record["status"] = "failed";
-      record["error"] = e.what();
+      groupError = e.what();
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    record["wall_s"] = seconds;
-    record["command"] = request.command;
-    record["log"] = tail(request.log);
-    record["image"] = fs::exists(request.image, ec) ? json("images/" + request.image.filename().string()) : json();
-    record["visits_image"] = !request.visitsImage.empty() && fs::exists(request.visitsImage, ec)
-                                 ? json("images/" + request.visitsImage.filename().string())
-                                 : json();
 
-    writeFileAtomic(dir.record(run->key), record.dump(1) + "\n");
-    records[run->key] = record;
-    ++outcome.executed;
-    ++done;
-    spentSeconds += seconds;
-    if (record["status"] != "ok") {
-      ++outcome.failed;
-      progress.finish();
-      std::cerr << "bvhlab run: run " << run->index << " (" << run->describe() << ") failed: "
-                << record["error"].get<std::string>() << "\n";
+    for (const RunRequest& req : request.runs) {
+      const RunSpec* run = &req.spec;
+      json record = {{"key", run->key},
+                     {"params", run->toJson()},
+                     {"config_name", config.name},
+                     {"config_hash", config.hash},
+                     {"git_commit", commit},
+                     {"machine", machine},
+                     {"started_at", startedAt},
+                     {"session", request.session},
+                     {"group_runs", request.runs.size()}};
+      const json* entry = groupError.empty() && results.contains(run->key) ? &results[run->key] : nullptr;
+      if (!groupError.empty()) {
+        record["status"] = "failed";
+        record["error"] = groupError + (request.runs.size() > 1 ? " (the whole group of " +
+                                                                      std::to_string(request.runs.size()) + " runs)"
+                                                                : std::string());
+      } else if (!entry || !entry->is_object()) {
+        record["status"] = "failed";
+        record["error"] = "the group's result has no entry for this run";
+      } else if (entry->contains("error")) {
+        record["status"] = "failed";
+        record["error"] = (*entry)["error"].is_string() ? (*entry)["error"].get<std::string>() : (*entry)["error"].dump();
+        if (entry->contains("result") && (*entry)["result"].is_object()) record["result"] = (*entry)["result"];
+      } else {
+        record["status"] = "ok";
+        record["result"] = *entry;
+      }
+      // The group's wall time is shared by its runs; each run's share is what the ETA needs.
+      record["wall_s"] = seconds / double(request.runs.size());
+      record["group_wall_s"] = seconds;
+      record["command"] = req.command.empty() ? request.command : req.command;
+      record["log"] = tail(req.log.empty() ? request.log : req.log);
+      std::error_code ec;
+      record["image"] = fs::exists(req.image, ec) ? json("images/" + req.image.filename().string()) : json();
+      record["visits_image"] = !req.visitsImage.empty() && fs::exists(req.visitsImage, ec)
+                                   ? json("images/" + req.visitsImage.filename().string())
+                                   : json();
+      writeFileAtomic(dir.record(run->key), record.dump(1) + "\n");
+      records[run->key] = record;
+      ++outcome.executed;
+      ++done;
+      if (record["status"] != "ok") {
+        ++outcome.failed;
+        progress.finish();
+        std::cerr << "bvhlab run: run " << run->index << " (" << run->describe() << ") failed: "
+                  << record["error"].get<std::string>() << "\n";
+      } else {
+        progress.finished(done, *run, record["result"]);
+      }
     }
+    spentSeconds += seconds;
     outcome.summary = writeResults(dir, plan, records, &cache);
   }
   progress.finish();

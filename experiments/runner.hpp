@@ -22,9 +22,10 @@ struct RunOptions {
   bool report = true;            // write DIR/report.html at the end (needs /usr/bin/python3 + matplotlib)
   std::filesystem::path binary;  // renderer; "" = this executable (also runs `hard-cases` for robust
                                  // sweeps, even with an injected executor when set explicitly)
-  RunExecutor executor;          // empty = subprocessExecutor(binary)
+  GroupExecutor groupExecutor;   // empty = executor run by run if set, else subprocessGroupExecutor(binary)
+  RunExecutor executor;          // a per-run executor (tests): groups run sequentially, unpaired
   std::optional<KnownNames> names;  // names to validate against; empty = registeredNames()
-  bool progress = true;          // progress line on stderr (only when stderr is a terminal)
+  bool progress = true;          // progress on stderr: a live line on a terminal, else one line per run
 };
 
 // Parses "I/N" (0 <= I < N); throws InputError naming the flag.

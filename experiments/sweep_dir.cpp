@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "datasets/scene.hpp"  // InputError
+#include "experiments/findings.hpp"
 
 namespace bvhlab {
 
@@ -120,9 +121,12 @@ const std::vector<std::string>& resultColumns() {
       // render settings
       "width", "height", "frames", "warmup", "backend",
       // measurements
-      "frame_ms", "frame_ms_min", "frame_ms_max", "fps", "build_ms", "sah_cost", "nodes", "leaves", "bvh_depth",
+      "frame_ms", "frame_ms_ci_low", "frame_ms_ci_high", "ci_pct", "ci_target_met", "measure_stop", "frame_ms_min",
+      "frame_ms_max", "fps", "aa_control_ratio", "aa_control_ci_low", "aa_control_ci_high", "session",
+      "build_ms", "sah_cost", "epo", "tree_hash", "nodes", "leaves", "bvh_depth",
       "bytes", "triangles", "node_visits_per_ray", "node_visits_p95", "triangle_tests_per_ray",
-      "triangle_tests_p95", "mesh_rays", "image_mae", "image_psnr", "image_error_note", "image", "visits_image",
+      "triangle_tests_p95", "ray_cost", "mesh_rays", "effective_depth", "image_mae", "image_psnr", "image_error_note",
+      "image", "visits_image",
       // provenance
       "gl_renderer", "config_name", "config_hash", "git_commit", "hostname", "cpu", "cores", "started_at",
       "wall_s", "error"};
@@ -314,6 +318,9 @@ json writeResults(const SweepDir& dir, const json& plan, const std::map<std::str
     csv << "\n";
   }
   writeFileAtomic(dir.root / "results.csv", csv.str(), false);
+  // The comparisons the report draws, with their intervals and verdicts (experiments/findings.hpp).
+  writeFileAtomic(dir.root / "findings.json",
+                  computeFindings(rows, plan["experiment"].value("axes", json::object())).dump(1) + "\n", false);
   return summary;
 }
 

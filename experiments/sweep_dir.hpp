@@ -3,6 +3,7 @@
 //   DIR/runs/KEY.json        one finished run (status ok or failed), written atomically
 //   DIR/images/KEY.png       its image; DIR/images/KEY.visits.png its visit heatmap
 //   DIR/results.json, .csv   one row per finished run of the plan, regenerated from the two above
+//   DIR/findings.json        the comparisons the report draws (experiments/findings.hpp), derived too
 //   DIR/report.html          experiments/report.py's rendering of results.json
 // Only runs/ and images/ are state; everything else is derived and may be deleted.
 #pragma once
@@ -48,7 +49,7 @@ std::map<std::string, nlohmann::json> readRecords(const SweepDir& dir);
 // Image errors are cached per (run key, reference key) within one process.
 using ImageErrorCache = std::map<std::pair<std::string, std::string>, nlohmann::json>;
 
-// Regenerates results.json and results.csv from plan.json and runs/. Returns the summary object
+// Regenerates results.json, results.csv and findings.json from plan.json and runs/. Returns the summary object
 // (planned, ok, failed, pending, stale).
 nlohmann::json writeResults(const SweepDir& dir, ImageErrorCache* cache = nullptr);
 // The same from a plan and records already in memory (the runner calls this after every run).

@@ -1,10 +1,14 @@
 #include "render/prepared_scene.hpp"
 
+#include "builders/epo.hpp"
+#include "layout/tree_hash.hpp"
+
 namespace bvhlab {
 
 std::unique_ptr<PreparedScene> prepareScene(Scene scene, const std::string& builder, const BuildOptions& options) {
   auto p = std::make_unique<PreparedScene>();
   p->scene = std::move(scene);
+  p->cost = options.cost;
   p->data = buildSceneData(p->scene);
   p->soup = gatherTriangles(p->scene);
   if (p->soup.size() > 0) {
@@ -17,6 +21,16 @@ std::unique_ptr<PreparedScene> prepareScene(Scene scene, const std::string& buil
     findBuilder(builder);  // an unknown name is still an error without a mesh
   }
   return p;
+}
+
+std::string PreparedScene::treeHash() const {
+  if (treeHash_.empty() && soup.size() > 0) treeHash_ = packedTreeHash(packed);
+  return treeHash_;
+}
+
+double PreparedScene::endPointOverlap() const {
+  if (epo_ < 0.0) epo_ = soup.size() > 0 ? bvhlab::endPointOverlap(bvh, soup.v0, soup.v1, soup.v2, cost) : 0.0;
+  return epo_;
 }
 
 }  // namespace bvhlab

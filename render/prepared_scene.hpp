@@ -18,6 +18,16 @@ struct PreparedScene {
   Bvh bvh;
   PackedBvh packed;
   BuildStats stats;  // empty (primitives == 0) when the scene has no triangles
+  CostModel cost;    // the model the tree was built (and its SAH computed) with
+
+  // Clock-free identity and quality of the tree, computed on first use (EPO costs a pass over the
+  // tree; `render` without --json never needs it). Both are 0 / "" without triangles.
+  std::string treeHash() const;        // layout/tree_hash.hpp: equal streams -> equal hash
+  double endPointOverlap() const;      // builders/epo.hpp, with `cost`
+
+ private:
+  mutable std::string treeHash_;
+  mutable double epo_ = -1.0;  // < 0: not computed yet
 };
 
 // `scene` is moved in; SceneData points into it, so PreparedScene is not copyable.

@@ -602,7 +602,8 @@ TEST_F(Experiments, SubprocessExecutorRecordsOutputCrashesAndTimeouts) {
   writeText(root / "m.off", "OFF\n0 0 0\n");
   writeText(root / "cfg.toml",
             "[render]\nwidth = 8\nheight = 4\ntimeout_s = 1.0\nenv = { FAKE_RENDER_PNG = '" + png.string() +
-                "' }\n[axes]\nscenes = 'm.off'\nkernels = ['good', 'crash', 'bad-json', 'hang', 'exit4', 'badflag']\n");
+                "' }\n[measure]\ninterleave = false\n[axes]\nscenes = 'm.off'\n"
+                "kernels = ['good', 'crash', 'bad-json', 'hang', 'exit4', 'badflag']\n");
   RunOptions o;
   o.config = root / "cfg.toml";
   o.outDir = root / "out";

@@ -1,0 +1,340 @@
+#include "experiments/findings.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "experiments/config.hpp"
+#include "render/frame_stats.hpp"
+
+namespace bvhlab {
+
+using nlohmann::json;
+
+const std::vector<std::string>& findingDesignAxes() {
+  static const std::vector<std::string> axes = {"builder", "kernel", "leaf_size"};
+  return axes;
+}
+
+const std::vector<std::string>& findingKnobAxes() {
+  static const std::vector<std::string> axes = {"depth",     "storage", "aa",   "robust",
+                                                "branching", "view",    "uber", "smaa_edges"};
+  return axes;
+}
+
+namespace {
+
+// The counts shown beside every ratio (exact, clock-free).
+const char* const kCounts[] = {"sah_cost", "epo", "node_visits_per_ray", "triangle_tests_per_ray", "ray_cost"};
+// The measures whose rank correlation with frame time the report shows.
+const char* const kPredictors[] = {"sah_cost", "epo", "node_visits_per_ray", "ray_cost"};
+// Axes that change the tree but not the shader: two runs differing only here, with equal tree
+// hashes, are the same computation.
+const std::set<std::string> kTreeAxes = {"builder", "leaf_size"};
+// Misranked pairs listed per context (the largest ratios first): enough to see a pattern.
+constexpr size_t kMaxMisrankedPerContext = 10;
+
+std::vector<std::string> comparedAxes() {
+  std::vector<std::string> out;
+  for (const AxisInfo& a : experimentAxes())
+    if (a.singular != "scene") out.emplace_back(a.singular);
+  return out;
+}
+
+std::string label(const json& row, const std::string& axis) {
+  auto it = row.find(axis);
+  if (it == row.end() || it->is_null()) return "";
+  if (it->is_string()) return it->get<std::string>();
+  if (it->is_boolean()) return it->get<bool>() ? "true" : "false";
+  if (it->is_number_integer()) return std::to_string(it->get<int64_t>());
+  return it->dump();
+}
+
+std::optional<double> number(const json& row, const char* key) {
+  auto it = row.find(key);
+  if (it == row.end() || !it->is_number()) return std::nullopt;
+  const double v = it->get<double>();
+  if (!std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+std::vector<double> frames(const json& row) {
+  std::vector<double> out;
+  if (auto it = row.find("frame_ms_all"); it != row.end() && it->is_array())
+    for (const json& v : *it)
+      if (v.is_number()) out.push_back(v.get<double>());
+  return out;
+}
+
+std::string session(const json& row) {
+  auto it = row.find("session");
+  return it != row.end() && it->is_string() ? it->get<std::string>() : "";
+}
+
+// "stack-ordered leaf_size=4": the values of `axes` that vary in the scene, for people.
+std::string describe(const json& row, const std::vector<std::string>& axes) {
+  std::string out;
+  for (const std::string& a : axes) {
+    const std::string v = label(row, a);
+    if (v.empty()) continue;
+    if (!out.empty()) out += ' ';
+    out += (a == "builder" || a == "kernel") ? v : a + "=" + v;
+  }
+  return out;
+}
+
+std::optional<double> correlationOf(const std::vector<const json*>& rows, const char* metric) {
+  std::vector<double> x, y;
+  for (const json* r : rows) {
+    const auto m = number(*r, metric);
+    const auto t = number(*r, "frame_ms");
+    if (!m || !t) return std::nullopt;  // a run without the measure: no honest correlation
+    x.push_back(*m);
+    y.push_back(*t);
+  }
+  return spearman(x, y);
+}
+
+class Finder {
+ public:
+  Finder(const json& rows, const json& axisOrder) : axisOrder_(axisOrder) {
+    for (const json& r : rows)
+      if (r.value("status", "") == "ok" && !r.value("reference_only", false) && number(r, "frame_ms"))
+        ok_.push_back(&r);
+    // The noise band of each session: how far its A/A control's interval reaches from 1.
+    for (const json* r : ok_)
+      if (const auto lo = number(*r, "aa_control_ci_low"), hi = number(*r, "aa_control_ci_high"); lo && hi && *lo > 0.0)
+        band_[session(*r)] = std::max(std::abs(std::log(*lo)), std::abs(std::log(*hi)));
+  }
+
+  json run() {
+    out_ = {{"format", 1},
+            {"comparisons", json::array()},
+            {"noise", json::array()},
+            {"predictors", json::array()},
+            {"misranked", json::array()},
+            {"skipped", json::array()}};
+    std::vector<std::string> scenes;
+    for (const json* r : ok_)
+      if (std::find(scenes.begin(), scenes.end(), label(*r, "scene")) == scenes.end())
+        scenes.push_back(label(*r, "scene"));
+    for (const std::string& scene : scenes) {
+      std::vector<const json*> rows;
+      for (const json* r : ok_)
+        if (label(*r, "scene") == scene) rows.push_back(r);
+      sceneFindings(scene, rows);
+    }
+    return out_;
+  }
+
+ private:
+  // The axes that take more than one value among `rows`.
+  std::vector<std::string> varying(const std::vector<const json*>& rows, const std::set<std::string>& skip = {}) {
+    std::vector<std::string> out;
+    for (const std::string& a : comparedAxes()) {
+      if (skip.count(a)) continue;
+      std::set<std::string> values;
+      for (const json* r : rows) values.insert(label(*r, a));
+      if (values.size() > 1) out.push_back(a);
+    }
+    return out;
+  }
+
+  double bandOf(const json& a, const json& b) {
+    double band = 0.0;
+    for (const json* r : {&a, &b})
+      if (auto it = band_.find(session(*r)); it != band_.end()) band = std::max(band, it->second);
+    return band;
+  }
+
+  bool sameComputation(const json& a, const json& b) {
+    const std::string ha = label(a, "tree_hash"), hb = label(b, "tree_hash");
+    if (ha.empty() || ha != hb) return false;
+    for (const std::string& axis : comparedAxes())
+      if (!kTreeAxes.count(axis) && label(a, axis) != label(b, axis)) return false;
+    return true;
+  }
+
+  json compare(const json& a, const json& b, const std::string& scene, const std::string& kind,
+               const std::string& axis, const std::string& context) {
+    json c = {{"scene", scene},
+              {"kind", kind},
+              {"axis", axis.empty() ? json() : json(axis)},
+              {"a", a["key"]},
+              {"b", b["key"]},
+              {"a_label", axis.empty() ? json() : json(label(a, axis))},
+              {"b_label", axis.empty() ? json() : json(label(b, axis))},
+              {"a_description", describe(a, contextAxes_)},
+              {"b_description", describe(b, contextAxes_)},
+              {"context", context},
+              {"metric", "frame_ms"}};
+    const std::vector<double> fa = frames(a), fb = frames(b);
+    const bool paired = !session(a).empty() && session(a) == session(b) && fa.size() == fb.size() && !fa.empty();
+    std::optional<Interval> ratio;
+    if (paired)
+      ratio = pairedRatio(fa, fb);
+    else
+      ratio = unpairedRatio(fa, fb, std::hash<std::string>{}(label(a, "key") + "/" + label(b, "key")));
+    const double band = bandOf(a, b);
+    c["paired"] = paired;
+    c["band"] = band;
+    c["n"] = ratio ? ratio->n : std::min(fa.size(), fb.size());
+    c["ratio"] = ratio ? ratio->estimate : *number(a, "frame_ms") / *number(b, "frame_ms");
+    c["ci_low"] = ratio ? json(ratio->low) : json();
+    c["ci_high"] = ratio ? json(ratio->high) : json();
+    std::string verdict = "no detectable difference";
+    if (sameComputation(a, b))
+      verdict = "same tree";
+    else if (ratio && ratio->high < std::exp(-band))
+      verdict = "faster";
+    else if (ratio && ratio->low > std::exp(band))
+      verdict = "slower";
+    c["verdict"] = verdict;
+    json counts = json::object();
+    for (const char* k : kCounts) {
+      const auto x = number(a, k), y = number(b, k);
+      counts[k] = json::array({x ? json(*x) : json(), y ? json(*y) : json()});
+    }
+    c["counts"] = counts;
+    return c;
+  }
+
+  void sceneFindings(const std::string& scene, const std::vector<const json*>& rows) {
+    contextAxes_ = varying(rows);
+    // Noise floor: every run that carries an A/A control.
+    for (const json* r : rows)
+      if (const auto ratio = number(*r, "aa_control_ratio"))
+        out_["noise"].push_back({{"scene", scene},
+                                 {"key", (*r)["key"]},
+                                 {"session", session(*r)},
+                                 {"description", describe(*r, contextAxes_)},
+                                 {"ratio", *ratio},
+                                 {"ci_low", (*r).value("aa_control_ci_low", json())},
+                                 {"ci_high", (*r).value("aa_control_ci_high", json())},
+                                 {"n", frames(*r).size()}});
+
+    const bool deep = std::any_of(rows.begin(), rows.end(), [](const json* r) {
+      return number(*r, "effective_depth").value_or(2.0) > 1.0;  // unknown: assume it matters
+    });
+    for (const std::string& axis : contextAxes_) {
+      const bool design = std::find(findingDesignAxes().begin(), findingDesignAxes().end(), axis) != findingDesignAxes().end();
+      const bool knob = std::find(findingKnobAxes().begin(), findingKnobAxes().end(), axis) != findingKnobAxes().end();
+      if (!design && !knob) continue;
+      if (axis == "depth" && !deep) {
+        out_["skipped"].push_back("depth comparisons on " + scene +
+                                  " skipped: its effective depth is 1 at every depth (nothing to reflect or refract)");
+        continue;
+      }
+      std::vector<std::string> others;
+      for (const std::string& a : contextAxes_)
+        if (a != axis) others.push_back(a);
+      std::map<std::string, std::vector<const json*>> contexts;
+      std::vector<std::string> order;
+      for (const json* r : rows) {
+        const std::string ctx = describe(*r, others);
+        if (!contexts.count(ctx)) order.push_back(ctx);
+        contexts[ctx].push_back(r);
+      }
+      for (const std::string& ctx : order) {
+        const std::vector<const json*>& members = contexts[ctx];
+        if (members.size() < 2) continue;
+        const json* base = nullptr;
+        if (design) {
+          base = *std::min_element(members.begin(), members.end(), [](const json* x, const json* y) {
+            return *number(*x, "frame_ms") < *number(*y, "frame_ms");
+          });
+        } else {
+          const json values = axisOrder_.value(axis, json::array());
+          const std::string first = values.empty() ? std::string() : values[0].is_string() ? values[0].get<std::string>() : values[0].dump();
+          for (const json* r : members)
+            if (label(*r, axis) == first) base = r;
+          if (!base) continue;  // the baseline value is not in this context
+        }
+        for (const json* r : members)
+          if (r != base) out_["comparisons"].push_back(compare(*r, *base, scene, "axis", axis, ctx));
+      }
+    }
+
+    // Each builder at its best against the scene's fastest run.
+    std::map<std::string, const json*> bestOf;
+    for (const json* r : rows) {
+      const json*& best = bestOf[label(*r, "builder")];
+      if (!best || *number(*r, "frame_ms") < *number(*best, "frame_ms")) best = r;
+    }
+    if (bestOf.size() > 1) {
+      const json* top = nullptr;
+      for (const auto& [b, r] : bestOf)
+        if (!top || *number(*r, "frame_ms") < *number(*top, "frame_ms")) top = r;
+      for (const auto& [b, r] : bestOf)
+        if (r != top) out_["comparisons"].push_back(compare(*r, *top, scene, "builder-best", "builder", "each at its best"));
+    }
+
+    predictors(scene, rows);
+  }
+
+  // Within each context of fixed kernel and knobs (the trees vary): how well each clock-free measure
+  // ranks the runs by time, and the pairs SAH ranks wrongly.
+  void predictors(const std::string& scene, const std::vector<const json*>& rows) {
+    std::vector<std::string> fixed;
+    for (const std::string& a : contextAxes_)
+      if (!kTreeAxes.count(a)) fixed.push_back(a);
+    std::map<std::string, std::vector<const json*>> contexts;
+    std::vector<std::string> order;
+    for (const json* r : rows) {
+      const std::string ctx = describe(*r, fixed);
+      if (!contexts.count(ctx)) order.push_back(ctx);
+      contexts[ctx].push_back(r);
+    }
+    for (const std::string& ctx : order) {
+      const std::vector<const json*>& members = contexts[ctx];
+      if (members.size() < 4) continue;  // fewer points rank nothing worth a number
+      json rho = json::object();
+      for (const char* m : kPredictors) {
+        const auto v = correlationOf(members, m);
+        rho[m] = v ? json(*v) : json();
+      }
+      out_["predictors"].push_back({{"scene", scene}, {"context", ctx}, {"n", members.size()}, {"spearman", rho}});
+
+      std::vector<json> wrong;
+      for (const json* x : members)
+        for (const json* y : members) {
+          const auto sx = number(*x, "sah_cost"), sy = number(*y, "sah_cost");
+          // Strictly cheaper by SAH, beyond float noise in the cost itself (1e-6 relative: the
+          // cost is summed in double from float areas).
+          if (!sx || !sy || !(*sx < *sy * (1.0 - 1e-6))) continue;
+          json c = compare(*x, *y, scene, "misranked", "", ctx);
+          if (c["verdict"] != "slower") continue;
+          wrong.push_back({{"scene", scene},
+                           {"context", ctx},
+                           {"a", c["a"]},
+                           {"b", c["b"]},
+                           {"a_label", c["a_description"]},
+                           {"b_label", c["b_description"]},
+                           {"sah", json::array({*sx, *sy})},
+                           {"ratio", c["ratio"]},
+                           {"ci_low", c["ci_low"]},
+                           {"ci_high", c["ci_high"]}});
+        }
+      std::sort(wrong.begin(), wrong.end(),
+                [](const json& p, const json& q) { return p["ratio"].get<double>() > q["ratio"].get<double>(); });
+      if (wrong.size() > kMaxMisrankedPerContext) wrong.resize(kMaxMisrankedPerContext);
+      for (json& w : wrong) out_["misranked"].push_back(std::move(w));
+    }
+  }
+
+  const json& axisOrder_;
+  std::vector<const json*> ok_;
+  std::map<std::string, double> band_;
+  std::vector<std::string> contextAxes_;
+  json out_;
+};
+
+}  // namespace
+
+json computeFindings(const json& rows, const json& axisOrder) { return Finder(rows, axisOrder).run(); }
+
+}  // namespace bvhlab

@@ -1,0 +1,251 @@
+#include "render/measure_command.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <limits>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <random>
+
+#include "datasets/scene_io.hpp"
+#include "render/frame_stats.hpp"
+#include "render/render_cli.hpp"
+#include "render/render_job.hpp"
+
+namespace bvhlab {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// One entry of the round-robin: a run of the group, or the A/A control of the first run.
+struct Entry {
+  std::string key;
+  RenderCommand cmd;
+  RenderSetup setup;
+  std::shared_ptr<const PreparedScene> prepared;
+  std::unique_ptr<GpuJob> job;
+  FrameTimes times;
+  std::string error;
+  bool control = false;
+  bool alive() const { return job != nullptr && error.empty(); }
+};
+
+int intField(const json& spec, const char* name, int fallback, int lo, int hi) {
+  if (!spec.contains(name)) return fallback;
+  if (!spec[name].is_number_integer()) throw std::invalid_argument(std::string("group file: ") + name + ": not an integer");
+  const int64_t v = spec[name].get<int64_t>();
+  if (v < lo || v > hi)
+    throw std::invalid_argument(std::string("group file: ") + name + ": " + std::to_string(v) + " outside " +
+                                std::to_string(lo) + ".." + std::to_string(hi));
+  return int(v);
+}
+
+// Half-width of the run's 95% interval of the median, in % of the median; +inf when there is none.
+double intervalPct(const std::vector<double>& ms) {
+  const auto ci = medianInterval(ms);
+  if (!ci || !(ci->estimate > 0.0)) return std::numeric_limits<double>::infinity();
+  return 50.0 * (ci->high - ci->low) / ci->estimate;
+}
+
+std::string elapsed(std::chrono::steady_clock::time_point since) {
+  return std::to_string(
+             int(std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count() + 0.5)) +
+         " s";
+}
+
+}  // namespace
+
+json measureGroup(const json& spec) {
+  if (!spec.is_object() || !spec.contains("runs") || !spec["runs"].is_array() || spec["runs"].empty())
+    throw std::invalid_argument("group file: needs a non-empty \"runs\" list");
+  const int minFrames = intField(spec, "min_frames", 10, 1, 100000);
+  const int maxFrames = intField(spec, "max_frames", minFrames, minFrames, 100000);
+  const double targetPct = spec.value("target_ci_pct", 2.0);
+  if (!(targetPct > 0.0 && targetPct <= 100.0)) throw std::invalid_argument("group file: target_ci_pct outside (0, 100]");
+  const bool wantControl = spec.value("aa_control", true) && maxFrames >= int(kMinValuesForInterval);
+  const std::string session = spec.value("session", std::string("unnamed"));
+  const auto start = std::chrono::steady_clock::now();
+
+  // ---- set up and build every run (CPU): one scene load per input, one tree per tree key --------
+  std::vector<std::unique_ptr<Entry>> entries;
+  std::map<std::string, Scene> scenes;
+  std::map<std::string, std::shared_ptr<const PreparedScene>> trees;
+  for (const json& run : spec["runs"]) {
+    auto e = std::make_unique<Entry>();
+    e->key = run.value("key", std::string());
+    if (e->key.empty()) throw std::invalid_argument("group file: a run without a \"key\"");
+    try {
+      std::vector<std::string> args;
+      for (const json& a : run.at("args")) args.push_back(a.get<std::string>());
+      e->cmd = parseRenderArgs(args);
+      if (e->cmd.cpu) throw std::invalid_argument("--cpu runs are not timed by measure (render them alone)");
+      auto scene = scenes.find(e->cmd.input);
+      if (scene == scenes.end()) scene = scenes.emplace(e->cmd.input, loadInput(e->cmd.input)).first;
+      e->setup = setupRender(e->cmd, &scene->second);
+      const std::string tk = treeKey(e->cmd);
+      auto tree = trees.find(tk);
+      if (tree == trees.end())
+        tree = trees.emplace(tk, prepareScene(std::move(e->setup.scene), e->cmd.builder, e->setup.build)).first;
+      e->prepared = tree->second;
+    } catch (const std::exception& ex) {
+      e->error = ex.what();
+    }
+    entries.push_back(std::move(e));
+  }
+  scenes.clear();  // every tree holds its own copy
+
+  // ---- GL: one context, one program per entry ------------------------------------------------------
+  const Backend backend = entries.front()->error.empty() ? entries.front()->setup.backend : Backend::OSMesa;
+  std::unique_ptr<GlContext> ctx = createContext(backend);
+  const std::string renderer = ctx->renderer();
+  for (auto& e : entries) {
+    if (!e->error.empty()) continue;
+    if (e->setup.backend != backend) {
+      e->error = "a group shares one GL context: every run needs the same --backend";
+      continue;
+    }
+    try {
+      e->job = std::make_unique<GpuJob>(e->cmd, e->setup, e->prepared);
+    } catch (const std::exception& ex) {
+      e->error = std::string(dynamic_cast<const ShaderError*>(&ex) ? "shader error: " : "") + ex.what();
+    }
+  }
+  // The A/A control: the first run that works, measured a second time by a second program.
+  Entry* controlled = nullptr;
+  if (wantControl) {
+    auto first = std::find_if(entries.begin(), entries.end(), [](const auto& e) { return e->alive(); });
+    if (first != entries.end()) {
+      const Entry& original = **first;
+      auto c = std::make_unique<Entry>();
+      c->key = original.key;
+      c->cmd = original.cmd;
+      c->setup.shader = original.setup.shader;
+      c->setup.path = original.setup.path;
+      c->setup.smaaOn = original.setup.smaaOn;
+      c->setup.smaa = original.setup.smaa;
+      c->prepared = original.prepared;
+      c->control = true;
+      try {
+        c->job = std::make_unique<GpuJob>(c->cmd, c->setup, c->prepared);
+        controlled = first->get();
+        entries.push_back(std::move(c));
+      } catch (const std::exception& ex) {
+        std::cerr << "bvhlab measure: warning: no A/A control: " << ex.what() << "\n";
+      }
+    }
+  }
+  std::cerr << "bvhlab measure: " << entries.size() << " entries ready (" << elapsed(start) << ")\n";
+
+  // ---- warm-up, then rounds in a shuffled order until every interval is narrow enough -------------
+  auto draw = [&](Entry& e, int index, bool timed) {
+    try {
+      double aaMs = 0.0;
+      const double ms = e.job->frame(index, aaMs);
+      if (timed) {
+        e.times.ms.push_back(ms);
+        if (e.setup.smaaOn) e.times.aaMs.push_back(aaMs);
+      }
+    } catch (const std::exception& ex) {
+      e.error = std::string("frame failed: ") + ex.what();
+      e.job.reset();
+    }
+  };
+  int warmup = 0;
+  for (auto& e : entries)
+    if (e->alive()) warmup = std::max(warmup, e->cmd.warmup);
+  for (int w = 0; w < warmup; ++w)
+    for (auto& e : entries)
+      if (e->alive() && w < e->cmd.warmup) draw(*e, w, false);
+
+  std::vector<size_t> order(entries.size());
+  std::iota(order.begin(), order.end(), size_t(0));
+  std::mt19937_64 rng(0x5eed);  // fixed: the same group draws in the same orders every time
+  int rounds = 0;
+  std::string stop = minFrames == maxFrames ? "fixed" : "max_frames";
+  while (rounds < maxFrames) {
+    // Fisher-Yates with the generator's raw output (std::shuffle's use of it is implementation-defined).
+    for (size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[size_t(rng() % i)]);
+    for (size_t i : order)
+      if (entries[i]->alive()) draw(*entries[i], rounds, true);
+    ++rounds;
+    if (rounds < minFrames || minFrames == maxFrames) continue;
+    double widest = 0.0;
+    for (auto& e : entries)
+      if (e->alive()) widest = std::max(widest, intervalPct(e->times.ms));
+    if (rounds % 10 == 0)
+      std::cerr << "bvhlab measure: round " << rounds << ": widest interval ±" << widest << "% (" << elapsed(start)
+                << ")\n";
+    if (widest <= targetPct) {
+      stop = "target";
+      break;
+    }
+  }
+
+  // ---- images, counts, JSON --------------------------------------------------------------------------
+  json out = {{"session", session}, {"rounds", rounds}, {"stop", stop}, {"renderer", renderer}};
+  json runs = json::object();
+  const Entry* control = nullptr;
+  for (auto& e : entries) {
+    if (e->control) {
+      control = e.get();
+      continue;
+    }
+    if (!e->error.empty()) {
+      runs[e->key] = {{"error", e->error}};
+      continue;
+    }
+    try {
+      e->times.stop = stop;
+      e->times.targetCiPct = minFrames == maxFrames ? 0.0 : targetPct;
+      const bool wantStats = e->cmd.json || e->cmd.view == "visits" || !e->cmd.visitsOutput.empty();
+      e->job->finish(wantStats);
+      json r = finishRender(e->cmd, e->setup, *e->prepared, e->job->frameOptions(), std::move(e->job->image),
+                            e->job->stats, e->times, renderer, false);
+      r["session"] = session;
+      r["rounds"] = rounds;
+      const uint64_t overflows = stackOverflowPixels(e->job->stats);
+      e->job.reset();
+      if (overflows > 0)
+        runs[e->key] = {{"error", "traversal stack overflowed in " + std::to_string(overflows) + " pixels"},
+                        {"result", r}};
+      else
+        runs[e->key] = std::move(r);
+    } catch (const std::exception& ex) {
+      runs[e->key] = {{"error", ex.what()}};
+    }
+  }
+  if (controlled && control && runs[controlled->key].contains("frame_ms")) {
+    json& r = runs[controlled->key];
+    r["aa_control_frame_ms_all"] = control->times.ms;
+    // original / control from paired rounds: an interval that excludes 1 would mean the round-robin
+    // itself favours one program (the report prints it as the sweep's noise floor).
+    if (const auto ratio = pairedRatio(controlled->times.ms, control->times.ms)) {
+      r["aa_control_ratio"] = ratio->estimate;
+      r["aa_control_ci_low"] = ratio->low;
+      r["aa_control_ci_high"] = ratio->high;
+    }
+  }
+  out["runs"] = std::move(runs);
+  out["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+int runMeasure(const MeasureCommand& cmd) {
+  std::ifstream in(cmd.spec);
+  if (!in) throw std::invalid_argument(cmd.spec + ": cannot open the group file");
+  json spec;
+  try {
+    spec = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw std::invalid_argument(cmd.spec + ": not valid JSON (" + e.what() + ")");
+  }
+  std::cout << measureGroup(spec).dump() << std::endl;
+  return 0;
+}
+
+}  // namespace bvhlab

@@ -1,0 +1,241 @@
+#include "render/render_job.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include <glad/gl.h>
+
+#include "datasets/image_io.hpp"
+#include "datasets/scene_io.hpp"
+#include "render/frame_stats.hpp"
+#include "render/heatmap.hpp"
+#include "traversal/kernels.hpp"
+
+namespace bvhlab {
+
+namespace {
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  size_t i = std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5));
+  return v[i];
+}
+
+std::string vecText(const glm::dvec3& v) {
+  return std::to_string(v.x) + "," + std::to_string(v.y) + "," + std::to_string(v.z);
+}
+
+}  // namespace
+
+RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
+  RenderSetup s;
+  if (!cmd.cameraPath.empty()) {
+    if (cmd.eye || cmd.target || cmd.up || cmd.fov)
+      throw std::invalid_argument("--camera-path sets the camera; drop --eye/--target/--up/--fov");
+    s.path = loadCameraPath(cmd.cameraPath);  // before the scene: a bad path fails fast
+  }
+  s.scene = loaded ? *loaded : loadInput(cmd.input);
+  Scene& scene = s.scene;
+  if (!s.path.empty()) scene.camera = s.path.front().camera;
+  RenderSettings& rs = scene.settings;
+  if (cmd.width) rs.width = *cmd.width;
+  if (cmd.height) rs.height = *cmd.height;
+  if (cmd.depth) rs.maxDepth = *cmd.depth;
+  if (cmd.exposure) rs.exposure = *cmd.exposure;
+  // --eye/--target are world coordinates; a far scene is stored relative to Scene::origin.
+  if (cmd.eye) scene.camera.eye = glm::vec3(*cmd.eye - scene.origin);
+  if (cmd.target) scene.camera.target = glm::vec3(*cmd.target - scene.origin);
+  if (cmd.up) scene.camera.up = *cmd.up;
+  if (cmd.fov) scene.camera.fovDeg = *cmd.fov;
+  if (rs.width < 1 || rs.height < 1 || rs.width > 16384 || rs.height > 16384)
+    throw std::invalid_argument("--width/--height must be in 1..16384");
+  if (rs.maxDepth < 1 || rs.maxDepth > 64) throw std::invalid_argument("--depth must be in 1..64");
+  if (cmd.frames < 1 || cmd.warmup < 0) throw std::invalid_argument("--frames must be >= 1 and --warmup >= 0");
+  if (cmd.leafSize < 1 || cmd.leafSize > int(kMaxLeafSize))
+    throw std::invalid_argument("--leaf-size must be in 1.." + std::to_string(kMaxLeafSize));
+
+  ShaderOptions& so = s.shader;
+  so.maxDepth = rs.maxDepth;
+  so.view = cmd.view == "visits" ? View::Shaded : parseView(cmd.view);
+  so.branching = parseBranching(cmd.branching);
+  so.kernel = findKernel(cmd.kernel).name;
+  so.storage = parseStorage(cmd.storage);
+  so.reinhard = rs.reinhard;
+  so.uber = cmd.uber;
+  so.robust = parseRobustness(cmd.robust);
+  s.backend = parseBackend(cmd.backend);
+  // "smaa-PRESET" is "smaa" with --smaa-preset PRESET, so an experiment axis can sweep the presets.
+  const bool smaaNamed = cmd.aa.rfind("smaa-", 0) == 0;
+  if (cmd.aa != "none" && cmd.aa != "smaa" && !smaaNamed && cmd.aa != "ssaa4" && cmd.aa != "ssaa16")
+    throw std::invalid_argument("unknown --aa '" + cmd.aa +
+                                "' (valid: none, smaa, smaa-low, smaa-medium, smaa-high, smaa-ultra, ssaa4, ssaa16)");
+  so.ssaaGrid = cmd.aa == "ssaa4" ? 2 : cmd.aa == "ssaa16" ? 4 : 1;
+  s.smaaOn = cmd.aa == "smaa" || smaaNamed;
+  s.smaaPreset = smaaNamed ? cmd.aa.substr(5) : cmd.smaaPreset;
+  s.smaa = SmaaSettings::preset(parseSmaaPreset(s.smaaPreset));
+  if (cmd.smaaEdges == "color")
+    s.smaa.edgeMode = SmaaEdgeMode::Color;
+  else if (cmd.smaaEdges != "luma")
+    throw std::invalid_argument("--smaa-edges: unknown mode '" + cmd.smaaEdges + "' (valid: luma, color)");
+  if (s.smaaOn && cmd.cpu) throw std::invalid_argument("--aa smaa runs on the GPU only (no --cpu)");
+
+  s.build.maxLeafSize = uint32_t(cmd.leafSize);
+  s.build.bins = uint32_t(std::max(0, cmd.bins));
+  return s;
+}
+
+std::string treeKey(const RenderCommand& c) {
+  std::string key = c.input + "|" + c.builder + "|" + std::to_string(c.leafSize) + "|" + std::to_string(c.bins) +
+                    "|" + c.cameraPath;
+  for (const auto& v : {c.width, c.height, c.depth}) key += "|" + (v ? std::to_string(*v) : std::string("-"));
+  for (const auto& v : {c.eye, c.target}) key += "|" + (v ? vecText(*v) : std::string("-"));
+  key += "|" + (c.up ? vecText(glm::dvec3(*c.up)) : std::string("-"));
+  key += "|" + (c.fov ? std::to_string(*c.fov) : std::string("-"));
+  key += "|" + (c.exposure ? std::to_string(*c.exposure) : std::string("-"));
+  return key;
+}
+
+GpuJob::GpuJob(const RenderCommand& cmd, const RenderSetup& setup, std::shared_ptr<const PreparedScene> prepared)
+    : prepared_(std::move(prepared)), shader_(setup.shader), path_(setup.path) {
+  const Scene& sc = prepared_->scene;
+  shader_.bvhStackSize = stackSizeFor(std::max<uint32_t>(1, prepared_->packed.depth));
+  frame_.width = sc.settings.width;
+  frame_.height = sc.settings.height;
+  frame_.camera = sc.camera;
+  frame_.exposure = sc.settings.exposure;
+  gpu_ = std::make_unique<GpuRenderer>(*prepared_, shader_, frame_);
+  if (setup.smaaOn) smaa_ = std::make_unique<SmaaPass>(frame_.width, frame_.height, setup.smaa);
+}
+
+double GpuJob::frame(int index, double& aaMs) {
+  if (!path_.empty()) gpu_->setCamera(path_[size_t(index) % path_.size()].camera);
+  const double ms = gpu_->drawFrame();
+  aaMs = 0.0;
+  if (!smaa_) return ms;
+  const auto start = std::chrono::steady_clock::now();
+  smaa_->apply(gpu_->colorTexture());
+  glFinish();
+  aaMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return ms + aaMs;
+}
+
+void GpuJob::finish(bool wantStats) {
+  double aaMs = 0.0;
+  if (!path_.empty()) frame(0, aaMs);  // the saved image is pose 0's
+  image = smaa_ ? smaa_->readOutput() : gpu_->readColor();
+  gpu_.reset();
+  smaa_.reset();
+  if (wantStats) {
+    ShaderOptions counted = shader_;
+    counted.countStats = true;
+    FrameOptions fo = frame_;
+    if (!path_.empty()) fo.camera = path_.front().camera;
+    GpuRenderer gpu(*prepared_, counted, fo);
+    gpu.drawFrame();
+    stats = gpu.readStats();
+  }
+}
+
+uint64_t stackOverflowPixels(const std::vector<glm::uvec4>& stats) {
+  uint64_t n = 0;
+  for (const glm::uvec4& p : stats) n += (p.z >> 31);
+  return n;
+}
+
+nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, const PreparedScene& prepared,
+                            const FrameOptions& fo, std::vector<uint8_t> image, const std::vector<glm::uvec4>& stats,
+                            const FrameTimes& times, const std::string& renderer, bool cpu) {
+  const ShaderOptions& so = setup.shader;
+  // Per-ray statistics: totals over the frame divided by rays traced into the mesh; p95 over pixels
+  // of each pixel's own per-ray mean.
+  uint64_t visits = 0, tests = 0, rays = 0, nonfinite = 0;
+  std::vector<double> pixelVisits, pixelTests;
+  for (const glm::uvec4& p : stats) {
+    const uint32_t r = p.z & 0x7FFFFFFFu;
+    nonfinite += (p.w >> 31);  // radiance NaN or infinite before tone mapping (main.glsl's nonFinite)
+    visits += p.x;
+    tests += p.y;
+    rays += r;
+    if (r > 0) {
+      pixelVisits.push_back(double(p.x) / r);
+      pixelTests.push_back(double(p.y) / r);
+    }
+  }
+  const bool visitsView = cmd.view == "visits";
+  if (!cmd.visitsOutput.empty() || visitsView) {
+    std::vector<uint8_t> heat = visitsHeatmap(stats, fo.width, fo.height);
+    if (!cmd.visitsOutput.empty()) saveImageRgba8(cmd.visitsOutput, fo.width, fo.height, heat);
+    if (visitsView) image = std::move(heat);
+  }
+  if (!cmd.output.empty()) saveImageRgba8(cmd.output, fo.width, fo.height, image);
+
+  nlohmann::json out;
+  const BuildStats& b = prepared.stats;
+  const std::vector<double>& ms = times.ms;
+  out["input"] = cmd.input;
+  out["image"] = cmd.output;
+  out["frame_ms"] = medianOf(ms);
+  out["frame_ms_min"] = ms.empty() ? 0.0 : *std::min_element(ms.begin(), ms.end());
+  out["frame_ms_max"] = ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end());
+  // The median's 95% order-statistic interval (render/frame_stats.hpp); null below 6 frames.
+  const auto ci = medianInterval(ms);
+  out["frame_ms_ci_low"] = ci ? nlohmann::json(ci->low) : nlohmann::json();
+  out["frame_ms_ci_high"] = ci ? nlohmann::json(ci->high) : nlohmann::json();
+  out["ci_pct"] = ci && ci->estimate > 0.0 ? nlohmann::json(50.0 * (ci->high - ci->low) / ci->estimate)
+                                           : nlohmann::json();
+  out["ci_target_pct"] = times.targetCiPct > 0.0 ? nlohmann::json(times.targetCiPct) : nlohmann::json();
+  out["ci_target_met"] = times.targetCiPct > 0.0 && ci && out["ci_pct"].get<double>() <= times.targetCiPct;
+  out["measure_stop"] = times.stop;
+  out["frame_ms_all"] = ms;
+  out["frames"] = ms.size();
+  out["warmup"] = cpu ? 0 : cmd.warmup;
+  out["width"] = fo.width;
+  out["height"] = fo.height;
+  out["depth"] = so.maxDepth;
+  out["effective_depth"] = effectiveDepth(analyzeScene(prepared.scene), so.maxDepth, so.uber);
+  out["backend"] = cpu ? "cpu" : backendName(setup.backend);
+  out["renderer"] = renderer;
+  out["view"] = cmd.view;
+  out["uber"] = so.uber;
+  out["branching"] = branchingName(so.branching);
+  out["storage"] = storageName(so.storage);
+  out["aa"] = cmd.aa;
+  out["robust"] = robustnessName(so.robust);
+  if (!setup.path.empty()) {
+    out["camera_path"] = cmd.cameraPath;
+    out["path_poses"] = setup.path.size();
+  }
+  if (setup.smaaOn) {
+    out["smaa_preset"] = setup.smaaPreset;
+    out["smaa_edges"] = cmd.smaaEdges;
+    out["aa_ms"] = medianOf(times.aaMs);
+  }
+  out["builder"] = cmd.builder;
+  out["kernel"] = so.kernel;
+  out["leaf_size"] = cmd.leafSize;
+  out["triangles"] = prepared.soup.size();
+  out["build_ms"] = b.buildMs;
+  out["sah_cost"] = b.sahCost;
+  out["nodes"] = b.nodes;
+  out["leaves"] = b.leaves;
+  out["bvh_depth"] = b.depth;
+  out["bytes"] = b.bytes;
+  out["tree_hash"] = prepared.treeHash();
+  out["epo"] = prepared.endPointOverlap();
+  out["mesh_rays"] = rays;
+  const double visitsPerRay = rays ? double(visits) / double(rays) : 0.0;
+  const double testsPerRay = rays ? double(tests) / double(rays) : 0.0;
+  out["node_visits_per_ray"] = visitsPerRay;
+  out["triangle_tests_per_ray"] = testsPerRay;
+  // The clock-free cost of the traced rays under the builders' own cost model (Ct, Ci).
+  const CostModel cost = setup.build.cost;
+  out["ray_cost"] = cost.traversalCost * visitsPerRay + cost.intersectionCost * testsPerRay;
+  out["node_visits_p95"] = percentile(pixelVisits, 0.95);
+  out["triangle_tests_p95"] = percentile(pixelTests, 0.95);
+  out["stack_overflow_pixels"] = stackOverflowPixels(stats);
+  out["nonfinite_pixels"] = nonfinite;
+  return out;
+}
+
+}  // namespace bvhlab

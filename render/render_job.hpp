@@ -1,0 +1,87 @@
+// One configured render, in the three steps `render` and `measure` share:
+//   1. setupRender: the command line checked and the scene loaded with its settings applied (no GL);
+//   2. prepareScene (render/prepared_scene.hpp): the tree built; jobs with equal treeKey() may share it;
+//   3. GpuJob: the GL state (needs a current context): timed frames, then the image and the counts,
+//      and renderJson(): the object `render --json` prints.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
+
+#include "render/fly_camera.hpp"
+#include "render/gl_context.hpp"
+#include "render/gpu_renderer.hpp"
+#include "render/prepared_scene.hpp"
+#include "render/render_command.hpp"
+#include "render/smaa.hpp"
+#include "shaders/assemble.hpp"
+
+namespace bvhlab {
+
+struct RenderSetup {
+  CameraPath path;  // empty = the scene's (or the command line's) camera
+  Scene scene;      // loaded, settings and camera applied; moved into prepareScene
+  ShaderOptions shader;
+  BuildOptions build;
+  Backend backend = Backend::OSMesa;
+  bool smaaOn = false;
+  std::string smaaPreset;
+  SmaaSettings smaa;
+};
+
+// Validates every option (throws std::invalid_argument / InputError naming the flag) and loads the
+// input. `loaded`: a copy of loadInput(cmd.input) to start from instead of reading the file again.
+RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded = nullptr);
+
+// Commands with the same key build the same PreparedScene (input, scene settings, camera, builder,
+// leaf size, bins): `measure` builds each tree once for all the kernels and knobs that use it.
+std::string treeKey(const RenderCommand& cmd);
+
+// The GL side of one render. Keeps `prepared` alive; needs a current context for its whole life.
+class GpuJob {
+ public:
+  GpuJob(const RenderCommand& cmd, const RenderSetup& setup, std::shared_ptr<const PreparedScene> prepared);
+  // One frame (the trace, plus the SMAA passes when on, each waited for with glFinish), drawn from
+  // camera-path pose index mod N. Returns its wall-clock ms; `aaMs` gets the SMAA part.
+  double frame(int index, double& aaMs);
+  // Draws pose 0 (for a camera path), reads the image back, and renders one more frame with the
+  // statistics counters compiled in (timed frames run without them). Frees the timed shader.
+  void finish(bool wantStats);
+
+  const PreparedScene& prepared() const { return *prepared_; }
+  const ShaderOptions& shader() const { return shader_; }
+  const FrameOptions& frameOptions() const { return frame_; }
+  std::vector<uint8_t> image;     // RGBA8, rows bottom-up (after finish)
+  std::vector<glm::uvec4> stats;  // per pixel (after finish(true))
+
+ private:
+  std::shared_ptr<const PreparedScene> prepared_;
+  ShaderOptions shader_;
+  FrameOptions frame_;
+  CameraPath path_;
+  std::unique_ptr<GpuRenderer> gpu_;
+  std::unique_ptr<SmaaPass> smaa_;
+};
+
+// Frame times of one run and how their measurement ended (measure: "target" | "max_frames" | "fixed").
+struct FrameTimes {
+  std::vector<double> ms, aaMs;
+  std::string stop = "fixed";
+  double targetCiPct = 0.0;  // 0 = no target
+};
+
+// Writes the image and heatmap the command asks for and returns `render --json`'s object (keys:
+// README "Using it"; frame_ms with its 95% interval, counts per ray, tree_hash, epo, ray_cost).
+// `stats` empty = no counts (the --cpu path passes the mirror's).
+nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, const PreparedScene& prepared,
+                            const FrameOptions& frame, std::vector<uint8_t> image,
+                            const std::vector<glm::uvec4>& stats, const FrameTimes& times,
+                            const std::string& renderer, bool cpu);
+
+// Pixels whose traversal stack overflowed (main.glsl's stats z bit 31): a render with any is an error.
+uint64_t stackOverflowPixels(const std::vector<glm::uvec4>& stats);
+
+}  // namespace bvhlab
