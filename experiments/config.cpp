@@ -70,6 +70,7 @@ json RunRender::keyJson() const {
   // How long a run is measured is part of what it is (a 2% interval is not a 5% one).
   key["max_frames"] = maxFrames;
   key["target_ci_pct"] = targetCiPct;
+  if (maxSeconds > 0.0) key["max_seconds"] = maxSeconds;
   return key;
 }
 
@@ -141,6 +142,7 @@ RunSpec RunSpec::fromJson(const json& j) {
   s.render.timeoutSeconds = r.value("timeout_s", s.render.timeoutSeconds);
   s.render.maxFrames = r.value("max_frames", s.render.frames);
   s.render.targetCiPct = r.value("target_ci_pct", s.render.targetCiPct);
+  s.render.maxSeconds = r.value("max_seconds", s.render.maxSeconds);
   s.render.groupSize = r.value("group_size", s.render.groupSize);
   s.render.aaControl = r.value("aa_control", s.render.aaControl);
   s.render.interleave = r.value("interleave", s.render.interleave);
@@ -565,6 +567,9 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         } else if (mk == "target_ci_pct") {
           out.targetCiPct = r.number(mv, key);
           if (!(out.targetCiPct > 0.0 && out.targetCiPct <= 100.0)) r.fail(mv.source(), key, "must be in (0, 100]");
+        } else if (mk == "max_seconds") {
+          out.maxSeconds = r.number(mv, key);
+          if (!(out.maxSeconds > 0.0)) r.fail(mv.source(), key, "must be > 0 seconds");
         } else if (mk == "group_size") {
           out.groupSize = int(r.integer(mv, key, 1, 100000));
         } else if (mk == "aa_control") {
@@ -573,7 +578,8 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
           out.interleave = r.boolean(mv, key);
         } else {
           r.fail(mk.source(), key,
-                 "unknown key; [measure] has min_frames, max_frames, target_ci_pct, group_size, aa_control, interleave");
+                 "unknown key; [measure] has min_frames, max_frames, target_ci_pct, max_seconds, group_size, "
+                 "aa_control, interleave");
         }
       }
     } else if (section == "axes") {

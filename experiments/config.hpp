@@ -36,6 +36,7 @@ struct RunRender {
   // of the median frame time is within ±targetCiPct % of it, or maxFrames rounds.
   int maxFrames = 100;
   double targetCiPct = 2.0;
+  double maxSeconds = 0.0;  // > 0: a group also stops once its rounds took this long (min_frames still first)
   int groupSize = 64;     // most runs measured together by one process (memory: one tree + program each)
   bool aaControl = true;  // measure one run of each group twice (the A/A control: the noise floor)
   bool interleave = true; // false: every run is its own `bvhlab render` process (isolation, no pairing)

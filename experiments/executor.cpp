@@ -139,7 +139,8 @@ json measureSpec(const fs::path& binary, const GroupRequest& request) {
   }
   return {{"session", request.session},         {"min_frames", r.frames},
           {"max_frames", r.maxFrames},          {"target_ci_pct", r.targetCiPct},
-          {"aa_control", r.aaControl},          {"runs", runs}};
+          {"max_seconds", r.maxSeconds},        {"aa_control", r.aaControl},
+          {"runs", runs}};
 }
 
 GroupExecutor subprocessGroupExecutor(fs::path binary) {

@@ -99,6 +99,24 @@ std::optional<double> correlationOf(const std::vector<const json*>& rows, const 
   return spearman(x, y);
 }
 
+// A run's A/A control: recomputed from the two frame lists (so findings always use the current
+// interval method), else the ratio `measure` stored.
+std::optional<Interval> controlRatio(const json& row) {
+  const std::vector<double> control = [&] {
+    std::vector<double> out;
+    if (auto it = row.find("aa_control_frame_ms_all"); it != row.end() && it->is_array())
+      for (const json& v : *it)
+        if (v.is_number()) out.push_back(v.get<double>());
+    return out;
+  }();
+  const std::vector<double> original = frames(row);
+  if (!control.empty() && control.size() == original.size()) return pairedRatio(original, control);
+  const auto ratio = number(row, "aa_control_ratio"), lo = number(row, "aa_control_ci_low"),
+             hi = number(row, "aa_control_ci_high");
+  if (!ratio || !lo || !hi) return std::nullopt;
+  return Interval{*ratio, *lo, *hi, kConfidence, original.size()};
+}
+
 class Finder {
  public:
   Finder(const json& rows, const json& axisOrder) : axisOrder_(axisOrder) {
@@ -107,8 +125,8 @@ class Finder {
         ok_.push_back(&r);
     // The noise band of each session: how far its A/A control's interval reaches from 1.
     for (const json* r : ok_)
-      if (const auto lo = number(*r, "aa_control_ci_low"), hi = number(*r, "aa_control_ci_high"); lo && hi && *lo > 0.0)
-        band_[session(*r)] = std::max(std::abs(std::log(*lo)), std::abs(std::log(*hi)));
+      if (const auto aa = controlRatio(*r); aa && aa->low > 0.0)
+        band_[session(*r)] = std::max(std::abs(std::log(aa->low)), std::abs(std::log(aa->high)));
   }
 
   json run() {
@@ -207,15 +225,15 @@ class Finder {
     contextAxes_ = varying(rows);
     // Noise floor: every run that carries an A/A control.
     for (const json* r : rows)
-      if (const auto ratio = number(*r, "aa_control_ratio"))
+      if (const auto aa = controlRatio(*r))
         out_["noise"].push_back({{"scene", scene},
                                  {"key", (*r)["key"]},
                                  {"session", session(*r)},
                                  {"description", describe(*r, contextAxes_)},
-                                 {"ratio", *ratio},
-                                 {"ci_low", (*r).value("aa_control_ci_low", json())},
-                                 {"ci_high", (*r).value("aa_control_ci_high", json())},
-                                 {"n", frames(*r).size()}});
+                                 {"ratio", aa->estimate},
+                                 {"ci_low", aa->low},
+                                 {"ci_high", aa->high},
+                                 {"n", aa->n}});
 
     const bool deep = std::any_of(rows.begin(), rows.end(), [](const json* r) {
       return number(*r, "effective_depth").value_or(2.0) > 1.0;  // unknown: assume it matters
@@ -259,18 +277,29 @@ class Finder {
       }
     }
 
-    // Each builder at its best against the scene's fastest run.
-    std::map<std::string, const json*> bestOf;
+    // Each builder at its best (over kernels and leaf sizes) against the fastest run, with every knob
+    // (depth, aa, robust, ...) held fixed: a builder is not "best" because it ran at depth 1.
+    std::vector<std::string> knobs;
+    for (const std::string& a : contextAxes_)
+      if (std::find(findingDesignAxes().begin(), findingDesignAxes().end(), a) == findingDesignAxes().end())
+        knobs.push_back(a);
+    std::map<std::string, std::map<std::string, const json*>> bestOf;  // knob context -> builder -> run
+    std::vector<std::string> knobOrder;
     for (const json* r : rows) {
-      const json*& best = bestOf[label(*r, "builder")];
+      const std::string ctx = describe(*r, knobs);
+      if (!bestOf.count(ctx)) knobOrder.push_back(ctx);
+      const json*& best = bestOf[ctx][label(*r, "builder")];
       if (!best || *number(*r, "frame_ms") < *number(*best, "frame_ms")) best = r;
     }
-    if (bestOf.size() > 1) {
+    for (const std::string& ctx : knobOrder) {
+      const auto& builders = bestOf[ctx];
+      if (builders.size() < 2) continue;
       const json* top = nullptr;
-      for (const auto& [b, r] : bestOf)
+      for (const auto& [b, r] : builders)
         if (!top || *number(*r, "frame_ms") < *number(*top, "frame_ms")) top = r;
-      for (const auto& [b, r] : bestOf)
-        if (r != top) out_["comparisons"].push_back(compare(*r, *top, scene, "builder-best", "builder", "each at its best"));
+      const std::string context = ctx.empty() ? "each at its best" : "each at its best, " + ctx;
+      for (const auto& [b, r] : builders)
+        if (r != top) out_["comparisons"].push_back(compare(*r, *top, scene, "builder-best", "builder", context));
     }
 
     predictors(scene, rows);

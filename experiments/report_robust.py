@@ -2,7 +2,8 @@
 
 report.py calls section_robustness(page, data, root) with its Page, its Data and the sweep directory.
 Per scene, one table over the robustness variants (traversal/robustness.hpp) of runs that differ in
-the robust axis only: frame time, its ratio to the fast variant of the same settings (same sweep),
+the robust axis only: frame time with its interval, its ratio to the fast variant of the same settings
+(with findings.json's interval and verdict when it compared the two),
 the variant's hard-case counts from DIR/hard_cases.json (written by `bvhlab run` with
 `bvhlab hard-cases`: leaks, disagreement with the exact oracle, secondary-ray failures; the same for
 every scene), and the image error against the config's reference and against the watertight run of
@@ -13,9 +14,9 @@ import json
 import os
 import sys
 
-# The small helpers (num, fmt, label, group, AXES) are report.py's. They are taken from the module that
-# defined the Data object passed in, so this file imports nothing from report.py (which imports this
-# one) and works whether report.py runs as a script (__main__) or was imported.
+# The small helpers (num, fmt, fmt_ms, label, AXES) are report_data.py's. They are taken from the module
+# that defined the Data object passed in, so this file imports nothing from the report's modules and
+# works however they were loaded.
 
 
 def _helpers(data):
@@ -102,7 +103,8 @@ def section_robustness(page, data, root):
                   h.fmt(_count(next(iter(hard.values()), {}), "total", "secondary_rays"))))
 
     order = data.values(rows, "robust")
-    header = ["variant", "frame ms", "× fast", "leaks", "GLSL leaks", "oracle ≠ hit/miss", "oracle ≠ first hit (clear)",
+    header = ["variant", "frame ms [95%]", "× fast", "leaks", "GLSL leaks", "oracle ≠ hit/miss",
+              "oracle ≠ first hit (clear)",
               "secondary self-hit / lost", "MAE vs reference", "MAE vs watertight"]
     findings = []
     table_id = 0
@@ -121,7 +123,6 @@ def section_robustness(page, data, root):
                 r = g.get(v)
                 if r is None:
                     continue
-                ms = h.num(r.get("frame_ms"))
                 hc = hard.get(v, {})
                 total = hc.get("total", {})
                 gpu = hc.get("gpu")
@@ -129,8 +130,8 @@ def section_robustness(page, data, root):
                 clear = total.get("oracle_first_clear_disagree")
                 cells.append([
                     "<b>%s</b>" % html.escape(v),
-                    h.fmt(ms),
-                    h.fmt(h.ratio(ms, fast_ms)),
+                    h.fmt_ms(r),
+                    data.ratio_cell(r, fast) if fast is not None else "–",
                     h.fmt(total.get("leaks")),
                     h.fmt(gpu.get("leaks")) if isinstance(gpu, dict) else "–",
                     h.fmt(total.get("oracle_hit_disagree")),
@@ -146,9 +147,9 @@ def section_robustness(page, data, root):
                 f = hard.get("fast", {}).get("total", {})
                 leak_text = (" and leaks %s of the hard cases' must-hit rays where fast leaks %s"
                              % (h.fmt(w.get("leaks")), h.fmt(f.get("leaks")))) if w and f else ""
-                findings.append("%s: watertight takes %s× the fast variant's frame time%s."
+                findings.append("%s: watertight takes %s the fast variant's frame time%s."
                                 % (html.escape(scene + ((" (" + where + ")") if where else "")),
-                                   h.fmt(h.ratio(h.num(watertight["frame_ms"]), fast_ms)), leak_text))
+                                   data.ratio_text(watertight, fast), leak_text))
     if findings:
         page.add('<ul class="findings">%s</ul>' % "".join("<li>%s</li>" % f for f in findings))
     if record and not problem:

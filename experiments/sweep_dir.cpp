@@ -171,6 +171,8 @@ json flattenRecord(const json& record) {
 
   const json& r = spec.at("render");
   for (const char* k : {"width", "height", "frames", "warmup", "backend"}) row[k] = r.at(k);
+  // An interleaved group renders min_frames..max_frames rounds: the row shows how many it took.
+  if (result.contains("frames") && result["frames"].is_number_integer()) row["frames"] = result["frames"];
 
   for (const auto& [k, v] : result.items()) {
     if (k == "image" || k == "renderer" || k == "input") continue;

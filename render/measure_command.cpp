@@ -67,6 +67,9 @@ json measureGroup(const json& spec) {
   const int maxFrames = intField(spec, "max_frames", minFrames, minFrames, 100000);
   const double targetPct = spec.value("target_ci_pct", 2.0);
   if (!(targetPct > 0.0 && targetPct <= 100.0)) throw std::invalid_argument("group file: target_ci_pct outside (0, 100]");
+  // A time budget for the rounds: a group of few or fast runs gets more rounds than a big one.
+  const double maxSeconds = spec.value("max_seconds", 0.0);
+  if (!(maxSeconds >= 0.0)) throw std::invalid_argument("group file: max_seconds must be >= 0");
   const bool wantControl = spec.value("aa_control", true) && maxFrames >= int(kMinValuesForInterval);
   const std::string session = spec.value("session", std::string("unnamed"));
   const auto start = std::chrono::steady_clock::now();
@@ -167,6 +170,7 @@ json measureGroup(const json& spec) {
   std::mt19937_64 rng(0x5eed);  // fixed: the same group draws in the same orders every time
   int rounds = 0;
   std::string stop = minFrames == maxFrames ? "fixed" : "max_frames";
+  const auto roundsStart = std::chrono::steady_clock::now();
   while (rounds < maxFrames) {
     // Fisher-Yates with the generator's raw output (std::shuffle's use of it is implementation-defined).
     for (size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[size_t(rng() % i)]);
@@ -182,6 +186,10 @@ json measureGroup(const json& spec) {
                 << ")\n";
     if (widest <= targetPct) {
       stop = "target";
+      break;
+    }
+    if (maxSeconds > 0.0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - roundsStart).count() >= maxSeconds) {
+      stop = "max_seconds";
       break;
     }
   }

@@ -5,14 +5,15 @@
 // calls it once per group; a crash ends only that group.
 //
 // The group file (JSON):
-//   {"session": "id", "min_frames": 10, "max_frames": 60, "target_ci_pct": 2.0, "aa_control": true,
+//   {"session": "id", "min_frames": 10, "max_frames": 60, "target_ci_pct": 2.0, "max_seconds": 0,
+//    "aa_control": true,
 //    "runs": [{"key": "K", "args": ["scene.toml", "--json", "-o", "K.png", "--builder", "median", ...]}]}
 // `args` are exactly `bvhlab render`'s arguments (parsed by the same CLI). Rounds go on until every
 // run's 95% interval of the median frame time is within ±target_ci_pct % of it, or max_frames
-// rounds; at least min_frames rounds. With aa_control, the first run is drawn a second time as an
+// rounds, or (max_seconds > 0) once the rounds have taken that long; at least min_frames rounds. With aa_control, the first run is drawn a second time as an
 // A/A control: its own GL program and frames, paired with the original's.
 //
-// Prints one JSON object: {"session", "rounds", "stop": "target"|"max_frames"|"fixed",
+// Prints one JSON object: {"session", "rounds", "stop": "target"|"max_frames"|"max_seconds"|"fixed",
 // "renderer", "wall_s", "runs": {"K": render's JSON object (+ session, rounds, aa_control_* for the
 // controlled run) or {"error": "...", "result": partial object}}}.
 #pragma once

@@ -1,0 +1,251 @@
+"""The findings section: DIR/findings.json (written by the runner, experiments/findings.cpp) said in words
+and tables. Nothing here computes a verdict; every ratio, interval and verdict is the file's, so the page
+and the file say the same. Rows are only read to describe a run's configuration and to fill a count the
+file lacks.
+"""
+import html
+
+from report_data import (COUNTS, describe, fmt, fmt_band, fmt_ms, fmt_ratio, label, num, plural, band_of,
+                         verdict_tag)
+
+PREDICTORS = [("sah_cost", "SAH"), ("epo", "EPO"), ("node_visits_per_ray", "visits/ray"), ("ray_cost", "ray cost")]
+VERDICTS = ["slower", "faster", "no detectable difference", "same tree"]
+
+
+def _scenes(data, entries):
+    """Scenes of the entries, in the sweep's scene order, unknown ones last."""
+    present = [e.get("scene") for e in entries]
+    known = [s for s in data.values(data.rows, "scene") if s in present]
+    return known + sorted({s for s in present if s not in known}, key=str)
+
+
+def _run_text(data, key, fallback, exclude=("scene",)):
+    """A run's configuration in words, from its row (the axes that vary in the sweep), else the file's label."""
+    row = data.by_key.get(key)
+    if row is None:
+        return html.escape(str(fallback or key or "?"))
+    return html.escape(describe(row, data.swept(exclude)) or str(fallback or key))
+
+
+def _verdict_words(c):
+    v = c.get("verdict")
+    if v == "same tree":
+        return "<i>same tree</i> (identical BVH, same kernel: nothing to tell apart)"
+    if v == "no detectable difference":
+        if num(c.get("ci_low")) is None:
+            return verdict_tag(v) + " (too few frames for an interval)"
+        return verdict_tag(v) + " (the interval does not clear the %s noise band)" % fmt_band(c.get("band"))
+    return verdict_tag(v)
+
+
+def _counts(data, c, metric):
+    """[a, b] of one count: the file's values, else the rows'."""
+    pair = (c.get("counts") or {}).get(metric)
+    if isinstance(pair, list) and len(pair) == 2:
+        return pair
+    ra, rb = data.by_key.get(c.get("a")) or {}, data.by_key.get(c.get("b")) or {}
+    return [ra.get(metric), rb.get(metric)]
+
+
+def _pair(a, b, digits=4):
+    if a is None and b is None:
+        return "–"
+    return "%s / %s" % (fmt(a, digits), fmt(b, digits))
+
+
+# ---------------------------------------------------------------- pieces
+def noise_floor(page, data, f):
+    """The A/A controls. An entry names either two runs (a = the control run, b = the run it repeats) or one
+    run that carries its own A/A measurement (key; the row's aa_control_* columns)."""
+    page.section("findings-noise", "Noise floor: A/A controls", level=3)
+    noise = list(f.get("noise") or [])
+    if not noise:  # a writer may list the controls among the comparisons instead
+        noise = [c for c in f.get("comparisons") or [] if c.get("kind") == "aa-control"]
+    if not noise:
+        page.note("No A/A control in this sweep: the noise band is 0, so any interval that excludes 1 is "
+                  "called faster or slower.")
+        return
+    page.p("Each group of runs measured together (one session) measures one configuration twice "
+           "(<i>A/A control</i>). The ratio of the two should be 1; its interval is what this machine's noise "
+           "does to a ratio, and a difference inside that band is never called faster or slower.")
+    cells, bands = [], []
+    for e in noise:
+        band = band_of(e.get("ci_low"), e.get("ci_high"))
+        bands.append(band)
+        original = e.get("b") or e.get("key")
+        keys = [k for k in (original, e.get("a") if e.get("b") else None) if k]
+        cells.append([html.escape(str(e.get("scene", "?"))),
+                      html.escape(str(e.get("group", e.get("session", "–")))),
+                      _run_text(data, original, e.get("description") or original),
+                      " / ".join("<code>%s</code>" % html.escape(str(k)) for k in keys),
+                      " / ".join(fmt_ms(data.by_key.get(k) or {}) for k in keys),
+                      fmt_ratio(e.get("ratio"), e.get("ci_low"), e.get("ci_high")), fmt(e.get("n")), fmt_band(band)])
+    page.table("findings-noise-data", ["scene", "session" if any("session" in e for e in noise) else "group",
+                                       "configuration", "run", "frame ms [95%]",
+                                       "second / first [95%]", "n", "band used"], cells)
+    known = [b for b in bands if b is not None]
+    if known and fmt_band(min(known)) == fmt_band(max(known)):
+        page.p("The A/A interval%s reach%s %s around 1: the band the verdicts use."
+               % ("s" if len(known) > 1 else "", "" if len(known) > 1 else "es", fmt_band(known[0])))
+    elif known:
+        page.p("The A/A intervals reach %s to %s around 1 (the band each group's verdicts use)."
+               % (fmt_band(min(known)), fmt_band(max(known))))
+    if len(known) < len(bands):
+        page.note("%s without an interval (too few frames): their groups use a band of 0."
+                  % plural(len(bands) - len(known), "control"))
+
+
+def builder_verdicts(data, scene, entries):
+    """One sentence per builder: its best run against the scene's fastest."""
+    best = [c for c in entries if c.get("kind") == "builder-best"]
+    if not best:
+        return []
+    fastest = []
+    for c in best:
+        if c.get("b") not in [f.get("b") for f in fastest]:
+            fastest.append(c)
+    who = ("scene", "builder")
+    items = []
+    for c in fastest:
+        r = data.by_key.get(c.get("b"))
+        items.append("<b>%s</b>: fastest builder <b>%s</b> at its best (%s), %s ms." % (
+            html.escape(str(scene)), html.escape(str(c.get("b_label") or (label(r, "builder") if r else "?"))),
+            _run_text(data, c.get("b"), c.get("b_description"), who), fmt_ms(r or {})))
+    for c in best:
+        if c.get("a") == c.get("b"):
+            continue
+        items.append("<b>%s</b> at its best (%s) takes %s the frame time of <b>%s</b> at its best (%s): %s." % (
+            html.escape(str(c.get("a_label"))), _run_text(data, c.get("a"), c.get("a_description"), who),
+            fmt_ratio(c.get("ratio"), c.get("ci_low"), c.get("ci_high")), html.escape(str(c.get("b_label"))),
+            _run_text(data, c.get("b"), c.get("b_description"), who), _verdict_words(c)))
+    return items
+
+
+# Axes whose runs are compared with the fastest of their context; the others (knobs) with the config's first value.
+FASTEST_AXES = ("builder", "kernel", "leaf_size", "bins")
+
+
+def verdict_summary(data, entries):
+    """Per axis: how many comparisons went which way, and against what."""
+    out = []
+    axes = []
+    for c in entries:
+        a = c.get("axis") if c.get("kind") == "axis" else None
+        if a and a not in axes:
+            axes.append(a)
+    for a in axes:
+        mine = [c for c in entries if c.get("kind") == "axis" and c.get("axis") == a]
+        counts = {v: sum(1 for c in mine if c.get("verdict") == v) for v in VERDICTS}
+        other = len(mine) - sum(counts.values())
+        parts = ["%d %s" % (n, v) for v, n in counts.items() if n] + (["%d other" % other] if other else [])
+        against = ("each run against the fastest run of its context" if a in FASTEST_AXES else
+                   "each value against %s" % html.escape("%s=%s" % (a, data.baseline(a)) if data.baseline(a) is not None
+                                                         else "the config's first value"))
+        out.append("<b>%s</b> (%s): %s — %s." % (html.escape(str(a)), against, plural(len(mine), "comparison"),
+                                                 ", ".join(parts)))
+    return out
+
+
+def comparison_table(page, data, scene, entries, tid):
+    shown = [c for c in entries if c.get("kind") in ("axis", "builder-best")]
+    if not shown:
+        return
+    with_error = any(num((data.by_key.get(k) or {}).get("image_mae")) is not None
+                     for c in shown for k in (c.get("a"), c.get("b")))
+    header = ["kind / axis", "context", "a", "b", "a / b time [95%]", "n", "band", "verdict"]
+    header += ["%s a / b" % name for _, name in COUNTS] + (["image error a / b"] if with_error else [])
+    cells = []
+    for c in shown:
+        kind = "best builder" if c.get("kind") == "builder-best" else str(c.get("axis") or "?")
+        n = fmt(c.get("n")) + ("" if c.get("paired", True) else " (unpaired)")
+        line = [html.escape(kind), html.escape(str(c.get("context") or "")),
+                html.escape(str(c.get("a_label") or c.get("a"))), html.escape(str(c.get("b_label") or c.get("b"))),
+                fmt_ratio(c.get("ratio"), c.get("ci_low"), c.get("ci_high")), n, fmt_band(c.get("band")),
+                verdict_tag(c.get("verdict"))]
+        line += [_pair(*_counts(data, c, m)) for m, _ in COUNTS]
+        if with_error:
+            line.append(_pair((data.by_key.get(c.get("a")) or {}).get("image_mae"),
+                              (data.by_key.get(c.get("b")) or {}).get("image_mae")))
+        cells.append(line)
+    page.table(tid, header, cells, cls="comparisons")
+
+
+def predictors(page, data, f):
+    entries = f.get("predictors") or []
+    page.section("findings-predictors", "Which cost measure predicts the frame time", level=3)
+    if not entries:
+        page.note("findings.json has no predictor entries (too few runs per scene and context).")
+        return
+    page.p("Spearman rank correlation, across the runs of one scene and context, between each deterministic "
+           "cost measure and the measured median frame time: 1 = the measure orders the runs exactly as the "
+           "clock does.")
+    cells = []
+    for e in entries:
+        rho = e.get("spearman") or {}
+        best = max((num(rho.get(k)) for k, _ in PREDICTORS if num(rho.get(k)) is not None), default=None)
+        row = [html.escape(str(e.get("scene", "?"))), html.escape(str(e.get("context") or "")), fmt(e.get("n"))]
+        for k, _ in PREDICTORS:
+            v = num(rho.get(k))
+            cell = "%.2f" % v if v is not None else "–"
+            row.append("<b>%s</b>" % cell if v is not None and v == best else cell)
+        cells.append(row)
+    page.table("findings-predictors-data", ["scene", "context", "runs"] + ["ρ %s" % n for _, n in PREDICTORS], cells)
+
+
+def misranked(page, data, f):
+    if "misranked" not in f:
+        return
+    entries = f.get("misranked") or []
+    page.section("findings-misranked", "Pairs SAH ranks wrongly", level=3)
+    if not entries:
+        page.p("SAH ranks every pair of runs whose times differ measurably in the right order.")
+        return
+    page.p("SAH says <i>a</i> is the cheaper tree, yet <i>a</i> measured slower than <i>b</i> (interval above the "
+           "noise band).")
+    cells = []
+    for e in entries:
+        sah = e.get("sah") if isinstance(e.get("sah"), list) and len(e.get("sah")) == 2 else [None, None]
+        cells.append([html.escape(str(e.get("scene", "?"))), html.escape(str(e.get("context") or "")),
+                      html.escape(str(e.get("a_label") or e.get("a"))),
+                      html.escape(str(e.get("b_label") or e.get("b"))),
+                      fmt(sah[0], 4), fmt(sah[1], 4), fmt_ratio(e.get("ratio"), e.get("ci_low"), e.get("ci_high"))])
+    page.table("findings-misranked-data", ["scene", "context", "a", "b", "SAH a", "SAH b", "a / b time [95%]"], cells)
+
+
+# ---------------------------------------------------------------- the section
+def section_findings(page, data):
+    page.section("findings", "Findings")
+    f = data.findings
+    if f is None:
+        why = data.findings_problem or "missing"
+        if why == "missing":
+            page.note("No comparisons: this directory has no findings.json (results measured before per-run "
+                      "intervals and A/A controls). Re-run the sweep with a current bvhlab to get verdicts with "
+                      "intervals.")
+        else:
+            page.note("No comparisons: findings.json is %s." % html.escape(why))
+        if data.failed:
+            page.items(["%s failed (listed below with their errors)." % plural(len(data.failed), "run")])
+        return
+    page.p("Every ratio is <i>a</i>'s median frame time over <i>b</i>'s with its 95% interval, from frames "
+           "measured in the same rounds (paired) where the runs shared a session. <b>faster</b> / <b>slower</b> "
+           "only when the whole interval lies outside the noise band measured by the group's A/A control; "
+           "<i>same tree</i> when both runs walk an identical BVH with the same kernel; otherwise "
+           "<i>no detectable difference</i>. Everything here is read from <code>findings.json</code>.")
+    noise_floor(page, data, f)
+    comparisons = [c for c in f.get("comparisons") or [] if c.get("kind") != "aa-control"]
+    if not comparisons:
+        page.note("findings.json lists no comparisons (no axis has two values among matched runs).")
+    for i, scene in enumerate(_scenes(data, comparisons)):
+        entries = [c for c in comparisons if c.get("scene") == scene]
+        page.section("findings-scene-%d" % (i + 1), "%s" % scene, level=3)
+        page.items(builder_verdicts(data, scene, entries) + verdict_summary(data, entries))
+        comparison_table(page, data, scene, entries, "findings-comparisons-%d" % (i + 1))
+    predictors(page, data, f)
+    misranked(page, data, f)
+    skipped = list(f.get("skipped") or [])
+    if skipped:
+        page.section("findings-skipped", "Comparisons not made", level=3)
+        page.items([html.escape(str(s)) for s in skipped])
+    if data.failed:
+        page.p("%s failed (listed below with their errors)." % plural(len(data.failed), "run"))
