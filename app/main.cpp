@@ -8,10 +8,12 @@
 #include <nlohmann/json.hpp>
 
 #include "builders/builder.hpp"
+#include "builders/epo.hpp"
 #include "datasets/scene.hpp"
 #include "datasets/scene_io.hpp"
 #include "experiments/runner.hpp"
 #include "layout/layout.hpp"
+#include "layout/tree_hash.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/hard_cases_command.hpp"
 #include "render/measure_command.hpp"
@@ -24,35 +26,62 @@ using namespace bvhlab;
 
 namespace {
 
-int buildCommand(const std::string& mesh, const std::string& builder, int leafSize, int bins, bool json) {
-  Scene scene = loadInput(mesh);
+struct BuildCommand {
+  std::string mesh, builder = "sah-binned", optimize;
+  int leafSize = 4, bins = 0, plocRadius = 16;
+  float sbvhAlpha = 1e-5f;
+  bool json = false;
+};
+
+int buildCommand(const BuildCommand& c) {
+  Scene scene = loadInput(c.mesh);
   TriangleSoup soup = gatherTriangles(scene);
-  if (soup.size() == 0) throw InputError(mesh + ": no triangles to build a BVH over");
+  if (soup.size() == 0) throw InputError(c.mesh + ": no triangles to build a BVH over");
   std::vector<Aabb> boxes = triangleBoxes(soup);
   std::vector<glm::vec3> centroids = triangleCentroids(soup);
   BuildOptions options;
-  if (leafSize < 1 || leafSize > int(kMaxLeafSize))
+  if (c.leafSize < 1 || c.leafSize > int(kMaxLeafSize))
     throw std::invalid_argument("--leaf-size must be in 1.." + std::to_string(kMaxLeafSize));
-  options.maxLeafSize = uint32_t(leafSize);
-  options.bins = uint32_t(std::max(0, bins));
+  if (!(c.sbvhAlpha >= 0.0f && c.sbvhAlpha <= 1.0f))
+    throw std::invalid_argument("--sbvh-alpha must be in 0..1 (a fraction of the root's area)");
+  if (c.plocRadius < 1 || c.plocRadius > 1024) throw std::invalid_argument("--ploc-radius must be in 1..1024");
+  options.maxLeafSize = uint32_t(c.leafSize);
+  options.bins = uint32_t(std::max(0, c.bins));
+  options.optimize = c.optimize;
+  options.sbvhAlpha = c.sbvhAlpha;
+  options.plocRadius = uint32_t(c.plocRadius);
   BuildStats stats;
-  Bvh bvh = buildBvh(builder, BuildInput{boxes, centroids}, options, &stats);
+  Bvh bvh = buildBvh(c.builder, BuildInput{boxes, centroids, soup.v0, soup.v1, soup.v2}, options, &stats);
   PackedBvh packed = packBvh(bvh, soup);
   stats.bytes = packed.bytes();
-  if (json) {
-    nlohmann::json j = {{"mesh", mesh},           {"builder", builder},
-                        {"leaf_size", leafSize},  {"primitives", stats.primitives},
-                        {"nodes", stats.nodes},   {"leaves", stats.leaves},
-                        {"depth", stats.depth},   {"sah_cost", stats.sahCost},
-                        {"build_ms", stats.buildMs}, {"bytes", stats.bytes},
+  const double epo = endPointOverlap(bvh, soup.v0, soup.v1, soup.v2, options.cost);
+  if (c.json) {
+    nlohmann::json j = {{"mesh", c.mesh},
+                        {"builder", c.builder},
+                        {"optimize", c.optimize.empty() ? nlohmann::json() : nlohmann::json(c.optimize)},
+                        {"leaf_size", c.leafSize},
+                        {"primitives", stats.primitives},
+                        {"references", stats.references},
+                        {"nodes", stats.nodes},
+                        {"leaves", stats.leaves},
+                        {"depth", stats.depth},
+                        {"sah_cost", stats.sahCost},
+                        {"sah_before_optimize", stats.sahBeforeOptimize},
+                        {"epo", epo},
+                        {"build_ms", stats.buildMs},
+                        {"optimize_ms", stats.optimizeMs},
+                        {"bytes", stats.bytes},
                         {"bytes_per_triangle", double(stats.bytes) / double(stats.primitives)},
+                        {"tree_hash", packedTreeHash(packed)},
                         {"prims_per_leaf_mean", stats.primsPerLeafMean},
                         {"prims_per_leaf_max", stats.primsPerLeafMax}};
     std::cout << j.dump() << std::endl;
   } else {
-    std::printf("%s on %s: %zu triangles, %zu nodes, %zu leaves, depth %u, SAH %.3f, %.2f ms, %zu bytes\n",
-                builder.c_str(), mesh.c_str(), stats.primitives, stats.nodes, stats.leaves, stats.depth,
-                stats.sahCost, stats.buildMs, stats.bytes);
+    std::printf("%s%s on %s: %zu triangles (%zu references), %zu nodes, %zu leaves, depth %u, SAH %.3f, EPO %.3f, "
+                "%.2f ms, %zu bytes\n",
+                c.builder.c_str(), c.optimize.empty() ? "" : ("+" + c.optimize).c_str(), c.mesh.c_str(),
+                stats.primitives, stats.references, stats.nodes, stats.leaves, stats.depth, stats.sahCost, epo,
+                stats.buildMs, stats.bytes);
   }
   return 0;
 }
@@ -74,15 +103,16 @@ int main(int argc, char** argv) {
   measureCmd->add_option("spec", mc.spec, "group file (JSON: the runs' render arguments and the [measure] settings)")
       ->required();
 
-  std::string mesh, builder = "sah-binned";
-  int leafSize = 4, bins = 0;
-  bool buildJson = false;
+  BuildCommand bc;
   auto* build = app.add_subcommand("build", "build a BVH over a mesh and print its statistics");
-  build->add_option("--mesh", mesh, "mesh or scene file")->required();
-  build->add_option("--builder", builder, "BVH builder");
-  build->add_option("--leaf-size", leafSize, "max triangles per leaf");
-  build->add_option("--bins", bins, "bins for sah-binned (0 = default)");
-  build->add_flag("--json", buildJson, "print JSON");
+  build->add_option("--mesh", bc.mesh, "mesh or scene file")->required();
+  build->add_option("--builder", bc.builder, "BVH builder")->capture_default_str();
+  build->add_option("--leaf-size", bc.leafSize, "max triangles per leaf")->capture_default_str();
+  build->add_option("--bins", bc.bins, "bins for sah-binned and sbvh (0 = default)");
+  build->add_option("--optimize", bc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
+  build->add_option("--sbvh-alpha", bc.sbvhAlpha, "sbvh: overlap threshold for spatial splits")->capture_default_str();
+  build->add_option("--ploc-radius", bc.plocRadius, "ploc: nearest-neighbour search radius")->capture_default_str();
+  build->add_flag("--json", bc.json, "print JSON");
 
   RunOptions ro;
   std::string config, outDir, shard, binary;
@@ -112,6 +142,7 @@ int main(int argc, char** argv) {
   viewCmd->add_option("--width", vo.width, "window width");
   viewCmd->add_option("--height", vo.height, "window height");
   viewCmd->add_option("--builder", vo.builder, "initial BVH builder (B cycles)");
+  viewCmd->add_option("--optimize", vo.optimize, "post-pass after every build: reinsert");
   viewCmd->add_option("--kernel", vo.kernel, "initial traversal kernel (K cycles)");
   viewCmd->add_option("--leaf-size", vo.leafSize, "initial max triangles per leaf (L / Shift+L)");
   viewCmd->add_option("--depth", vo.depth, "initial max path depth ([ and ])");
@@ -170,7 +201,7 @@ int main(int argc, char** argv) {
       return mergeCommand(std::vector<std::filesystem::path>(mergeDirs.begin(), mergeDirs.end()), mergeOut);
     if (reportCmd->parsed()) return reportCommand(reportDir);
     if (hardCmd->parsed()) return runHardCases(hc);
-    if (build->parsed()) return buildCommand(mesh, builder, leafSize, bins, buildJson);
+    if (build->parsed()) return buildCommand(bc);
     if (listBuilders->parsed()) {
       for (const BuilderInfo& b : builders()) std::printf("%-12s %s\n", b.name.c_str(), b.description.c_str());
       return 0;

@@ -25,7 +25,12 @@ const BuilderInfo& findBuilder(const std::string& name);
 // std::invalid_argument for bad options.
 void validateBuildInput(const BuildInput& input, const BuildOptions& options);
 
-// Times the build, validates the input (empty input is an error), fills BuildStats.
+// The post-passes BuildOptions::optimize accepts (besides "" = none).
+const std::vector<std::string>& optimizePasses();
+
+// Times the build (post-pass included), validates the input (empty input is an error) and the
+// options (an unknown builder or optimize pass: std::invalid_argument naming the valid ones), fills
+// BuildStats.
 Bvh buildBvh(const std::string& builder, const BuildInput& input, const BuildOptions& options,
              BuildStats* stats = nullptr);
 

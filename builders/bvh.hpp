@@ -56,22 +56,38 @@ struct CostModel {
 struct BuildOptions {
   uint32_t maxLeafSize = 4;  // 1..kMaxLeafSize primitives per leaf
   CostModel cost;
-  uint32_t bins = 0;         // sah-binned: bin count (0 = the builder's measured default)
+  uint32_t bins = 0;         // sah-binned, sbvh: bin count (0 = the builder's measured default)
+  // sbvh (Stich, Friedrich & Dietrich 2009): a spatial split is tried at a node only when the overlap
+  // of its best object split's children, as a fraction of the root's area, exceeds alpha; at most
+  // referenceBudget x primitives leaf references in all.
+  float sbvhAlpha = 1e-5f;
+  float sbvhReferenceBudget = 2.0f;
+  uint32_t plocRadius = 16;  // ploc (Meister & Bittner 2018): nearest-neighbour search radius in Morton order
+  // A post-pass after any builder: "" (none) or "reinsert" (Bittner et al. 2013).
+  std::string optimize;
+  double optimizeBudgetMs = 0.0;  // reinsert: stop after this long (0 = run to convergence)
   // Worker threads for builders that split their top levels into tasks (0 = hardware concurrency).
   // The tree never depends on it: the task split is fixed and results are spliced in a fixed order.
   uint32_t threads = 0;
 };
 
-// Input: one box and one centroid per primitive (same length).
+// Input: one box and one centroid per primitive (same length). When the primitives are triangles,
+// v0/v1/v2 may give their vertices (same length again): builders that split primitives (sbvh) clip
+// the triangles themselves then, and clip the boxes when they are empty.
 struct BuildInput {
   std::span<const Aabb> boxes;
   std::span<const glm::vec3> centroids;
+  std::span<const glm::vec3> v0 = {}, v1 = {}, v2 = {};
+  bool hasTriangles() const { return !v0.empty(); }
 };
 
 struct BuildStats {
   std::string builder;
   uint32_t leafSize = 0;
   size_t primitives = 0, nodes = 0, leaves = 0;
+  size_t references = 0;   // leaf entries: == primitives unless a builder splits primitives (sbvh)
+  double sahBeforeOptimize = 0.0;  // the builder's own tree's SAH when a post-pass ran (else == sahCost)
+  double optimizeMs = 0.0;         // the post-pass's time (included in buildMs)
   uint32_t depth = 0;      // root alone = depth 1
   double sahCost = 0.0;    // normalised by root half-area
   double buildMs = 0.0;

@@ -100,7 +100,8 @@ inline bool inside(const Aabb& inner, const Aabb& outer) {
 struct FlatNode {
   Aabb geometry;         // tight box of the subtree's triangles, from their vertices (the query prunes
                          // with it, so a builder's box that is too small or too large cannot hide area)
-  double area = 0.0;     // total area of the subtree's triangles
+  double area = 0.0;     // total area of the subtree's triangles referenced once in the whole tree
+  bool shared = false;   // the subtree references a triangle that is referenced more than once
   uint32_t left = 0, right = 0;   // inner: children's ids
   uint32_t end = 0;               // one past the subtree's last id
   uint32_t first = 0, count = 0;  // leaf: range in Bvh::primIndices
@@ -112,6 +113,12 @@ struct Prepared {
   std::vector<Aabb> triBox;     // per triangle, exact (min/max of float vertices)
   std::vector<double> triArea;  // per triangle
   double totalArea = 0.0;
+  // Triangles referenced by more than one leaf entry (builders that split primitives, e.g. sbvh):
+  // shared[t], and the pre-order ids of the leaves that reference t in
+  // leafIds[leafBegin[t], leafBegin[t + 1]), ascending. Empty when every triangle is referenced once.
+  std::vector<uint8_t> shared;
+  std::vector<uint32_t> leafBegin, leafIds;
+  bool anyShared = false;
 };
 
 Prepared prepare(const Bvh& bvh, std::span<const glm::vec3> v0, std::span<const glm::vec3> v1,
@@ -147,6 +154,8 @@ Prepared prepare(const Bvh& bvh, std::span<const glm::vec3> v0, std::span<const 
     stack.pop_back();
     if (index >= bvh.nodes.size() || idOf[index] != UINT32_MAX)
       throw std::invalid_argument("endPointOverlap: malformed BVH: child index out of range or node reached twice");
+    if (order.size() >= 0x7FFFFFFFu)
+      throw std::invalid_argument("endPointOverlap: more than 2^31 - 1 nodes");
     idOf[index] = uint32_t(order.size());
     order.push_back(index);
     const BvhNode& node = bvh.nodes[index];
@@ -158,7 +167,7 @@ Prepared prepare(const Bvh& bvh, std::span<const glm::vec3> v0, std::span<const 
 
   p.nodes.resize(order.size());
   p.boxes.resize(order.size());
-  std::vector<uint8_t> referenced(triangles, 0);
+  std::vector<uint32_t> referenced(triangles, 0);
   for (size_t id = 0; id < order.size(); ++id) {
     const BvhNode& node = bvh.nodes[order[id]];
     FlatNode& f = p.nodes[id];
@@ -175,9 +184,7 @@ Prepared prepare(const Bvh& bvh, std::span<const glm::vec3> v0, std::span<const 
         if (t >= triangles)
           throw std::invalid_argument("endPointOverlap: primitive " + std::to_string(t) + " is out of range (" +
                                       std::to_string(triangles) + " triangles)");
-        if (referenced[t]++)
-          throw std::invalid_argument("endPointOverlap: triangle " + std::to_string(t) +
-                                      " is referenced by more than one leaf entry");
+        ++referenced[t];
       }
     } else {
       f.left = idOf[node.left], f.right = idOf[node.right];
@@ -186,6 +193,20 @@ Prepared prepare(const Bvh& bvh, std::span<const glm::vec3> v0, std::span<const 
   for (size_t t = 0; t < triangles; ++t)
     if (!referenced[t])
       throw std::invalid_argument("endPointOverlap: triangle " + std::to_string(t) + " is in no leaf of the tree");
+  p.shared.assign(triangles, 0);
+  for (size_t t = 0; t < triangles; ++t)
+    if (referenced[t] > 1) p.shared[t] = 1, p.anyShared = true;
+  if (p.anyShared) {
+    p.leafBegin.assign(triangles + 1, 0);
+    for (size_t t = 0; t < triangles; ++t) p.leafBegin[t + 1] = p.leafBegin[t] + (p.shared[t] ? referenced[t] : 0);
+    p.leafIds.resize(p.leafBegin[triangles]);
+    std::vector<uint32_t> fill(p.leafBegin.begin(), p.leafBegin.end() - 1);
+    for (size_t id = 0; id < p.nodes.size(); ++id) {  // ascending ids: each list comes out sorted
+      const FlatNode& f = p.nodes[id];
+      for (uint32_t k = f.first; k < f.first + f.count; ++k)
+        if (p.shared[bvh.primIndices[k]]) p.leafIds[fill[bvh.primIndices[k]]++] = uint32_t(id);
+    }
+  }
 
   // Bottom-up in reverse pre-order: children have larger ids than their parent. The right child is
   // walked after the left one, so its subtree ends where the parent's does.
@@ -196,7 +217,10 @@ Prepared prepare(const Bvh& bvh, std::span<const glm::vec3> v0, std::span<const 
       for (uint32_t k = f.first; k < f.first + f.count; ++k) {
         const uint32_t t = bvh.primIndices[k];
         f.geometry.grow(p.triBox[t]);
-        f.area += p.triArea[t];
+        if (p.shared[t])
+          f.shared = true;
+        else
+          f.area += p.triArea[t];
       }
     } else {
       const FlatNode &l = p.nodes[f.left], &r = p.nodes[f.right];
@@ -204,6 +228,7 @@ Prepared prepare(const Bvh& bvh, std::span<const glm::vec3> v0, std::span<const 
       f.geometry = l.geometry;
       f.geometry.grow(r.geometry);
       f.area = l.area + r.area;
+      f.shared = l.shared || r.shared;
     }
   }
   return p;
@@ -217,20 +242,42 @@ class OverlapQuery {
                std::span<const glm::vec3> v1, std::span<const glm::vec3> v2)
       : p_(p), prims_(primIndices), v0_(v0), v1_(v1), v2_(v2) {}
 
+  // Q(n) is the SET of triangles referenced in n's subtree. A triangle referenced once is outside
+  // Q(n) exactly when its leaf is outside n's subtree, which the walk's skip of n gives for free. A
+  // triangle referenced by several leaves (a builder that splits primitives) is counted at most
+  // once per node, and only when none of its leaves lies in n's subtree.
   double operator()(uint32_t n) {
     const Aabb& box = p_.boxes[n];
+    const uint32_t end = p_.nodes[n].end;
     double sum = 0.0;
     stack_.assign(1, 0u);
     while (!stack_.empty()) {
-      const uint32_t m = stack_.back();
+      const uint32_t entry = stack_.back();
       stack_.pop_back();
+      const uint32_t m = entry & ~kInsideBit;
       if (m == n) continue;  // Q(n): the surfaces a visit to n is for
       const FlatNode& f = p_.nodes[m];
+      if (entry & kInsideBit) {
+        // Below a subtree that lies wholly inside the box (not an ancestor of n) whose once-referenced
+        // area is already summed: what is left are its shared triangles, each whole inside the box.
+        if (!f.shared) continue;
+        if (f.count == 0) {
+          stack_.push_back(f.right | kInsideBit);
+          stack_.push_back(f.left | kInsideBit);
+          continue;
+        }
+        for (uint32_t k = f.first; k < f.first + f.count; ++k) {
+          const uint32_t t = prims_[k];
+          if (p_.shared[t] && firstOutsideQ(t, n, end)) sum += p_.triArea[t];
+        }
+        continue;
+      }
       if (!overlaps(f.geometry, box)) continue;
       // A subtree wholly inside the box contributes all its area, unless it holds n (an ancestor).
       const bool ancestor = m < n && n < f.end;
       if (!ancestor && inside(f.geometry, box)) {
         sum += f.area;
+        if (f.shared) stack_.push_back(m | kInsideBit);
         continue;
       }
       if (f.count == 0) {
@@ -241,6 +288,7 @@ class OverlapQuery {
       for (uint32_t k = f.first; k < f.first + f.count; ++k) {
         const uint32_t t = prims_[k];
         if (!overlaps(p_.triBox[t], box)) continue;
+        if (p_.anyShared && p_.shared[t] && !firstOutsideQ(t, n, end)) continue;
         sum += inside(p_.triBox[t], box) ? p_.triArea[t] : clippedArea(v0_[t], v1_[t], v2_[t], box, a_, b_);
       }
     }
@@ -248,10 +296,24 @@ class OverlapQuery {
   }
 
  private:
+  static constexpr uint32_t kInsideBit = 0x80000000u;  // prepare() keeps node ids below it
+
+  // For a shared triangle t: true the first time this query for node n (subtree ids [n, end)) meets
+  // it, if no leaf of n's subtree references it.
+  bool firstOutsideQ(uint32_t t, uint32_t n, uint32_t end) {
+    if (stamp_.empty()) stamp_.assign(p_.triArea.size(), 0u);
+    if (stamp_[t] == n + 1) return false;
+    stamp_[t] = n + 1;
+    const auto first = p_.leafIds.begin() + p_.leafBegin[t], last = p_.leafIds.begin() + p_.leafBegin[t + 1];
+    const auto it = std::lower_bound(first, last, n);
+    return !(it != last && *it < end);
+  }
+
   const Prepared& p_;
   std::span<const uint32_t> prims_;
   std::span<const glm::vec3> v0_, v1_, v2_;
   std::vector<uint32_t> stack_;
+  std::vector<uint32_t> stamp_;  // per triangle: n + 1 once the query for node n has met it
   Polygon a_, b_;
 };
 

@@ -7,7 +7,9 @@
 //
 //   S      every surface of the scene: here, the triangles given;  A(.) surface area (full triangle
 //          area, in numerator and denominator alike, so the ratio has no unit)
-//   Q(n)   the surfaces in the subtree of n
+//   Q(n)   the surfaces in the subtree of n: the SET of triangles its leaves reference. A builder that
+//          splits primitives (sbvh) references a triangle from several leaves; it is in Q(n) when any
+//          of them lies in n's subtree, and counts at most once in A((S \ Q(n)) ∩ n) otherwise.
 //   ∩ n    clipped to n's bounding box: (S \ Q(n)) ∩ n is every triangle NOT in n's subtree, clipped
 //          to n's box
 //   C_n    the cost of visiting n, the per-node cost of the paper's SAH (their Eq. 1):
@@ -51,7 +53,7 @@ double clippedTriangleArea(const glm::dvec3& a, const glm::dvec3& b, const glm::
 //
 // Throws std::invalid_argument when the three spans differ in length, a vertex or a node box is not
 // finite, the tree has no nodes, is not a tree (a cycle, a child out of range), or its leaves do not
-// reference every triangle exactly once.
+// reference every triangle at least once (several references to one triangle are fine: see Q(n)).
 double endPointOverlap(const Bvh& bvh, std::span<const glm::vec3> v0, std::span<const glm::vec3> v1,
                        std::span<const glm::vec3> v2, const CostModel& cost, unsigned threads = 0);
 

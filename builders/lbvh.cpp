@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "builders/build_util.hpp"
+#include "builders/collapse.hpp"
 
 namespace bvhlab {
 
@@ -110,60 +111,22 @@ Bvh buildLbvh(const BuildInput& input, const BuildOptions& options) {
   }
   radixSort(keys);
 
-  Bvh bvh;
   std::vector<BvhNode> full = detail::buildTopDown(Aabb{}, Task{0, 0, n}, detail::resolveThreads(options.threads),
                                                    [&] { return MortonStepper(keys); });
 
-  // Bottom-up (children have larger indices than their parents): refit boxes, give every node its
-  // contiguous range, and decide which subtrees to collapse into one leaf.
-  struct Info {
-    uint32_t first, count;
-    double cost;  // SAH cost of the subtree as it will be emitted, in unnormalised areas
-    bool collapse;
-  };
-  std::vector<Info> info(full.size());
-  const CostModel& c = options.cost;
+  // Bottom-up (children have larger indices than their parents): refit boxes, let every leaf name its
+  // primitive, then collapse small subtrees by SAH (builders/collapse.hpp).
   for (size_t i = full.size(); i-- > 0;) {
     BvhNode& node = full[i];
     if (node.isLeaf()) {
-      node.bounds = input.boxes[keys[node.first].id];
-      info[i] = {node.first, node.count, c.intersectionCost * double(node.bounds.halfArea()) * node.count, true};
-      continue;
+      node.first = keys[node.first].id;
+      node.bounds = input.boxes[node.first];
+    } else {
+      node.bounds = full[node.left].bounds;
+      node.bounds.grow(full[node.right].bounds);
     }
-    const Info &l = info[node.left], &r = info[node.right];
-    node.bounds = full[node.left].bounds;
-    node.bounds.grow(full[node.right].bounds);
-    const double area = node.bounds.halfArea();
-    const uint32_t count = l.count + r.count;
-    const double asLeaf = c.intersectionCost * area * count, asTree = c.traversalCost * area + l.cost + r.cost;
-    const bool collapse = count <= options.maxLeafSize && asLeaf <= asTree;
-    info[i] = {l.first, count, collapse ? asLeaf : asTree, collapse};
   }
-
-  // Emit the collapsed tree depth-first.
-  bvh.nodes.reserve(full.size());
-  bvh.nodes.push_back({full[0].bounds});
-  std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};  // (index in full, index in bvh)
-  while (!stack.empty()) {
-    auto [from, to] = stack.back();
-    stack.pop_back();
-    const BvhNode& node = full[from];
-    if (info[from].collapse) {
-      bvh.nodes[to].first = info[from].first;
-      bvh.nodes[to].count = info[from].count;
-      continue;
-    }
-    const uint32_t left = uint32_t(bvh.nodes.size());
-    bvh.nodes[to].left = left;
-    bvh.nodes[to].right = left + 1;
-    bvh.nodes.push_back({full[node.left].bounds});
-    bvh.nodes.push_back({full[node.right].bounds});
-    stack.push_back({node.right, left + 1});
-    stack.push_back({node.left, left});
-  }
-  bvh.primIndices.resize(n);
-  for (uint32_t i = 0; i < n; ++i) bvh.primIndices[i] = keys[i].id;
-  return bvh;
+  return detail::collapseLeavesBySah(full, options);
 }
 
 }  // namespace bvhlab

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "builders/builder.hpp"
+#include "builders/reinsert.hpp"
 #include "datasets/scene.hpp"  // InputError
 
 namespace bvhlab {
@@ -16,7 +17,9 @@ namespace bvhlab {
 Bvh buildMedianBvh(const BuildInput&, const BuildOptions&);
 Bvh buildSahBinnedBvh(const BuildInput&, const BuildOptions&);
 Bvh buildSahSweepBvh(const BuildInput&, const BuildOptions&);
+Bvh buildSbvh(const BuildInput&, const BuildOptions&);
 Bvh buildLbvh(const BuildInput&, const BuildOptions&);
+Bvh buildPloc(const BuildInput&, const BuildOptions&);
 Bvh buildEmbreeBvh(const BuildInput&, const BuildOptions&);
 Bvh buildEmbreeLowBvh(const BuildInput&, const BuildOptions&);
 
@@ -26,7 +29,10 @@ const std::vector<BuilderInfo>& builders() {
        buildMedianBvh},
       {"sah-binned", "binned SAH (options.bins bins per axis, 64 by default), median fallback", buildSahBinnedBvh},
       {"sah-sweep", "full-sweep SAH: exact best object split over centroids sorted on all axes", buildSahSweepBvh},
+      {"sbvh", "SBVH: binned object + spatial splits (triangles clipped), alpha, reference budget, unsplitting", buildSbvh},
       {"lbvh", "Morton-code radix tree (LBVH), SAH-collapsed leaves", buildLbvh},
+      {"ploc", "PLOC: bottom-up clustering in Morton order, neighbours within +-plocRadius, SAH-collapsed leaves",
+       buildPloc},
       {"embree", "Embree 3 rtcBuildBVH, quality MEDIUM (the reference)", buildEmbreeBvh},
       {"embree-low", "Embree 3 rtcBuildBVH, quality LOW (Morton codes)", buildEmbreeLowBvh},
   };
@@ -68,6 +74,11 @@ void validateBuildInput(const BuildInput& input, const BuildOptions& options) {
   if (input.boxes.size() != input.centroids.size())
     throw InputError("BVH build: " + std::to_string(input.boxes.size()) + " boxes but " +
                      std::to_string(input.centroids.size()) + " centroids");
+  if (input.hasTriangles() && (input.v0.size() != input.boxes.size() || input.v1.size() != input.boxes.size() ||
+                               input.v2.size() != input.boxes.size()))
+    throw InputError("BVH build: " + std::to_string(input.boxes.size()) + " boxes but " +
+                     std::to_string(input.v0.size()) + "/" + std::to_string(input.v1.size()) + "/" +
+                     std::to_string(input.v2.size()) + " triangle vertices");
   if (input.boxes.size() > std::numeric_limits<uint32_t>::max())
     throw InputError("BVH build: " + std::to_string(input.boxes.size()) +
                      " primitives; at most 2^32 - 1 are supported");
@@ -90,18 +101,35 @@ void validateBuildInput(const BuildInput& input, const BuildOptions& options) {
                      " are too large (extent or area overflows float)");
 }
 
+const std::vector<std::string>& optimizePasses() {
+  static const std::vector<std::string> names = {"reinsert"};
+  return names;
+}
+
 Bvh buildBvh(const std::string& builder, const BuildInput& input, const BuildOptions& options,
              BuildStats* stats) {
   const BuilderInfo& info = findBuilder(builder);
+  if (!options.optimize.empty() && options.optimize != "reinsert")
+    throw std::invalid_argument("unknown --optimize pass '" + options.optimize + "'; valid: reinsert");
   validateBuildInput(input, options);
   const auto start = std::chrono::steady_clock::now();
   Bvh bvh = info.build(input, options);
+  double sahBefore = 0.0, optimizeMs = 0.0;
+  if (!options.optimize.empty()) {
+    sahBefore = sahCost(bvh, options.cost);
+    const auto t0 = std::chrono::steady_clock::now();
+    optimizeReinsert(bvh, options);
+    optimizeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  }
   const auto stop = std::chrono::steady_clock::now();
   if (stats) {
     *stats = computeStats(bvh, options.cost);
     stats->builder = info.name;
     stats->leafSize = options.maxLeafSize;
+    stats->primitives = input.boxes.size();
     stats->buildMs = std::chrono::duration<double, std::milli>(stop - start).count();
+    stats->sahBeforeOptimize = options.optimize.empty() ? stats->sahCost : sahBefore;
+    stats->optimizeMs = optimizeMs;
   }
   return bvh;
 }

@@ -70,11 +70,12 @@ BuildStats computeStats(const Bvh& bvh, const CostModel& cost) {
     stats.depth = std::max(stats.depth, depth);
     if (node.isLeaf()) {
       ++stats.leaves;
-      stats.primitives += node.count;
+      stats.references += node.count;
       stats.primsPerLeafMax = std::max(stats.primsPerLeafMax, node.count);
     }
   });
-  stats.primsPerLeafMean = stats.leaves ? double(stats.primitives) / double(stats.leaves) : 0.0;
+  stats.primitives = stats.references;  // buildBvh sets the input's count (they differ for sbvh)
+  stats.primsPerLeafMean = stats.leaves ? double(stats.references) / double(stats.leaves) : 0.0;
   stats.sahCost = sahCost(bvh, cost);
   return stats;
 }

@@ -23,26 +23,42 @@
 
 namespace bvhlab::testing {
 
-// Triangles reduced to what a builder sees.
+// Builders that split primitives into several references (sbvh): a primitive may be referenced by
+// more than one leaf, and a leaf's box need only hold the clipped part of each primitive it
+// references. The tests keep the strict invariants (each primitive exactly once, leaf box = union of
+// its primitives' boxes) for every other builder.
+inline bool splitsPrimitives(const std::string& builder) { return builder == "sbvh"; }
+
+// Triangles reduced to what a builder sees: boxes and centroids, and the vertices of the sets made
+// of triangles (inputWithTriangles() passes them, so a splitting builder clips the triangles rather
+// than their boxes).
 struct PrimitiveSet {
   std::string name;
   std::vector<Aabb> boxes;
   std::vector<glm::vec3> centroids;
+  std::vector<glm::vec3> v0, v1, v2;  // empty as soon as one primitive was added as a box
 
   void addTriangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
     Aabb box;
     box.grow(a);
     box.grow(b);
     box.grow(c);
+    if (v0.size() == boxes.size()) v0.push_back(a), v1.push_back(b), v2.push_back(c);
     boxes.push_back(box);
     centroids.push_back((a + b + c) / 3.0f);
   }
   void addBox(const Aabb& box, const glm::vec3& centroid) {
     boxes.push_back(box);
     centroids.push_back(centroid);
+    v0.clear(), v1.clear(), v2.clear();
   }
   size_t size() const { return boxes.size(); }
+  bool hasTriangles() const { return !boxes.empty() && v0.size() == boxes.size(); }
   BuildInput input() const { return {boxes, centroids}; }
+  BuildInput inputWithTriangles() const {
+    if (!hasTriangles()) return input();
+    return {boxes, centroids, v0, v1, v2};
+  }
 };
 
 // `count` triangles of random orientation, centres uniform in the unit cube, edge lengths spread over
@@ -95,6 +111,33 @@ inline PrimitiveSet sphereSoup(uint32_t nu, uint32_t nv, float bumps = 0.0f) {
       set.addTriangle(p(i, k), p(i + 1, k), p(i + 1, k + 1));
       set.addTriangle(p(i, k), p(i + 1, k + 1), p(i, k + 1));
     }
+  return set;
+}
+
+// `count` long thin triangles of random orientation crossing one another in the unit cube (grass,
+// hair, wires, a jumble of sticks): lengths 0.1..0.6 (log-uniform), widths 1% of the length. Their
+// boxes are large and overlap everywhere while their area is small: the case spatial splits are for.
+inline PrimitiveSet thinTriangles(size_t count, uint32_t seed = 3) {
+  PrimitiveSet set;
+  set.name = "thin" + std::to_string(count);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f), signedUnit(-1.0f, 1.0f);
+  auto direction = [&] {
+    while (true) {
+      const glm::vec3 d(signedUnit(rng), signedUnit(rng), signedUnit(rng));
+      const float len = glm::length(d);
+      if (len > 0.1f && len <= 1.0f) return d / len;
+    }
+  };
+  for (size_t i = 0; i < count; ++i) {
+    const glm::vec3 c(unit(rng), unit(rng), unit(rng));
+    const float length = 0.1f * std::pow(6.0f, unit(rng));
+    const glm::vec3 d = direction();
+    glm::vec3 side = glm::cross(d, direction());
+    side = glm::length(side) > 1e-3f ? glm::normalize(side) : glm::vec3(0.0f, 1.0f, 0.0f);
+    const glm::vec3 a = c - 0.5f * length * d, b = c + 0.5f * length * d;
+    set.addTriangle(a, b, a + 0.01f * length * side);
+  }
   return set;
 }
 

@@ -83,6 +83,11 @@ std::vector<std::string> renderCommandLine(const fs::path& binary, const RunRequ
     if (name == "builder") {
       argv.insert(argv.end(), {"--builder", value.value.at("name").get<std::string>()});
       if (value.value.contains("bins")) argv.insert(argv.end(), {"--bins", scalarFlag(value.value["bins"])});
+      if (value.value.contains("optimize")) argv.insert(argv.end(), {"--optimize", scalarFlag(value.value["optimize"])});
+      if (value.value.contains("sbvh_alpha"))
+        argv.insert(argv.end(), {"--sbvh-alpha", number(value.value["sbvh_alpha"].get<double>())});
+      if (value.value.contains("ploc_radius"))
+        argv.insert(argv.end(), {"--ploc-radius", scalarFlag(value.value["ploc_radius"])});
     } else if (name == "uber") {
       if (value.value.get<bool>()) argv.push_back("--uber");
     } else {

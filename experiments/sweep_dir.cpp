@@ -123,7 +123,8 @@ const std::vector<std::string>& resultColumns() {
       // measurements
       "frame_ms", "frame_ms_ci_low", "frame_ms_ci_high", "ci_pct", "ci_target_met", "measure_stop", "frame_ms_min",
       "frame_ms_max", "fps", "aa_control_ratio", "aa_control_ci_low", "aa_control_ci_high", "session",
-      "build_ms", "sah_cost", "epo", "tree_hash", "nodes", "leaves", "bvh_depth",
+      "build_ms", "sah_cost", "epo", "tree_hash", "references", "sah_before_optimize", "optimize_ms", "nodes",
+      "leaves", "bvh_depth",
       "bytes", "triangles", "node_visits_per_ray", "node_visits_p95", "triangle_tests_per_ray",
       "triangle_tests_p95", "ray_cost", "mesh_rays", "effective_depth", "image_mae", "image_psnr", "image_error_note",
       "image", "visits_image",

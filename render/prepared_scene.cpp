@@ -14,7 +14,7 @@ std::unique_ptr<PreparedScene> prepareScene(Scene scene, const std::string& buil
   if (p->soup.size() > 0) {
     std::vector<Aabb> boxes = triangleBoxes(p->soup);
     std::vector<glm::vec3> centroids = triangleCentroids(p->soup);
-    p->bvh = buildBvh(builder, BuildInput{boxes, centroids}, options, &p->stats);
+    p->bvh = buildBvh(builder, BuildInput{boxes, centroids, p->soup.v0, p->soup.v1, p->soup.v2}, options, &p->stats);
     p->packed = packBvh(p->bvh, p->soup);
     p->stats.bytes = p->packed.bytes();
   } else {

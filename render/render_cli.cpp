@@ -33,7 +33,11 @@ void addRenderOptions(CLI::App& app, RenderCommand& rc, RenderCliText& text) {
   app.add_option("--builder", rc.builder, "BVH builder (see `bvhlab builders`)");
   app.add_option("--kernel", rc.kernel, "traversal kernel (see `bvhlab kernels`)");
   app.add_option("--leaf-size", rc.leafSize, "max triangles per BVH leaf");
-  app.add_option("--bins", rc.bins, "bins for sah-binned (0 = default)");
+  app.add_option("--bins", rc.bins, "bins for sah-binned and sbvh (0 = default)");
+  app.add_option("--optimize", rc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
+  app.add_option("--sbvh-alpha", rc.sbvhAlpha, "sbvh: overlap threshold for spatial splits (fraction of the root area)")
+      ->capture_default_str();
+  app.add_option("--ploc-radius", rc.plocRadius, "ploc: nearest-neighbour search radius")->capture_default_str();
   app.add_option("--storage", rc.storage, "tbo | tex2d");
   app.add_option("--branching", rc.branching, "full (both Fresnel branches) | report (Algorithm 1)");
   app.add_option("--eye", text.eye, "camera position x,y,z");

@@ -21,6 +21,9 @@ struct RenderCommand {
   std::string kernel = "stack-ordered";
   int leafSize = 4;
   int bins = 0;
+  std::string optimize;    // post-pass after the builder: "" | "reinsert"
+  float sbvhAlpha = 1e-5f; // sbvh: spatial splits only where object-split children overlap more than this
+  int plocRadius = 16;     // ploc: nearest-neighbour search radius
   std::string storage = "tbo";
   std::string branching = "full";
   std::optional<glm::dvec3> eye, target;  // world coordinates (a far scene is stored relative to its origin)

@@ -82,11 +82,18 @@ RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
 
   s.build.maxLeafSize = uint32_t(cmd.leafSize);
   s.build.bins = uint32_t(std::max(0, cmd.bins));
+  s.build.optimize = cmd.optimize;
+  if (!(cmd.sbvhAlpha >= 0.0f && cmd.sbvhAlpha <= 1.0f))
+    throw std::invalid_argument("--sbvh-alpha must be in 0..1 (a fraction of the root's area)");
+  if (cmd.plocRadius < 1 || cmd.plocRadius > 1024) throw std::invalid_argument("--ploc-radius must be in 1..1024");
+  s.build.sbvhAlpha = cmd.sbvhAlpha;
+  s.build.plocRadius = uint32_t(cmd.plocRadius);
   return s;
 }
 
 std::string treeKey(const RenderCommand& c) {
   std::string key = c.input + "|" + c.builder + "|" + std::to_string(c.leafSize) + "|" + std::to_string(c.bins) +
+                    "|" + c.optimize + "|" + std::to_string(c.sbvhAlpha) + "|" + std::to_string(c.plocRadius) +
                     "|" + c.cameraPath;
   for (const auto& v : {c.width, c.height, c.depth}) key += "|" + (v ? std::to_string(*v) : std::string("-"));
   for (const auto& v : {c.eye, c.target}) key += "|" + (v ? vecText(*v) : std::string("-"));
@@ -221,6 +228,10 @@ nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, 
   out["leaves"] = b.leaves;
   out["bvh_depth"] = b.depth;
   out["bytes"] = b.bytes;
+  out["references"] = b.references;
+  out["optimize"] = cmd.optimize.empty() ? nlohmann::json() : nlohmann::json(cmd.optimize);
+  out["sah_before_optimize"] = b.sahBeforeOptimize;
+  out["optimize_ms"] = b.optimizeMs;
   out["tree_hash"] = prepared.treeHash();
   out["epo"] = prepared.endPointOverlap();
   out["mesh_rays"] = rays;

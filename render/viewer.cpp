@@ -244,6 +244,7 @@ class Viewer {
   // live configuration
   std::string builder_, kernel_, view_, aa_, robust_;
   int leafSize_ = 4, depth_ = 5;
+  std::string optimize_;  // ViewerOptions::optimize, applied after every rebuild
   float scale_ = 1.0f;
   bool needRebuild_ = true, needRenderer_ = true, needSmaa_ = true;
 
@@ -342,6 +343,7 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
   aa_ = o.aa;
   robust_ = o.robust;
   leafSize_ = o.leafSize;
+  optimize_ = o.optimize;
   depth_ = o.depth.value_or(original_.settings.maxDepth);
   scale_ = o.resolutionScale;
 
@@ -604,6 +606,7 @@ void Viewer::ensureRenderers() {
     gpu_.reset();
     BuildOptions bo;
     bo.maxLeafSize = uint32_t(leafSize_);
+    bo.optimize = optimize_;
     auto start = Clock::now();
     prepared_ = prepareScene(Scene(original_), builder_, bo);
     prepareMs_ = msSince(start);

@@ -15,6 +15,7 @@ struct ViewerOptions {
   std::string input;                  // scene .toml or mesh file
   std::optional<int> width, height;   // window size (default: the scene's image size)
   std::string builder = "sah-binned";
+  std::string optimize;  // post-pass after every (re)build: "" | "reinsert"
   std::string kernel = "stack-ordered";
   int leafSize = 4;
   std::optional<int> depth;

@@ -35,7 +35,8 @@ struct Triangles {
     centroids.push_back((a + b + c) / 3.0f);
   }
   size_t size() const { return v0.size(); }
-  BuildInput input() const { return {boxes, centroids}; }
+  // With the vertices: a builder that splits primitives (sbvh) clips the triangles themselves.
+  BuildInput input() const { return {boxes, centroids, v0, v1, v2}; }
   double epo(const Bvh& bvh, const CostModel& cost = {}, unsigned threads = 0) const {
     return endPointOverlap(bvh, v0, v1, v2, cost, threads);
   }
@@ -265,6 +266,83 @@ TEST(Epo, InnerAndLeafNodesWeighTheirCosts) {
   EXPECT_NEAR(t.epo(bvh, cost), 8.0 / total, 1e-14);
   EXPECT_NEAR(t.epo(bvh), 4.5 / total, 1e-14);  // Ct = Ci = 1
   EXPECT_NEAR(bruteForceEpo(bvh, t, cost), 8.0 / total, 1e-14);
+}
+
+// A triangle referenced by two leaves, as a builder that splits primitives (sbvh) makes them. Q(n)
+// is the set of triangles referenced in n's subtree, and a triangle counts at most once per node.
+// T0 = (0,0,0), (4,0,0), (0,4,0): area 8, in z = 0, split at x = 2 into leaves A and B.
+// T1 = (3,0,1), (3.5,0,1), (3,0.5,1): area 0.125, in z = 1, in leaf B.
+// T2 = (1,1,0), (1.5,1,0), (1,1.5,0): area 0.125, in z = 0, in leaf C.
+// root -> (I -> (A {T0}: [0,2] x [0,4] x [0,0], B {T0, T1}: [2,4] x [0,2] x [0,1]), C {T2}: T2's box)
+//   root  everything                                                        0
+//   I     Q = {T0, T1}: T2, inside I's box (0.125)                          0.125 x Ct
+//   A     Q = {T0} (although T0 is also in B): T2 inside A's flat box        0.125 x Ci
+//         (0.125), T1 off its plane (0)
+//   B     Q = {T0, T1}: T2 is at x <= 1.5 (0)                               0
+//   C     Q = {T2}: T0 over C's square [1,1.5]^2, ONCE although two leaves   0.25  x Ci
+//         reference it (0.25); T1 off the plane (0)
+// A(S) = 8 + 0.125 + 0.125 (T0 once). Counting T0 per reference would add T0's part in A's box
+// (x <= 2: 6) to leaf A's term and double C's.
+TEST(Epo, DuplicateReferencesCountATriangleOnce) {
+  Triangles t;
+  t.add({0, 0, 0}, {4, 0, 0}, {0, 4, 0});
+  t.add({3, 0, 1}, {3.5f, 0, 1}, {3, 0.5f, 1});
+  t.add({1, 1, 0}, {1.5f, 1, 0}, {1, 1.5f, 0});
+  Bvh bvh;
+  bvh.nodes.resize(5);
+  bvh.primIndices = {0, 0, 1, 2};
+  bvh.nodes[0].left = 1, bvh.nodes[0].right = 4;   // root
+  bvh.nodes[1].left = 2, bvh.nodes[1].right = 3;   // I
+  bvh.nodes[2].first = 0, bvh.nodes[2].count = 1;  // A
+  bvh.nodes[3].first = 1, bvh.nodes[3].count = 2;  // B
+  bvh.nodes[4].first = 3, bvh.nodes[4].count = 1;  // C
+  bvh.nodes[2].bounds = {{0, 0, 0}, {2, 4, 0}};
+  bvh.nodes[3].bounds = {{2, 0, 0}, {4, 2, 1}};
+  bvh.nodes[4].bounds = t.boxes[2];
+  bvh.nodes[1].bounds = bvh.nodes[2].bounds;
+  bvh.nodes[1].bounds.grow(bvh.nodes[3].bounds);
+  bvh.nodes[0].bounds = bvh.nodes[1].bounds;
+  bvh.nodes[0].bounds.grow(bvh.nodes[4].bounds);
+  EXPECT_NEAR(t.epo(bvh), 0.5 / 8.25, 1e-14);
+  CostModel cost;
+  cost.traversalCost = 1.5f;
+  cost.intersectionCost = 2.0f;
+  EXPECT_NEAR(t.epo(bvh, cost), (0.125 * 1.5 + 0.375 * 2.0) / 8.25, 1e-14);
+  EXPECT_NEAR(bruteForceEpo(bvh, t, cost), (0.125 * 1.5 + 0.375 * 2.0) / 8.25, 1e-14);
+  for (unsigned threads : {1u, 2u, 0u}) EXPECT_EQ(t.epo(bvh, cost, threads), t.epo(bvh, cost, 1)) << threads;
+
+  // T0 in both leaves of one node: that node's term has no T0 in it.
+  Triangles two;
+  two.add({0, 0, 0}, {4, 0, 0}, {0, 4, 0});
+  two.add({1, 1, 0}, {1.5f, 1, 0}, {1, 1.5f, 0});
+  Bvh split;
+  split.nodes.resize(3);
+  split.primIndices = {0, 1, 0};
+  split.nodes[0].left = 1, split.nodes[0].right = 2;
+  split.nodes[1].first = 0, split.nodes[1].count = 2;  // {T0, T2'}: [0,2] x [0,4] x [0,0]
+  split.nodes[2].first = 2, split.nodes[2].count = 1;  // {T0}: [2,4] x [0,2] x [0,0]
+  split.nodes[1].bounds = {{0, 0, 0}, {2, 4, 0}};
+  split.nodes[2].bounds = {{2, 0, 0}, {4, 2, 0}};
+  split.nodes[0].bounds = {{0, 0, 0}, {4, 4, 0}};
+  // Leaf 1 holds both triangles; leaf 2's box meets T2' (x <= 1.5) nowhere: EPO 0.
+  EXPECT_EQ(two.epo(split), 0.0);
+  EXPECT_EQ(bruteForceEpo(split, two, {}), 0.0);
+}
+
+// Every builder's tree (sbvh: with duplicate references) against the definition, on random
+// triangles: exercises the query's shortcuts (subtrees wholly inside a box) with shared triangles.
+TEST(Epo, SbvhTreesMatchBruteForce) {
+  for (uint32_t seed : {4u, 5u}) {
+    const Triangles t = randomTriangles(400, seed, 0.05f, 0.6f);  // big triangles: many split references
+    BuildOptions options;
+    options.maxLeafSize = 2;
+    const Bvh bvh = buildBvh("sbvh", t.input(), options);
+    ASSERT_GT(bvh.primIndices.size(), t.size());
+    const double reference = bruteForceEpo(bvh, t, {});
+    EXPECT_GT(reference, 0.0);
+    EXPECT_NEAR(t.epo(bvh), reference, 1e-10 * reference);
+    EXPECT_EQ(t.epo(bvh, {}, 3), t.epo(bvh, {}, 1));
+  }
 }
 
 // ---- EPO against the definition, every builder ---------------------------------------------------

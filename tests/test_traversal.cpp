@@ -189,7 +189,10 @@ std::vector<Tree> treesFor(const TriangleSoup& soup, bool localShapes) {
   for (const BuilderInfo& b : builders()) {
     BuildOptions options;
     options.maxLeafSize = 4;
-    trees.push_back({b.name, packBvh(buildBvh(b.name, BuildInput{boxes, centroids}, options), soup)});
+    // With the vertices, so a builder that splits primitives (sbvh) clips the triangles: its leaves
+    // then reference a triangle more than once, with boxes that hold only the clipped parts.
+    const BuildInput input{boxes, centroids, soup.v0, soup.v1, soup.v2};
+    trees.push_back({b.name, packBvh(buildBvh(b.name, input, options), soup)});
   }
   if (localShapes) {
     trees.push_back({"test-chain", packBvh(chainBvh(boxes), soup)});

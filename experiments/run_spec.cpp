@@ -1,0 +1,155 @@
+// Runs and their keys: the axes a config may sweep, a run's parameters, its stable key (FNV-1a 64 of
+// its parameters) and its plan.json form. The TOML parsing that produces them is experiments/config.cpp.
+#include <cstdio>
+
+#include "builders/builder.hpp"
+#include "experiments/config.hpp"
+#if __has_include("traversal/kernels.hpp")
+#include "traversal/kernels.hpp"
+#define BVHLAB_HAVE_KERNEL_REGISTRY 1
+#endif
+
+namespace bvhlab {
+
+using nlohmann::json;
+
+const std::vector<AxisInfo>& experimentAxes() {
+  static const std::vector<AxisInfo> axes = {
+      {"scenes", "scene", ""},  // the scene is the positional INPUT of `bvhlab render`
+      {"builders", "builder", "--builder"},
+      {"kernels", "kernel", "--kernel"},
+      {"leaf_sizes", "leaf_size", "--leaf-size"},
+      {"depths", "depth", "--depth"},
+      {"storages", "storage", "--storage"},
+      {"aa", "aa", "--aa"},
+      {"robust", "robust", "--robust"},
+      {"branching", "branching", "--branching"},
+      {"views", "view", "--view"},
+      {"uber", "uber", "--uber"},
+      {"smaa_edges", "smaa_edges", "--smaa-edges"},
+  };
+  return axes;
+}
+
+const AxisInfo* findAxis(std::string_view name) {
+  for (const AxisInfo& a : experimentAxes())
+    if (a.plural == name || a.singular == name) return &a;
+  return nullptr;
+}
+
+std::string hashHex(std::string_view bytes) {
+  uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a 64 offset basis and prime (Fowler/Noll/Vo)
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 0x100000001b3ull;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+json RunRender::keyJson() const {
+  json key{{"width", width},     {"height", height},     {"warmup", warmup}, {"frames", frames},
+           {"backend", backend}, {"heatmaps", heatmaps}, {"env", env},       {"args", args}};
+  if (!cameraPath.empty()) {  // only when set: keys of configs without a path stay as they were
+    key["camera_path"] = cameraPath;
+    key["camera_path_hash"] = cameraPathHash;
+  }
+  // How long a run is measured is part of what it is (a 2% interval is not a 5% one).
+  key["max_frames"] = maxFrames;
+  key["target_ci_pct"] = targetCiPct;
+  if (maxSeconds > 0.0) key["max_seconds"] = maxSeconds;
+  return key;
+}
+
+json RunRender::groupJson() const {
+  json g = keyJson();
+  g["group_size"] = groupSize;
+  g["aa_control"] = aaControl;
+  g["interleave"] = interleave;
+  g["timeout_s"] = timeoutSeconds;
+  return g;
+}
+
+const AxisValue* RunSpec::axis(std::string_view singular) const {
+  for (const auto& [name, value] : axes)
+    if (name == singular) return &value;
+  return nullptr;
+}
+
+std::string RunSpec::describe() const {
+  std::string out;
+  for (const auto& [name, value] : axes) {
+    if (!out.empty()) out += ' ';
+    if (name == "scene" || name == "builder")
+      out += value.label;
+    else
+      out += name + "=" + value.label;
+  }
+  return out;
+}
+
+json RunSpec::keyJson() const {
+  json a = json::object();
+  for (const auto& [name, value] : axes) a[name] = value.value;
+  return json{{"axes", a}, {"render", render.keyJson()}};
+}
+
+json RunSpec::toJson() const {
+  json a = json::array();
+  for (const auto& [name, value] : axes) {
+    json v{{"axis", name}, {"label", value.label}, {"value", value.value}};
+    if (!value.file.empty()) v["file"] = value.file.string();
+    a.push_back(v);
+  }
+  json r = render.groupJson();
+  if (!render.cameraPathFile.empty()) r["camera_path_file"] = render.cameraPathFile.string();
+  return json{{"index", index},   {"key", key},       {"axes", a},
+              {"render", r},      {"sweeps", sweeps}, {"reference_key", referenceKey},
+              {"reference_only", referenceOnly}};
+}
+
+RunSpec RunSpec::fromJson(const json& j) {
+  RunSpec s;
+  s.index = j.at("index").get<std::size_t>();
+  s.key = j.at("key").get<std::string>();
+  for (const json& v : j.at("axes")) {
+    AxisValue value{v.at("label").get<std::string>(), v.at("value"), {}};
+    if (v.contains("file")) value.file = v["file"].get<std::string>();
+    s.axes.emplace_back(v.at("axis").get<std::string>(), std::move(value));
+  }
+  const json& r = j.at("render");
+  s.render.width = r.at("width");
+  s.render.height = r.at("height");
+  s.render.warmup = r.at("warmup");
+  s.render.frames = r.at("frames");
+  s.render.backend = r.at("backend");
+  s.render.heatmaps = r.at("heatmaps");
+  s.render.env = r.at("env").get<std::map<std::string, std::string>>();
+  s.render.args = r.at("args").get<std::vector<std::string>>();
+  s.render.timeoutSeconds = r.value("timeout_s", s.render.timeoutSeconds);
+  s.render.maxFrames = r.value("max_frames", s.render.frames);
+  s.render.targetCiPct = r.value("target_ci_pct", s.render.targetCiPct);
+  s.render.maxSeconds = r.value("max_seconds", s.render.maxSeconds);
+  s.render.groupSize = r.value("group_size", s.render.groupSize);
+  s.render.aaControl = r.value("aa_control", s.render.aaControl);
+  s.render.interleave = r.value("interleave", s.render.interleave);
+  s.render.cameraPath = r.value("camera_path", "");
+  s.render.cameraPathHash = r.value("camera_path_hash", "");
+  s.render.cameraPathFile = r.value("camera_path_file", "");
+  s.sweeps = j.at("sweeps").get<std::vector<std::string>>();
+  s.referenceKey = j.at("reference_key");
+  s.referenceOnly = j.at("reference_only");
+  return s;
+}
+
+KnownNames registeredNames() {
+  KnownNames names;
+  for (const BuilderInfo& b : builders()) names.builders.push_back(b.name);
+#ifdef BVHLAB_HAVE_KERNEL_REGISTRY
+  for (const KernelInfo& k : kernels()) names.kernels.push_back(k.name);
+#endif
+  return names;
+}
+
+}  // namespace bvhlab
