@@ -1,5 +1,6 @@
 // bvhlab — command line. Each subcommand is a thin shell over a library call; every error ends in
 // one line on stderr and a non-zero exit code.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -11,6 +12,7 @@
 #include "builders/epo.hpp"
 #include "datasets/scene.hpp"
 #include "datasets/scene_io.hpp"
+#include "experiments/provenance.hpp"
 #include "experiments/runner.hpp"
 #include "layout/layout.hpp"
 #include "layout/tree_hash.hpp"
@@ -175,7 +177,32 @@ int main(int argc, char** argv) {
   auto* listBuilders = app.add_subcommand("builders", "list the BVH builders");
   auto* listKernels = app.add_subcommand("kernels", "list the traversal kernels");
 
-  CLI11_PARSE(app, argc, argv);
+  // --version: the release and the commit of the source tree it runs from (as the run records say).
+  app.set_version_flag("--version", [] {
+    return std::string("bvhlab ") + BVHLAB_VERSION + " (commit " + gitCommit(findSourceDir()) + ")";
+  });
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // A mistyped or missing subcommand: name it and list the real ones (CLI11 would only say that
+    // an argument was not expected).
+    std::vector<std::string> names;
+    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) names.push_back(sub->get_name());
+    const bool help = dynamic_cast<const CLI::CallForHelp*>(&e) || dynamic_cast<const CLI::CallForAllHelp*>(&e) ||
+                      dynamic_cast<const CLI::CallForVersion*>(&e);
+    const bool known = argc > 1 && std::find(names.begin(), names.end(), argv[1]) != names.end();
+    if (!help && (argc < 2 || (!known && argv[1][0] != '-'))) {
+      std::string list;
+      for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+      if (argc < 2)
+        std::fprintf(stderr, "bvhlab: error: no command given; commands: %s (bvhlab COMMAND --help)\n", list.c_str());
+      else
+        std::fprintf(stderr, "bvhlab: error: unknown command '%s'; commands: %s (bvhlab COMMAND --help)\n", argv[1],
+                     list.c_str());
+      return 2;
+    }
+    return app.exit(e);
+  }
   try {
     if (render->parsed()) {
       applyRenderCliText(rc, renderText);

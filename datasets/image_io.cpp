@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -175,11 +176,32 @@ void saveImageRgba8(const fs::path& path, int width, int height, const std::vect
     throw std::invalid_argument("saveImageRgba8(" + path.string() + "): buffer of " +
                                 std::to_string(rgbaBottomUp.size()) + " bytes for a " + std::to_string(width) +
                                 "x" + std::to_string(height) + " RGBA8 image");
+  const std::string format = imageFormatFor(path);
+  if (format == "jpeg") {  // JPEG has no alpha channel: write RGB
+    std::vector<uint8_t> rgb(size_t(width) * height * 3);
+    for (size_t i = 0; i < size_t(width) * height; ++i)
+      for (int c = 0; c < 3; ++c) rgb[3 * i + c] = rgbaBottomUp[4 * i + c];
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    spec.attribute("Compression", "jpeg:95");
+    writeAtomically(path, [&](const fs::path& tmp) { writeOiio(path, tmp, "jpeg", spec, rgb.data(), size_t(width) * 3); });
+    return;
+  }
   OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
   spec.attribute("oiio:UnassociatedAlpha", 1);  // the bytes are straight alpha: write them as they are
   writeAtomically(path, [&](const fs::path& tmp) {
-    writeOiio(path, tmp, "png", spec, rgbaBottomUp.data(), size_t(width) * 4);
+    writeOiio(path, tmp, format.c_str(), spec, rgbaBottomUp.data(), size_t(width) * 4);
   });
+}
+
+std::string imageFormatFor(const fs::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext.empty() || ext == ".png") return "png";
+  if (ext == ".jpg" || ext == ".jpeg") return "jpeg";
+  if (ext == ".tif" || ext == ".tiff") return "tiff";
+  const std::string why = ext == ".exr" ? " (the render is 8-bit display-referred, not scene-linear)" : "";
+  throw InputError(path.string() + ": cannot write an 8-bit image as '" + ext + "'" + why +
+                   "; use .png, .jpg/.jpeg or .tif/.tiff");
 }
 
 void saveImageExr(const fs::path& path, const Image& image) {

@@ -29,9 +29,15 @@ struct ImageRgba8 {
 // Throws InputError for a missing or unreadable file, or a file that is not 8 bits per channel.
 ImageRgba8 loadImageRgba8(const std::filesystem::path& path);
 
-// Writes 8-bit RGBA (bottom-up, e.g. straight from glReadPixels) as a PNG. Creates parent
-// directories. Throws std::invalid_argument if the buffer size is not 4*w*h, InputError naming the
-// path if the file cannot be written.
+// The OpenImageIO writer an 8-bit image file gets from its extension (case-insensitive): .png (and
+// a name without an extension) -> "png", .jpg/.jpeg -> "jpeg" (alpha dropped), .tif/.tiff -> "tiff".
+// Anything else, .exr included (the render is 8-bit display-referred, not scene-linear), throws
+// InputError naming the path and the formats that work: call it before rendering.
+std::string imageFormatFor(const std::filesystem::path& path);
+
+// Writes 8-bit RGBA (bottom-up, e.g. straight from glReadPixels) in the format imageFormatFor(path)
+// names. Creates parent directories. Throws std::invalid_argument if the buffer size is not 4*w*h,
+// InputError naming the path if the file cannot be written or its extension names no 8-bit format.
 void saveImageRgba8(const std::filesystem::path& path, int width, int height,
                     const std::vector<uint8_t>& rgbaBottomUp);
 

@@ -56,6 +56,37 @@ struct Fd {
 
 }  // namespace
 
+namespace {
+
+// The child runProcess waits for, and the interrupting signal: plain values a signal handler may use.
+volatile sig_atomic_t gChild = 0;
+volatile sig_atomic_t gSignal = 0;
+struct sigaction gPreviousInt, gPreviousTerm;
+
+extern "C" void onInterrupt(int sig) {
+  gSignal = sig;
+  if (gChild > 0) ::kill(pid_t(gChild), SIGKILL);  // async-signal-safe; the render has nothing to flush
+}
+
+}  // namespace
+
+InterruptGuard::InterruptGuard() {
+  gSignal = 0;
+  struct sigaction sa {};
+  sa.sa_handler = onInterrupt;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: poll/waitpid return EINTR and the loops look again
+  ::sigaction(SIGINT, &sa, &gPreviousInt);
+  ::sigaction(SIGTERM, &sa, &gPreviousTerm);
+}
+
+InterruptGuard::~InterruptGuard() {
+  ::sigaction(SIGINT, &gPreviousInt, nullptr);
+  ::sigaction(SIGTERM, &gPreviousTerm, nullptr);
+}
+
+int InterruptGuard::interrupted() { return int(gSignal); }
+
 ProcessResult runProcess(const std::vector<std::string>& argv, const ProcessOptions& options) {
   if (argv.empty()) throw std::invalid_argument("runProcess: empty argv");
 
@@ -92,6 +123,11 @@ ProcessResult runProcess(const std::vector<std::string>& argv, const ProcessOpti
                      : posix_spawn(&pid, args[0], &actions, nullptr, args.data(), envp.data());
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) throw std::runtime_error("cannot start '" + argv[0] + "': " + std::strerror(rc));
+  gChild = pid;
+  struct ClearChild {
+    ~ClearChild() { gChild = 0; }
+  } clearChild;
+  if (gSignal != 0) ::kill(pid, SIGKILL);  // interrupted while it was being started
   outPipe[1].reset();
   errPipe[1].reset();
 

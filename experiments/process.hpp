@@ -25,6 +25,19 @@ struct ProcessOptions {
 // when the process cannot be started at all (not found, not executable).
 ProcessResult runProcess(const std::vector<std::string>& argv, const ProcessOptions& options = {});
 
+// While one exists, SIGINT and SIGTERM to this process kill the child runProcess is waiting for
+// (so a stopped sweep leaves no render running, writing images for a run without a record) and
+// are remembered: interrupted() tells the caller to stop at the next safe point. The previous
+// handlers come back when it is destroyed.
+class InterruptGuard {
+ public:
+  InterruptGuard();
+  ~InterruptGuard();
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+  static int interrupted();  // the signal received (SIGINT/SIGTERM), or 0
+};
+
 // Quotes argv for a POSIX shell, for logs and error messages ("bvhlab render 'a b.toml' --json").
 std::string shellQuote(const std::vector<std::string>& argv);
 

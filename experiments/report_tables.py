@@ -48,6 +48,23 @@ def section_images(page, data):
         page.add('<div class="pair" id="images-%s">%s</div>' % (html.escape(scene), "".join(blocks)))
 
 
+def sah_before(row):
+    """The builder's own SAH when a post-pass (--optimize) changed it, else a dash."""
+    if not row.get("optimize"):
+        return "–"
+    return fmt(row.get("sah_before_optimize"), 4)
+
+
+def references(row):
+    """Leaf references, and their ratio to the triangles when a builder splits primitives (sbvh)."""
+    refs, tris = num(row.get("references")), num(row.get("triangles"))
+    if refs is None:
+        return "–"
+    if tris and refs != tris:
+        return "%s (%s×)" % (fmt(refs), fmt(refs / tris, 3))
+    return fmt(refs)
+
+
 def section_builder_table(page, data):
     page.section("table-builders", "Per builder: each at its best")
     rows = data.sweep
@@ -75,11 +92,13 @@ def section_builder_table(page, data):
                         fmt(best.get("sah_cost"), 4), fmt(best.get("epo"), 4),
                         "%s (%s)" % (fmt(best.get("node_visits_per_ray"), 4), fmt(best.get("node_visits_p95"))),
                         "%s (%s)" % (fmt(best.get("triangle_tests_per_ray"), 4), fmt(best.get("triangle_tests_p95"))),
-                        fmt(best.get("ray_cost"), 4), fmt(best.get("build_ms")), fmt(best.get("nodes")),
+                        fmt(best.get("ray_cost"), 4), fmt(best.get("build_ms")), sah_before(best),
+                        fmt(best.get("optimize_ms")), references(best), fmt(best.get("nodes")),
                         fmt(mb / 1e6 if mb is not None else None)])
     page.table("table-builders-data", ["scene", "builder", "runs", "best configuration", "frame ms [95%]",
                                        "vs fastest [95%]", "SAH", "EPO", "visits/ray (p95)", "tests/ray (p95)",
-                                       "ray cost", "build ms", "nodes", "MB"], out)
+                                       "ray cost", "build ms", "SAH before optimize", "optimize ms",
+                                       "references (/ triangles)", "nodes", "MB"], out)
 
 
 def pareto_table(page, data, fronts):

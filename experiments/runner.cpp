@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -256,6 +257,7 @@ SweepOutcome runSweep(const RunOptions& options) {
   double spentSeconds = 0.0;
   size_t done = outcome.skipped;
   for (size_t gi = 0; gi < groups.size(); ++gi) {
+    if ((outcome.interrupted = InterruptGuard::interrupted())) break;
     const std::vector<const RunSpec*>& group = groups[gi];
     const size_t remaining = mine.size() - done;
     progress.update(done, outcome.executed ? spentSeconds / double(outcome.executed) : 0.0, remaining,
@@ -283,6 +285,8 @@ SweepOutcome runSweep(const RunOptions& options) {
       groupError = e.what();
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    // Stopped by SIGINT/SIGTERM: the group's child was killed mid-measurement; its runs stay pending.
+    if ((outcome.interrupted = InterruptGuard::interrupted())) break;
 
     for (const RunRequest& req : request.runs) {
       const RunSpec* run = &req.spec;
@@ -341,7 +345,7 @@ SweepOutcome runSweep(const RunOptions& options) {
   progress.finish();
   // Once per sweep (shard 0 of a sharded one), and only when there is a real renderer to ask: the runs
   // go to child processes, or an injected executor (tests) comes with an explicit binary.
-  if ((!options.executor || !options.binary.empty()) && options.shardIndex == 0)
+  if ((!options.executor || !options.binary.empty()) && options.shardIndex == 0 && !outcome.interrupted)
     recordHardCases(config, dir, options, commit, machine);
   outcome.summary = writeResults(dir, plan, records, &cache);
   return outcome;
@@ -433,8 +437,19 @@ fs::path writeReport(const fs::path& dir) {
 
 int runCommand(const RunOptions& options) {
   try {
+    const InterruptGuard guard;  // Ctrl-C / kill stop the running group's child too
     const SweepOutcome o = runSweep(options);
     const json& s = o.summary;
+    if (o.interrupted) {
+      std::string again = "bvhlab run " + options.config.string();
+      if (!options.outDir.empty()) again += " --out " + options.outDir.string();
+      if (options.shardCount > 1)
+        again += " --shard " + std::to_string(options.shardIndex) + "/" + std::to_string(options.shardCount);
+      std::cerr << "bvhlab run: interrupted (" << strsignal(o.interrupted) << "); the running group was stopped, "
+                << s.value("ok", 0) << " finished runs are kept in " << o.dir.string() << "; resume with: " << again
+                << "\n";
+      return 128 + o.interrupted;
+    }
     std::cerr << "bvhlab run: " << o.executed << " runs executed (" << o.failed << " failed), " << o.skipped
               << " already finished; " << o.dir.string() << ": " << s["ok"] << " ok, " << s["failed"]
               << " failed, " << s["pending"] << " pending of " << s["planned"] << "\n";

@@ -38,6 +38,7 @@ struct SweepOutcome {
   size_t skipped = 0;    // runs already finished (resumed)
   size_t failed = 0;     // runs executed now that failed
   nlohmann::json summary;  // writeResults()'s summary of the whole directory
+  int interrupted = 0;     // the signal that stopped the sweep (InterruptGuard in runCommand), or 0
 };
 
 // The library entry points (throw InputError for a bad config or directory).

@@ -80,6 +80,9 @@ RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
     throw std::invalid_argument("--smaa-edges: unknown mode '" + cmd.smaaEdges + "' (valid: luma, color)");
   if (s.smaaOn && cmd.cpu) throw std::invalid_argument("--aa smaa runs on the GPU only (no --cpu)");
 
+  // Refused now, not after the frames are rendered.
+  if (!cmd.output.empty()) imageFormatFor(cmd.output);
+  if (!cmd.visitsOutput.empty()) imageFormatFor(cmd.visitsOutput);
   s.build.maxLeafSize = uint32_t(cmd.leafSize);
   s.build.bins = uint32_t(std::max(0, cmd.bins));
   s.build.optimize = cmd.optimize;

@@ -243,3 +243,60 @@ TEST(Cli, EyeAndTargetOfAFarSceneAreWorldCoordinates) {
 }
 
 }  // namespace
+
+// -o writes the format its extension names (through OpenImageIO) or is refused before anything is
+// rendered; the files read back as the same picture.
+TEST(Cli, OutputFormatFollowsTheExtensionOrIsRefused) {
+  const fs::path dir = testDir() / "formats";
+  fs::create_directories(dir);
+  const std::string input = scene("sphere.toml").string();
+  Result png = run("render " + input + " --width 40 --height 24 --frames 1 -o " + (dir / "a.png").string());
+  ASSERT_EQ(png.code, 0) << png.err;
+  const bvhlab::ImageRgba8 reference = bvhlab::loadImageRgba8(dir / "a.png");
+  for (const char* name : {"a.tif", "a.TIFF", "a.jpg", "a.jpeg"}) {
+    SCOPED_TRACE(name);
+    Result r = run("render " + input + " --width 40 --height 24 --frames 1 -o " + (dir / name).string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::ifstream f(dir / name, std::ios::binary);
+    std::array<unsigned char, 4> magic{};
+    f.read(reinterpret_cast<char*>(magic.data()), 4);
+    const bool jpeg = std::string(name).find("jp") != std::string::npos;
+    if (jpeg) {
+      EXPECT_EQ(magic[0], 0xFF);  // JPEG SOI marker FF D8
+      EXPECT_EQ(magic[1], 0xD8);
+    } else {
+      EXPECT_TRUE((magic[0] == 'I' && magic[1] == 'I') || (magic[0] == 'M' && magic[1] == 'M'));  // TIFF byte order
+    }
+    const bvhlab::ImageRgba8 back = bvhlab::loadImageRgba8(dir / name);
+    ASSERT_EQ(back.width, reference.width);
+    ASSERT_EQ(back.height, reference.height);
+    double diff = 0.0;
+    for (size_t i = 0; i < back.rgba.size(); i += 4)
+      for (int c = 0; c < 3; ++c) diff += std::abs(int(back.rgba[i + c]) - int(reference.rgba[i + c]));
+    diff /= 3.0 * double(back.rgba.size() / 4);
+    EXPECT_LT(diff, jpeg ? 3.0 : 1e-9) << "mean |difference| over RGB";
+  }
+  for (const char* name : {"a.exr", "a.gif", "a.txt"}) {
+    SCOPED_TRACE(name);
+    Result r = run("render " + input + " --width 40 --height 24 --frames 1 -o " + (dir / name).string());
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find(name), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(".png"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / name));
+  }
+}
+
+TEST(Cli, UnknownOrMissingCommandListsTheCommandsAndVersionPrintsTheCommit) {
+  Result typo = run("rendr scene.toml");
+  EXPECT_EQ(typo.code, 2);
+  EXPECT_NE(typo.err.find("unknown command 'rendr'"), std::string::npos) << typo.err;
+  for (const char* c : {"render", "build", "run", "measure", "report"})
+    EXPECT_NE(typo.err.find(c), std::string::npos) << c << " not listed: " << typo.err;
+  Result none = run("");
+  EXPECT_EQ(none.code, 2);
+  EXPECT_NE(none.err.find("no command given"), std::string::npos) << none.err;
+  Result version = run("--version");
+  EXPECT_EQ(version.code, 0) << version.err;
+  EXPECT_EQ(version.out.rfind("bvhlab ", 0), 0u) << version.out;
+  EXPECT_NE(version.out.find("(commit "), std::string::npos) << version.out;
+}

@@ -1,8 +1,11 @@
 // Interleaved measurement and its verdicts: the runner's groups, the A/A control, findings.json
 // against a fake clock with known effects, "same tree", resuming after a group is killed, and the
 // real `bvhlab measure` child process (llvmpipe) on a tiny mesh.
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <csignal>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -420,4 +423,46 @@ kernels = ["stack-ordered", "no-such-kernel"]
   const json f = readJsonFile(root / "out" / "findings.json");
   ASSERT_FALSE(f["comparisons"].empty());
   for (const json& c : f["comparisons"]) EXPECT_TRUE(c["paired"]) << c.dump();
+}
+
+// Ctrl-C (SIGINT) or SIGTERM to `bvhlab run` stops the group's child too, keeps what finished, and
+// says how to resume; nothing is left running.
+TEST_F(Measurement, SigintStopsTheRunningGroupsChildAndSaysHowToResume) {
+  const fs::path marker = root / "child.pid";
+  const fs::path fake = root / "slow_bvhlab.sh";
+  // The stand-in measure writes its pid, then takes far longer than the test waits.
+  writeText(fake, "#!/bin/sh\necho $$ > '" + marker.string() + "'\nexec sleep 60\n");
+  fs::permissions(fake, fs::perms::owner_all);
+  writeText(root / "cfg.toml", kBuilders);
+  const std::string err = (root / "stderr.txt").string();
+  const std::string cmd = std::string("exec ") + BVHLAB_BINARY + " run " + (root / "cfg.toml").string() + " --out " +
+                          (root / "out").string() + " --binary " + fake.string() + " --no-report 2> " + err;
+  const pid_t runner = ::fork();
+  ASSERT_GE(runner, 0);
+  if (runner == 0) {
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    std::_Exit(127);
+  }
+  // Wait for the child measure to start (at most 20 s).
+  for (int i = 0; i < 200 && !fs::exists(marker); ++i) ::usleep(100000);
+  ASSERT_TRUE(fs::exists(marker)) << "the runner never started its group";
+  ::usleep(200000);  // the pid line is written
+  std::ifstream in(marker);
+  pid_t child = 0;
+  in >> child;
+  ASSERT_GT(child, 0);
+  ASSERT_EQ(::kill(runner, SIGINT), 0);
+  int status = 0;
+  const auto start = std::chrono::steady_clock::now();
+  ASSERT_EQ(::waitpid(runner, &status, 0), runner);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10.0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGINT);
+  // The child is gone (reaped by the runner, so not even a zombie answers).
+  EXPECT_NE(::kill(child, 0), 0) << "the group's child " << child << " is still running";
+  std::ifstream e(err);
+  const std::string text((std::istreambuf_iterator<char>(e)), {});
+  EXPECT_NE(text.find("interrupted"), std::string::npos) << text;
+  EXPECT_NE(text.find("resume with: bvhlab run"), std::string::npos) << text;
+  EXPECT_TRUE(readRecords(SweepDir{root / "out"}).empty()) << "the killed group's runs stay pending";
 }
