@@ -183,6 +183,17 @@ std::vector<BvhNode> buildTopDown(const Aabb& rootBox, Task root, unsigned threa
     level = std::move(next);
   }
 
+  // One thread: each subtree straight into `nodes`, in creation order. That is the layout the
+  // splice below makes (a subtree's root stays at its placeholder, its other nodes follow those of
+  // the subtrees before it, in the order they were made), without the copies.
+  if (threads <= 1) {
+    for (const Task& task : subtrees) {
+      auto stepper = makeStepper();
+      buildSubtree(nodes, task, stepper);
+    }
+    return nodes;
+  }
+
   // Subtrees into their own arrays, biggest first (load balance), then spliced in creation order.
   std::vector<std::vector<BvhNode>> local(subtrees.size());
   std::vector<uint32_t> order(subtrees.size());

@@ -56,14 +56,27 @@ inline float floatUp(double x) {
 // crossing also lies on the segment, so the range is clamped to [min, max] of p[i], q[i] (floats:
 // exact), which makes it exact whenever p[i] == q[i] (axis-parallel edges). 16u = 2^-49 relative is
 // far below a float step (2^-23), so the widening costs at most one float step, usually none.
+//
+// When every operation happens to be exact (checked with error-free transformations: Knuth's TwoSum
+// for the sums, an FMA for the product and the division's remainder), x is the exact value and no
+// widening is needed: the common case of coordinates on a coarse grid, and crossings at vertices.
+inline double sumError(double a, double b, double sum) {  // (a + b) - sum, exactly (TwoSum)
+  const double bb = sum - a;
+  return (a - (sum - bb)) + (b - bb);
+}
+
 inline void crossingRange(const glm::vec3& p, const glm::vec3& q, int k, float s, int i, float& lo, float& hi) {
   constexpr double u = std::numeric_limits<double>::epsilon() / 2.0;
   const double d1 = double(s) - double(p[k]);
   const double d2 = double(q[k]) - double(p[k]);
   const double t = d1 / d2;
-  const double m = t * (double(q[i]) - double(p[i]));
+  const double e = double(q[i]) - double(p[i]);
+  const double m = t * e;
   const double x = double(p[i]) + m;
-  const double err = 16.0 * u * (std::abs(double(p[i])) + std::abs(m));
+  const bool exact = sumError(double(s), -double(p[k]), d1) == 0.0 && sumError(double(q[k]), -double(p[k]), d2) == 0.0 &&
+                     std::fma(-t, d2, d1) == 0.0 && sumError(double(q[i]), -double(p[i]), e) == 0.0 &&
+                     std::fma(t, e, -m) == 0.0 && sumError(double(p[i]), m, x) == 0.0;
+  const double err = exact ? 0.0 : 16.0 * u * (std::abs(double(p[i])) + std::abs(m));
   const double segLo = std::min(double(p[i]), double(q[i])), segHi = std::max(double(p[i]), double(q[i]));
   lo = floatDown(std::max(x - err, segLo));
   hi = floatUp(std::min(x + err, segHi));

@@ -1,76 +1,119 @@
 // The SAH leaf collapse that the bottom-up builders (lbvh, ploc) share: they build a binary tree
 // down to single primitives, then every subtree of at most maxLeafSize primitives whose SAH cost as
 // one leaf (Ci * count * area) is no higher than as a subtree becomes one leaf.
+//
+// The input tree (`full`): root at 0, every child at a larger index than its parent, every box set,
+// every leaf holding one primitive (count 1, first = the primitive's input id). The output is
+// emitted depth-first (left child first, a node's children next to each other, in the order a
+// sequential depth-first walk appends them), and primIndices lists the primitives in leaf order.
+// The emission runs subtrees as parallel jobs, each writing its precomputed slots: the output is the
+// same for any thread count.
 #pragma once
 #include <cstdint>
+#include <span>
 #include <utility>
 #include <vector>
 
+#include "builders/build_util.hpp"
 #include "builders/bvh.hpp"
 
 namespace bvhlab::detail {
 
-// `full`: a binary tree with its root at 0 and every child at a larger index than its parent, every
-// box set, and every leaf holding one primitive (count 1, first = the primitive's input id). Returns
-// the collapsed tree, emitted depth-first (left child first); primIndices lists the primitives in
-// the order the leaves are emitted, so a leaf's range is contiguous.
-inline Bvh collapseLeavesBySah(const std::vector<BvhNode>& full, const BuildOptions& options) {
-  struct Info {
-    uint32_t count;
-    double cost;  // SAH cost of the subtree as it will be emitted, in unnormalised areas
-    bool collapse;
-  };
-  std::vector<Info> info(full.size());
+struct CollapseInfo {
+  double cost;     // SAH cost of the subtree as it will be emitted, in unnormalised areas
+  uint32_t count;  // primitives below
+  uint32_t inner;  // inner nodes it will emit: 0 exactly when it becomes one leaf
+  bool collapse() const { return inner == 0; }
+};
+
+// A node's entry from its children's (builders that make nodes bottom-up call this as they go).
+inline CollapseInfo collapseLeafInfo(const BvhNode& leaf, const BuildOptions& options) {
+  return {options.cost.intersectionCost * double(leaf.bounds.halfArea()) * leaf.count, leaf.count, 0};
+}
+inline CollapseInfo collapseInnerInfo(const BvhNode& node, const CollapseInfo& l, const CollapseInfo& r,
+                                      const BuildOptions& options) {
   const CostModel& c = options.cost;
+  const double area = node.bounds.halfArea();
+  const uint32_t count = l.count + r.count;
+  const double asLeaf = c.intersectionCost * area * count, asTree = c.traversalCost * area + l.cost + r.cost;
+  const bool collapse = count <= options.maxLeafSize && asLeaf <= asTree;
+  return {collapse ? asLeaf : asTree, count, collapse ? 0 : 1 + l.inner + r.inner};
+}
+
+// The collapsed tree from `full` and every node's CollapseInfo.
+inline Bvh emitCollapsed(std::span<const BvhNode> full, std::span<const CollapseInfo> info, unsigned threads) {
+  Bvh bvh;
+  bvh.nodes.resize(1 + 2 * size_t(info[0].inner));
+  bvh.primIndices.resize(info[0].count);
+  bvh.nodes[0] = {full[0].bounds};
+
+  // A walk from `from` (written at `to`) that appends children at `next` and primitives at `prim`.
+  struct Walk {
+    uint32_t from, to, next, prim;
+  };
+  // One depth-first walk; with `split`, nodes of at most `split` primitives (not collapsed) are not
+  // entered but returned, with the counters they will start from, so they can run as jobs.
+  auto walk = [&](Walk w, uint32_t split, std::vector<Walk>* jobs) {
+    std::vector<std::pair<uint32_t, uint32_t>> stack{{w.from, w.to}};  // (index in full, index in bvh)
+    std::vector<uint32_t> leafStack;
+    while (!stack.empty()) {
+      auto [from, to] = stack.back();
+      stack.pop_back();
+      const CollapseInfo& node = info[from];
+      if (node.collapse()) {  // its primitives, left to right
+        bvh.nodes[to].first = w.prim;
+        bvh.nodes[to].count = node.count;
+        leafStack.assign(1, from);
+        while (!leafStack.empty()) {
+          const BvhNode& sub = full[leafStack.back()];
+          leafStack.pop_back();
+          if (sub.isLeaf()) {
+            bvh.primIndices[w.prim++] = sub.first;
+          } else {
+            leafStack.push_back(sub.right);
+            leafStack.push_back(sub.left);
+          }
+        }
+        continue;
+      }
+      if (jobs && node.count <= split && from != w.from) {
+        jobs->push_back({from, to, w.next, w.prim});
+        w.next += 2 * node.inner;
+        w.prim += node.count;
+        continue;
+      }
+      const BvhNode& source = full[from];
+      const uint32_t left = w.next;
+      w.next += 2;
+      bvh.nodes[to].left = left;
+      bvh.nodes[to].right = left + 1;
+      bvh.nodes[left] = {full[source.left].bounds};
+      bvh.nodes[left + 1] = {full[source.right].bounds};
+      stack.push_back({source.right, left + 1});
+      stack.push_back({source.left, left});
+    }
+  };
+  const Walk root{0, 0, 1, 0};
+  const uint32_t n = info[0].count;
+  if (n < kParallelMinInput) {  // as buildTopDown: thresholds from the input size only
+    walk(root, 0, nullptr);
+    return bvh;
+  }
+  std::vector<Walk> jobs;
+  walk(root, n / kSubtreeFraction, &jobs);
+  runJobs(jobs.size(), threads, [&](size_t k) { walk(jobs[k], 0, nullptr); });
+  return bvh;
+}
+
+// The whole collapse for a tree whose boxes are all set (a bottom-up pass, then the emission).
+inline Bvh collapseLeavesBySah(const std::vector<BvhNode>& full, const BuildOptions& options, unsigned threads = 1) {
+  std::vector<CollapseInfo> info(full.size());
   for (size_t i = full.size(); i-- > 0;) {  // children before parents
     const BvhNode& node = full[i];
-    if (node.isLeaf()) {
-      info[i] = {node.count, c.intersectionCost * double(node.bounds.halfArea()) * node.count, true};
-      continue;
-    }
-    const Info &l = info[node.left], &r = info[node.right];
-    const double area = node.bounds.halfArea();
-    const uint32_t count = l.count + r.count;
-    const double asLeaf = c.intersectionCost * area * count, asTree = c.traversalCost * area + l.cost + r.cost;
-    const bool collapse = count <= options.maxLeafSize && asLeaf <= asTree;
-    info[i] = {count, collapse ? asLeaf : asTree, collapse};
+    info[i] = node.isLeaf() ? collapseLeafInfo(node, options)
+                            : collapseInnerInfo(node, info[node.left], info[node.right], options);
   }
-
-  Bvh bvh;
-  bvh.nodes.reserve(full.size());
-  bvh.primIndices.reserve(info[0].count);
-  bvh.nodes.push_back({full[0].bounds});
-  std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};  // (index in full, index in bvh)
-  std::vector<uint32_t> leafStack;
-  while (!stack.empty()) {
-    auto [from, to] = stack.back();
-    stack.pop_back();
-    const BvhNode& node = full[from];
-    if (info[from].collapse) {  // its primitives, left to right
-      bvh.nodes[to].first = uint32_t(bvh.primIndices.size());
-      bvh.nodes[to].count = info[from].count;
-      leafStack.assign(1, from);
-      while (!leafStack.empty()) {
-        const BvhNode& sub = full[leafStack.back()];
-        leafStack.pop_back();
-        if (sub.isLeaf()) {
-          bvh.primIndices.push_back(sub.first);
-        } else {
-          leafStack.push_back(sub.right);
-          leafStack.push_back(sub.left);
-        }
-      }
-      continue;
-    }
-    const uint32_t left = uint32_t(bvh.nodes.size());
-    bvh.nodes[to].left = left;
-    bvh.nodes[to].right = left + 1;
-    bvh.nodes.push_back({full[node.left].bounds});
-    bvh.nodes.push_back({full[node.right].bounds});
-    stack.push_back({node.right, left + 1});
-    stack.push_back({node.left, left});
-  }
-  return bvh;
+  return emitCollapsed(full, info, threads);
 }
 
 }  // namespace bvhlab::detail

@@ -126,7 +126,7 @@ Bvh buildLbvh(const BuildInput& input, const BuildOptions& options) {
       node.bounds.grow(full[node.right].bounds);
     }
   }
-  return detail::collapseLeavesBySah(full, options);
+  return detail::collapseLeavesBySah(full, options, detail::resolveThreads(options.threads));
 }
 
 }  // namespace bvhlab

@@ -6,28 +6,43 @@
 //     over the run (what lbvh does with equal codes; clustering nested boxes of one centre would
 //     chain them into a list).
 //  2. Repeat until one cluster is left: every cluster finds its nearest neighbour -- the one whose
-//     merged box has the smallest area -- among the clusters within +-radius in the current order;
-//     mutual nearest neighbours merge (the merged cluster takes the lower position, the order is kept)
-//     and the array is compacted.
+//     merged box has the smallest (half) area -- among the clusters within +-radius in the current
+//     order (BuildOptions::plocRadius, 1..1024); mutual nearest neighbours merge (the merged cluster
+//     takes the lower position, the order is kept) and the array is compacted.
 //  3. The single-primitive-leaf tree is collapsed by SAH (builders/collapse.hpp, shared with lbvh).
 // Ties in the merged area are broken by a key of the pair alone (distance in the order, then the
 // lower position's parity, then the lower position), so the smallest pair in the window is always
-// mutual (at least one merge per iteration) and equal boxes pair up (2k, 2k+1) instead of chaining.
-// The search runs in fixed chunks of the order on threads; every cluster's neighbour is a function
-// of the clusters alone, so the tree is the same for any thread count.
+// mutual (at least one merge per pass) and equal boxes pair up (2k, 2k+1) instead of chaining.
+// Threads: the passes work in fixed chunks of the order (never derived from the thread count) and
+// every cluster's neighbour is a function of the clusters alone, so the tree is the same for any
+// thread count. Quality, leaf 4, Ct = Ci = 1: 1.09x sah-binned's SAH on the bunny, elephant and
+// armadillo, 1.05x on makeLargeMesh(1M), 0.91x on random soups (tests/test_ploc.cpp).
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <barrier>
+#include <bit>
+#include <cstring>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <new>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
-// BVHLAB_NO_SIMD forces the portable path (same float operations in the same order: same trees).
-#if defined(__SSE2__) && !defined(BVHLAB_NO_SIMD)
-#define BVHLAB_PLOC_SSE 1
-#include <emmintrin.h>
+// The neighbour search runs on GCC/Clang vector extensions, 4 lanes (SSE2 on x86-64), or 8 lanes on
+// CPUs with AVX2 (chosen at run time). BVHLAB_NO_SIMD forces the scalar loop, BVHLAB_NO_AVX2 the 4
+// lanes: every path makes the same float operations on the same pairs and the same choices, so the
+// same trees (tests/test_ploc.cpp: Ploc.MatchesTheDefinition, a plain implementation, against the
+// path the machine takes).
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(BVHLAB_NO_SIMD)
+#define BVHLAB_PLOC_VECTOR 1
+#if defined(__x86_64__) && !defined(BVHLAB_NO_AVX2)
+#define BVHLAB_PLOC_AVX2 1
+#endif
 #endif
 
 #include "builders/build_util.hpp"
@@ -40,8 +55,10 @@ namespace {
 constexpr int kBitsPerAxis = 21;  // 3 * 21 = 63 bits in a 64-bit code
 // The CLI's range too (app/, render/, experiments/): the search costs O(radius) per cluster and pass.
 constexpr uint32_t kMaxRadius = 1024;
-// Clusters per search job. Fixed (never derived from the thread count); chunks only split the work,
-// each cluster's result does not depend on them. Each job rescans the radius clusters before it.
+// Clusters per job. Fixed (never derived from the thread count); chunks only split the work, no
+// cluster's neighbour depends on them. A job also searches for the radius clusters on either side
+// (to see which of its own are mutual) and needs the merged areas of the radius before those:
+// about 3 * 16 / 8192 = 0.6% more work at the default radius.
 constexpr uint32_t kChunk = 8192;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
@@ -62,129 +79,234 @@ struct Keyed {
   uint32_t id;
 };
 
-// LSD radix sort on the code, 8 bits per pass; stable, so equal codes keep their input order.
-// Passes whose digit is the same for every key are skipped.
-void radixSort(std::vector<Keyed>& keys) {
-  std::vector<Keyed> other(keys.size());
+// LSD radix sort on the code, 8 bits per pass; stable, so equal codes keep their input order (and
+// the order is unique: chunks and threads only split the work). Per pass, each chunk of kChunk keys
+// counts its digits, the counts become offsets (digit-major, chunk-minor), and each chunk scatters
+// its keys. Passes whose digit is the same for every key are skipped.
+void radixSort(std::vector<Keyed>& keys, unsigned threads) {
+  const size_t n = keys.size(), chunks = (n + kChunk - 1) / kChunk;
+  // Up to 16 thread starts per pass pair: worth it only when a pass is long against a start (tens
+  // of microseconds): from 16 chunks (131072 keys) on. The result is the same either way.
+  if (chunks < 16) threads = 1;
+  std::vector<Keyed> other(n);
+  std::vector<std::array<uint32_t, 256>> count(chunks);
   for (int shift = 0; shift < 64; shift += 8) {
-    std::array<size_t, 256> count{};
-    for (const Keyed& k : keys) ++count[(k.code >> shift) & 0xff];
-    if (count[(keys[0].code >> shift) & 0xff] == keys.size()) continue;
-    size_t sum = 0;
-    for (size_t& c : count) sum += std::exchange(c, sum);
-    for (const Keyed& k : keys) other[count[(k.code >> shift) & 0xff]++] = k;
+    auto digit = [shift](const Keyed& k) { return (k.code >> shift) & 0xff; };
+    detail::runJobs(chunks, threads, [&](size_t c) {
+      count[c].fill(0);
+      for (size_t i = c * kChunk, end = std::min(n, i + kChunk); i < end; ++i) ++count[c][digit(keys[i])];
+    });
+    size_t first = 0;  // keys with the first key's digit
+    for (const auto& chunk : count) first += chunk[digit(keys[0])];
+    if (first == n) continue;
+    uint32_t sum = 0;
+    for (size_t d = 0; d < 256; ++d)
+      for (auto& chunk : count) sum += std::exchange(chunk[d], sum);
+    detail::runJobs(chunks, threads, [&](size_t c) {
+      for (size_t i = c * kChunk, end = std::min(n, i + kChunk); i < end; ++i) other[count[c][digit(keys[i])]++] = keys[i];
+    });
     keys.swap(other);
   }
 }
 
-// The current clusters in order, structure of arrays (the search reads four neighbours at a time):
-// box[0..2] min x/y/z, box[3..5] max x/y/z, node = the cluster's node in the full tree. Padded by 4
-// so a 4-wide load past the last cluster stays inside the arrays (those lanes are masked).
+// The current clusters in order, structure of arrays: box[0..2] min x/y/z, box[3..5] max x/y/z,
+// node = the cluster's node in the full tree. The box arrays have `pad` (>= radius + 8, a multiple
+// of 4) entries before cluster 0 and after the last cluster holding an "everywhere" box, so the
+// search reads whole vectors around any cluster without bounds checks: such a box's union
+// with any box spans FLT_MAX - -FLT_MAX, which overflows to +inf on every axis, so its merged area
+// is +inf (inf * inf and inf + inf, never inf - inf or 0 * inf: no NaN) and never beats a finite
+// one. Entries between are left uninitialised: every pass writes what it reads.
 struct Clusters {
-  std::vector<float> box[6];
-  std::vector<uint32_t> node;
-  void resize(size_t m) {
-    for (auto& b : box) b.assign(m + 4, 0.0f);
-    node.resize(m + 4);
+  static constexpr float kHuge = std::numeric_limits<float>::max();
+  std::unique_ptr<float[]> storage[6];
+  float* box[6];
+  std::unique_ptr<uint32_t[]> node;
+  std::unique_ptr<detail::CollapseInfo[]> info;  // the node's (read here rather than from the tree)
+  uint32_t pad;
+  Clusters(uint32_t capacity, uint32_t padding) : pad(padding) {
+    for (int a = 0; a < 6; ++a) {
+      storage[a].reset(new float[capacity + 2 * size_t(pad)]);  // 16-byte aligned (malloc), so box[a] too
+      box[a] = storage[a].get() + pad;
+      std::fill_n(box[a] - pad, pad, a < 3 ? -kHuge : kHuge);
+    }
+    node.reset(new uint32_t[capacity]);
+    info.reset(new detail::CollapseInfo[capacity]);
+  }
+  void padAfter(uint32_t m) {
+    for (int a = 0; a < 6; ++a) std::fill_n(box[a] + m, pad, a < 3 ? -kHuge : kHuge);
   }
   Aabb bounds(uint32_t i) const {
     return {{box[0][i], box[1][i], box[2][i]}, {box[3][i], box[4][i], box[5][i]}};
   }
-  void set(uint32_t i, const Aabb& b, uint32_t n) {
+  void set(uint32_t i, const Aabb& b, uint32_t n, const detail::CollapseInfo& nodeInfo) {
     for (int a = 0; a < 3; ++a) box[a][i] = b.min[a], box[3 + a][i] = b.max[a];
     node[i] = n;
+    info[i] = nodeInfo;
   }
 };
 
 // Orders the candidates of cluster x that tie on merged area by a key of the pair {x, j} alone
 // (distance, parity of the lower position, the lower position), so both ends of a pair rank it alike.
-uint64_t tieKey(uint32_t x, uint32_t j) {
-  const uint64_t d = x > j ? x - j : j - x, lower = std::min(x, j);
+// Below 2^32 for any radius below 2^29 (kMaxRadius is far below).
+uint32_t tieKey(uint32_t x, uint32_t j) {
+  const uint32_t d = x > j ? x - j : j - x, lower = std::min(x, j);
   return 4 * d + 2 * (lower & 1) + (j > x ? 1 : 0);
 }
 
-// Scratch for one search job: the best candidate so far of each cluster in [base, base + size),
-// from clusters before it (the "backward" half of its window).
-struct Scratch {
-  std::vector<float> area;
-  std::vector<uint32_t> index;
-};
-
-// Cluster i against its forward window (i, i + count]: returns i's best forward candidate (smallest
-// area, ties to the nearest), and offers i to each of those clusters' backward best (ties to the
-// nearest: candidates arrive in increasing i, so equal areas replace). Merged half areas are
-// computed as Aabb::halfArea does, (ex*ey + ey*ez) + ez*ex; inputs are finite and validated to a
-// finite scene area, so every area here is finite and no NaN reaches a comparison.
-void scanForward(const Clusters& c, uint32_t i, uint32_t count, uint32_t base, Scratch& s, float& bestArea,
-                 uint32_t& bestIndex) {
-  float* backArea = s.area.data() - base;
-  uint32_t* backIndex = s.index.data() - base;
-#if defined(BVHLAB_PLOC_SSE)
-  const __m128 lx = _mm_set1_ps(c.box[0][i]), ly = _mm_set1_ps(c.box[1][i]), lz = _mm_set1_ps(c.box[2][i]);
-  const __m128 hx = _mm_set1_ps(c.box[3][i]), hy = _mm_set1_ps(c.box[4][i]), hz = _mm_set1_ps(c.box[5][i]);
-  const __m128i self = _mm_set1_epi32(int32_t(i)), limit = _mm_set1_epi32(int32_t(count)), four = _mm_set1_epi32(4);
-  __m128i k = _mm_setr_epi32(0, 1, 2, 3);  // offset - 1 of each lane: j = i + 1 + k (count <= kMaxRadius)
-  __m128i lane = _mm_setr_epi32(int32_t(i + 1), int32_t(i + 2), int32_t(i + 3), int32_t(i + 4));
-  __m128 vArea = _mm_set1_ps(kInf);
-  __m128i vIndex = _mm_set1_epi32(-1);
-  auto select = [](__m128 mask, __m128 a, __m128 b) { return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b)); };
-  for (uint32_t j = i + 1, end = i + 1 + count; j < end; j += 4) {
-    const __m128 ex = _mm_sub_ps(_mm_max_ps(hx, _mm_loadu_ps(&c.box[3][j])), _mm_min_ps(lx, _mm_loadu_ps(&c.box[0][j])));
-    const __m128 ey = _mm_sub_ps(_mm_max_ps(hy, _mm_loadu_ps(&c.box[4][j])), _mm_min_ps(ly, _mm_loadu_ps(&c.box[1][j])));
-    const __m128 ez = _mm_sub_ps(_mm_max_ps(hz, _mm_loadu_ps(&c.box[5][j])), _mm_min_ps(lz, _mm_loadu_ps(&c.box[2][j])));
-    const __m128 area = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ex, ey), _mm_mul_ps(ey, ez)), _mm_mul_ps(ez, ex));
-    const __m128 valid = _mm_castsi128_ps(_mm_cmplt_epi32(k, limit));
-    const __m128 better = _mm_and_ps(valid, _mm_cmplt_ps(area, vArea));
-    vArea = select(better, area, vArea);
-    vIndex = _mm_castps_si128(select(better, _mm_castsi128_ps(lane), _mm_castsi128_ps(vIndex)));
-    const __m128 back = _mm_loadu_ps(&backArea[j]);
-    const __m128i backI = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&backIndex[j]));
-    const __m128 replace = _mm_and_ps(valid, _mm_cmple_ps(area, back));
-    _mm_storeu_ps(&backArea[j], select(replace, area, back));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(&backIndex[j]),
-                     _mm_castps_si128(select(replace, _mm_castsi128_ps(self), _mm_castsi128_ps(backI))));
-    k = _mm_add_epi32(k, four);
-    lane = _mm_add_epi32(lane, four);
-  }
-  alignas(16) float areas[4];
-  alignas(16) uint32_t indices[4];
-  _mm_store_ps(areas, vArea);
-  _mm_store_si128(reinterpret_cast<__m128i*>(indices), vIndex);
-  bestArea = kInf, bestIndex = kNone;
-  for (int l = 0; l < 4; ++l)  // each lane kept its nearest among equals: the nearest overall wins
-    if (areas[l] < bestArea || (areas[l] == bestArea && indices[l] < bestIndex)) bestArea = areas[l], bestIndex = indices[l];
-#else
-  bestArea = kInf, bestIndex = kNone;
-  for (uint32_t j = i + 1, end = i + 1 + count; j < end; ++j) {
-    const float ex = std::max(c.box[3][i], c.box[3][j]) - std::min(c.box[0][i], c.box[0][j]);
-    const float ey = std::max(c.box[4][i], c.box[4][j]) - std::min(c.box[1][i], c.box[1][j]);
-    const float ez = std::max(c.box[5][i], c.box[5][j]) - std::min(c.box[2][i], c.box[2][j]);
-    const float area = (ex * ey + ey * ez) + ez * ex;
-    if (area < bestArea) bestArea = area, bestIndex = j;
-    if (area <= backArea[j]) backArea[j] = area, backIndex[j] = i;
-  }
-#endif
+// Candidate j of cluster x with merged area `area`, as one number: areas are >= 0 (and not NaN), so
+// their bit patterns order as they do; the nearest neighbour is the candidate with the smallest key.
+// "+ 0.0f" turns -0 into +0 (and changes nothing else): a coordinate of -0 next to one of +0 can
+// make an extent, and so an area, -0 or +0 depending on the operand order of min/max, and -0's bit
+// pattern would rank it above every positive area.
+uint64_t candidateKey(float area, uint32_t x, uint32_t j) {
+  return uint64_t(std::bit_cast<uint32_t>(area + 0.0f)) << 32 | tieKey(x, j);
 }
 
-// Nearest neighbour of each cluster in [a, b) among the m clusters, into nn[a, b).
-void nearestNeighbours(const Clusters& c, uint32_t m, uint32_t radius, uint32_t a, uint32_t b, uint32_t* nn,
-                       Scratch& s) {
-  const uint32_t base = a - std::min(a, radius);
-  // Backward bests of [base, b + radius), padded for the 4-wide stores past it.
-  const size_t size = size_t(b - base) + radius + 4;
-  s.area.assign(size, kInf);
-  s.index.assign(size, kNone);
-  for (uint32_t i = base; i < b; ++i) {
-    float forwardArea;
-    uint32_t forward;
-    scanForward(c, i, std::min(radius, m - 1 - i), base, s, forwardArea, forward);
-    if (i < a) continue;  // scanned only to offer itself to [a, b)
-    const float backArea = s.area[i - base];
-    const uint32_t back = s.index[i - base];
-    // m >= 2, so one side is finite; equal areas are then both finite.
-    nn[i] = forwardArea < backArea || (forwardArea == backArea && tieKey(i, forward) < tieKey(i, back)) ? forward
-                                                                                                      : back;
+// Frees what ::operator new allocated (BvhNode is trivially destructible: nothing to destroy).
+static_assert(std::is_trivially_destructible_v<BvhNode>);
+struct FreeStorage {
+  void operator()(BvhNode* p) const { ::operator delete(p); }
+};
+
+// Scratch for one search job: the ring of recent forward areas (vector path), the nearest neighbours.
+struct Scratch {
+  std::vector<float> forward;
+  std::vector<uint32_t> nn;
+};
+
+// Merged half area of clusters x and j, as Aabb::halfArea computes it: (ex*ey + ey*ez) + ez*ex.
+// Inputs are finite and validated to a finite scene area, so it is finite for real clusters.
+[[maybe_unused]] float mergedArea(const Clusters& c, int64_t x, int64_t j) {
+  const float ex = std::max(c.box[3][x], c.box[3][j]) - std::min(c.box[0][x], c.box[0][j]);
+  const float ey = std::max(c.box[4][x], c.box[4][j]) - std::min(c.box[1][x], c.box[1][j]);
+  const float ez = std::max(c.box[5][x], c.box[5][j]) - std::min(c.box[2][x], c.box[2][j]);
+  return (ex * ey + ey * ez) + ez * ex;
+}
+
+// The definition: the smallest candidateKey among the clusters within radius on either side.
+[[maybe_unused]] void nearestNeighboursScalar(const Clusters& c, uint32_t m, uint32_t radius, uint32_t lo,
+                                              uint32_t hi, Scratch& s) {
+  for (uint32_t x = lo; x < hi; ++x) {
+    uint64_t best = ~uint64_t(0);
+    uint32_t nearest = kNone;
+    for (uint32_t d = 1; d <= radius; ++d) {
+      if (x >= d) {
+        const uint64_t key = candidateKey(mergedArea(c, x, x - d), x, x - d);
+        if (key < best) best = key, nearest = x - d;
+      }
+      if (x + d < m) {
+        const uint64_t key = candidateKey(mergedArea(c, x, x + d), x, x + d);
+        if (key < best) best = key, nearest = x + d;
+      }
+    }
+    s.nn[x - lo] = nearest;
   }
+}
+
+#if defined(BVHLAB_PLOC_VECTOR)
+// W consecutive clusters x0..x0+W-1 (x0 a multiple of W) per vector. For d = 1..radius: the merged
+// areas with x + d (forward), kept in a ring of the last `ring` columns per d, from which the merged
+// areas with x - d (backward) are read back, so each pair is computed once. Ties on area go to the
+// smaller d on each side (strict <, d ascending); the sides then meet by candidateKey. The blocks
+// start up to W - 1 clusters early; the lanes before lo may read ring columns this job has not
+// written (zeros or older areas, never NaN), and their results are dropped.
+// min/max as a < b ? a : b: inputs are never NaN; for -0 vs +0 the choice can differ from the
+// scalar loop's, which only changes the sign of a zero area, and candidateKey ignores that.
+typedef float Float4 __attribute__((vector_size(16)));
+typedef int32_t Int4 __attribute__((vector_size(16)));
+typedef float Float8 __attribute__((vector_size(32)));
+typedef int32_t Int8 __attribute__((vector_size(32)));
+template <int W>
+struct Vectors;
+template <>
+struct Vectors<4> {
+  using F = Float4;
+  using I = Int4;
+};
+template <>
+struct Vectors<8> {
+  using F = Float8;
+  using I = Int8;
+};
+
+template <int W>
+[[gnu::always_inline]] inline void nearestNeighboursVector(const Clusters& c, uint32_t radius, uint32_t lo,
+                                                           uint32_t hi, Scratch& s) {
+  using F = typename Vectors<W>::F;
+  using I = typename Vectors<W>::I;
+  F inf;
+  for (int l = 0; l < W; ++l) inf[l] = kInf;
+  const uint32_t ring = std::bit_ceil(radius + W);  // >= the radius + W columns in use at once
+  const size_t stride = ring + W;                    // + a copy of columns 0..W-1: no load wraps
+  s.forward.resize(radius * stride);
+  float* const ringBase = s.forward.data();
+  const int64_t first = (int64_t(lo) - radius) & ~int64_t(W - 1);  // >= -pad: padding before 0
+  for (int64_t x0 = first; x0 < int64_t(hi); x0 += W) {
+    F box[6];
+    for (int a = 0; a < 6; ++a) std::memcpy(&box[a], c.box[a] + x0, sizeof(F));
+    const uint32_t column = uint32_t(x0) & (ring - 1);
+    F forwardArea = inf, backwardArea = inf;
+    I forwardD = {}, backwardD = {};
+    float* row = ringBase;
+    for (uint32_t d = 1; d <= radius; ++d, row += stride) {
+      F e[3];
+      for (int a = 0; a < 3; ++a) {
+        F low, high;
+        std::memcpy(&low, c.box[a] + x0 + d, sizeof(F));
+        std::memcpy(&high, c.box[3 + a] + x0 + d, sizeof(F));
+        e[a] = (box[3 + a] > high ? box[3 + a] : high) - (box[a] < low ? box[a] : low);
+      }
+      const F area = (e[0] * e[1] + e[1] * e[2]) + e[2] * e[0];
+      std::memcpy(row + column, &area, sizeof(F));
+      if (column == 0) std::memcpy(row + ring, &area, sizeof(F));
+      const I better = area < forwardArea;
+      forwardArea = better ? area : forwardArea;
+      forwardD = better ? int32_t(d) : forwardD;
+    }
+    if (x0 + W <= int64_t(lo)) continue;  // only its forward areas were needed
+    row = ringBase;
+    for (uint32_t d = 1; d <= radius; ++d, row += stride) {
+      F area;  // written d columns ago
+      std::memcpy(&area, row + (uint32_t(x0 - d) & (ring - 1)), sizeof(F));
+      const I better = area < backwardArea;
+      backwardArea = better ? area : backwardArea;
+      backwardD = better ? int32_t(d) : backwardD;
+    }
+    for (int l = 0; l < W; ++l) {
+      const int64_t x = x0 + l;
+      if (x < int64_t(lo) || x >= int64_t(hi)) continue;
+      // m >= 2, so one side has a real (finite) candidate; a side without one has area +inf.
+      const uint32_t xi = uint32_t(x), forward = xi + uint32_t(forwardD[l]), backward = xi - uint32_t(backwardD[l]);
+      s.nn[xi - lo] =
+          candidateKey(forwardArea[l], xi, forward) < candidateKey(backwardArea[l], xi, backward) ? forward : backward;
+    }
+  }
+}
+
+void nearestNeighbours4(const Clusters& c, uint32_t radius, uint32_t lo, uint32_t hi, Scratch& s) {
+  nearestNeighboursVector<4>(c, radius, lo, hi, s);
+}
+#if defined(BVHLAB_PLOC_AVX2)
+[[gnu::target("avx2")]] void nearestNeighbours8(const Clusters& c, uint32_t radius, uint32_t lo, uint32_t hi,
+                                                Scratch& s) {
+  nearestNeighboursVector<8>(c, radius, lo, hi, s);
+}
+#endif
+#endif
+
+// Nearest neighbour of each cluster in [lo, hi) among the m clusters, into s.nn[0, hi - lo).
+void nearestNeighbours(const Clusters& c, [[maybe_unused]] uint32_t m, uint32_t radius, uint32_t lo, uint32_t hi,
+                       Scratch& s) {
+  s.nn.resize(hi - lo);
+#if defined(BVHLAB_PLOC_AVX2)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return nearestNeighbours8(c, radius, lo, hi, s);
+#endif
+#if defined(BVHLAB_PLOC_VECTOR)
+  nearestNeighbours4(c, radius, lo, hi, s);
+#else
+  nearestNeighboursScalar(c, m, radius, lo, hi, s);
+#endif
 }
 
 }  // namespace
@@ -217,75 +339,168 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
       keys[i] = {spreadBits(uint64_t(q.x)) << 2 | spreadBits(uint64_t(q.y)) << 1 | spreadBits(uint64_t(q.z)), i};
     }
   });
-  radixSort(keys);
+  radixSort(keys, threads);
 
   // The full tree: leaves at n - 1 + (Morton position), inner nodes numbered downwards from n - 2 as
   // they are made, so a parent (made after its children) has a smaller index and the root ends at 0.
-  std::vector<BvhNode> full(2 * size_t(n) - 1);
-  for (uint32_t k = 0; k < n; ++k) {
-    BvhNode& leaf = full[n - 1 + k];
-    leaf.bounds = input.boxes[keys[k].id];
-    leaf.first = keys[k].id;
-    leaf.count = 1;
-  }
-  uint32_t nextInner = n - 1;  // one past the next inner node's index
-  auto makeInner = [&](uint32_t left, uint32_t right) {
-    const uint32_t index = --nextInner;
-    BvhNode& node = full[index];
-    node.bounds = full[left].bounds;
-    node.bounds.grow(full[right].bounds);
-    node.left = left;
-    node.right = right;
-    return index;
+  // Each node's collapse cost is computed as it is made (builders/collapse.hpp).
+  // Storage only: each node is constructed once, when it is made (and first touched by the thread
+  // that makes it), instead of being initialised first and then overwritten.
+  const size_t nodes = 2 * size_t(n) - 1;
+  std::unique_ptr<BvhNode[], FreeStorage> full(static_cast<BvhNode*>(::operator new(nodes * sizeof(BvhNode))));
+  std::unique_ptr<detail::CollapseInfo[]> info(new detail::CollapseInfo[nodes]);
+  auto makeInner = [&](uint32_t index, uint32_t left, uint32_t right, const Aabb& box, const detail::CollapseInfo& l,
+                       const detail::CollapseInfo& r) -> const detail::CollapseInfo& {
+    const BvhNode& node = *new (&full[index]) BvhNode{box, left, right, 0, 0};
+    return info[index] = detail::collapseInnerInfo(node, l, r, options);
+  };
+  auto chunkOf = [&](size_t job, uint32_t size) {
+    const uint32_t a = uint32_t(job) * kChunk;
+    return std::pair{a, std::min(size, a + kChunk)};
   };
 
-  // Initial clusters: single primitives, and one balanced tree per run of equal codes.
-  Clusters clusters, next;
-  clusters.resize(n);
-  next.resize(n);
-  uint32_t m = 0;
-  std::vector<uint32_t> level;
-  for (uint32_t k = 0; k < n;) {
-    uint32_t end = k + 1;
-    while (end < n && keys[end].code == keys[k].code) ++end;
-    level.clear();
-    for (uint32_t p = k; p < end; ++p) level.push_back(n - 1 + p);
-    while (level.size() > 1) {  // pair neighbours level by level: depth ceil(log2 run)
-      size_t w = 0;
-      for (size_t p = 0; p + 1 < level.size(); p += 2) level[w++] = makeInner(level[p], level[p + 1]);
-      if (level.size() % 2) level[w++] = level.back();
-      level.resize(w);
+  // Initial clusters: single primitives, and one balanced tree per run of equal codes. Per chunk of
+  // the order: the leaves, and the runs that start in it (clusters) with their inner nodes; then the
+  // runs' trees, at offsets from those counts (the numbering of a sequential pass).
+  auto runStart = [&](uint32_t k) { return k == 0 || keys[k].code != keys[k - 1].code; };
+  auto runEnd = [&](uint32_t k) {
+    while (++k < n && keys[k].code == keys[k - 1].code) {}
+    return k;
+  };
+  std::vector<uint32_t> outputs(jobs), merges(jobs), outputAt(jobs), nodeAt(jobs);
+  detail::runJobs(jobs, threads, [&](size_t job) {
+    const auto [a, b] = chunkOf(job, n);
+    uint32_t runs = 0, inner = 0;
+    for (uint32_t k = a; k < b; ++k) {
+      const BvhNode& leaf = *new (&full[n - 1 + k]) BvhNode{input.boxes[keys[k].id], 0, 0, keys[k].id, 1};
+      info[n - 1 + k] = detail::collapseLeafInfo(leaf, options);
+      if (runStart(k)) ++runs, inner += runEnd(k) - k - 1;
     }
-    clusters.set(m++, full[level[0]].bounds, level[0]);
-    k = end;
-  }
+    outputs[job] = runs, merges[job] = inner;
+  });
+  uint32_t nextInner = n - 1;  // one past the next inner node's index
+  auto offsets = [&](uint32_t chunks) {
+    uint32_t total = 0;
+    for (uint32_t job = 0; job < chunks; ++job) {
+      outputAt[job] = total, nodeAt[job] = nextInner;
+      total += outputs[job], nextInner -= merges[job];
+    }
+    return total;
+  };
+  const uint32_t pad = (radius + 11) & ~3u;  // >= radius + 8 (the widest vector), a multiple of 4
+  Clusters clusters(n, pad), next(n, pad);
+  uint32_t m = offsets(jobs);
+  clusters.padAfter(m);
+  detail::runJobs(jobs, threads, [&](size_t job) {
+    const auto [a, b] = chunkOf(job, n);
+    uint32_t out = outputAt[job], node = nodeAt[job];
+    std::vector<uint32_t> level;
+    for (uint32_t k = a; k < b; ++k) {
+      if (!runStart(k)) continue;
+      level.clear();
+      for (uint32_t p = k, end = runEnd(k); p < end; ++p) level.push_back(n - 1 + p);
+      while (level.size() > 1) {  // pair neighbours level by level: depth ceil(log2 run)
+        size_t w = 0;
+        for (size_t p = 0; p + 1 < level.size(); p += 2) {
+          Aabb box = full[level[p]].bounds;
+          box.grow(full[level[p + 1]].bounds);
+          makeInner(--node, level[p], level[p + 1], box, info[level[p]], info[level[p + 1]]);
+          level[w++] = node;
+        }
+        if (level.size() % 2) level[w++] = level.back();
+        level.resize(w);
+      }
+      clusters.set(out++, full[level[0]].bounds, level[0], info[level[0]]);
+    }
+  });
 
-  // 2. Cluster.
-  std::vector<uint32_t> nn(n);
-  std::vector<Scratch> scratch(jobs);
-  while (m > 1) {
-    const uint32_t chunks = (m + kChunk - 1) / kChunk;
-    detail::runJobs(chunks, threads, [&](size_t job) {
-      const uint32_t a = uint32_t(job) * kChunk, b = std::min(m, a + kChunk);
-      nearestNeighbours(clusters, m, radius, a, b, nn.data(), scratch[job]);
-    });
-    uint32_t w = 0;
-    for (uint32_t i = 0; i < m; ++i) {
-      const uint32_t j = nn[i];
-      if (nn[j] != i) {  // no merge this pass: keep it
-        for (int a = 0; a < 6; ++a) next.box[a][w] = clusters.box[a][i];
-        next.node[w++] = clusters.node[i];
-      } else if (i < j) {  // mutual: merged at the lower position
-        const uint32_t node = makeInner(clusters.node[i], clusters.node[j]);
-        next.set(w++, full[node].bounds, node);
+  // 2. Cluster. Each pass: (a) per chunk of the order, every cluster's nearest neighbour (the chunk
+  // also computes those of the radius clusters on either side, to see which of its own are mutual)
+  // and the chunk's counts; (b) the offsets from the counts; (c) per chunk, the merged and kept
+  // clusters written at those offsets. Merges are numbered in order, so the tree is that of a
+  // sequential pass, whichever thread does which chunk.
+  std::vector<uint32_t> partner(n);  // the nearest neighbour when mutual, else kNone
+  uint32_t chunks = (m + kChunk - 1) / kChunk, total = 0;
+  const unsigned team = std::min<unsigned>(threads, chunks);
+  std::vector<Scratch> scratch(std::max(team, 1u));  // one per thread
+  for (Scratch& s : scratch) {  // the most a search asks for: no allocation (nor exception) inside
+    s.nn.reserve(kChunk + 2 * size_t(radius));
+    s.forward.reserve(radius * (std::bit_ceil(radius + 8) + 8));
+  }
+  auto search = [&](uint32_t job, Scratch& s) {
+    const auto [a, b] = chunkOf(job, m);
+    const uint32_t lo = a - std::min(a, radius), hi = std::min(m, b + radius);
+    nearestNeighbours(clusters, m, radius, lo, hi, s);
+    uint32_t merged = 0, dropped = 0;
+    for (uint32_t x = a; x < b; ++x) {  // branch-free: "mutual" is a coin flip to a predictor
+      const uint32_t y = s.nn[x - lo];    // within radius of x, so inside [lo, hi)
+      const uint32_t mutual = s.nn[y - lo] == x;
+      partner[x] = y | (mutual - 1);  // kNone unless mutual
+      merged += mutual & (x < y);
+      dropped += mutual & (x > y);
+    }
+    outputs[job] = (b - a) - dropped;
+    merges[job] = merged;
+  };
+  auto write = [&](uint32_t job) {
+    const auto [a, b] = chunkOf(job, m);
+    uint32_t out = outputAt[job], node = nodeAt[job];
+    for (uint32_t x = a; x < b; ++x) {
+      const uint32_t y = partner[x];
+      if (y == kNone) {  // no merge this pass: kept
+        for (int k = 0; k < 6; ++k) next.box[k][out] = clusters.box[k][x];
+        next.node[out] = clusters.node[x];
+        next.info[out++] = clusters.info[x];
+      } else if (x < y) {  // merged at the lower position
+        Aabb box = clusters.bounds(x);
+        box.grow(clusters.bounds(y));
+        --node;
+        next.set(out++, box, node,
+                 makeInner(node, clusters.node[x], clusters.node[y], box, clusters.info[x], clusters.info[y]));
       }
     }
+  };
+  auto finishPass = [&] {
     std::swap(clusters, next);
-    m = w;
+    m = total;
+    clusters.padAfter(m);
+    chunks = (m + kChunk - 1) / kChunk;
+  };
+  // While a pass has several chunks: one team of threads for all those passes, in step at a barrier
+  // after each phase (a thread start costs tens of microseconds, a pass can take less). The barrier's
+  // completion step runs alone: the offsets, then the swap to the next pass.
+  if (m > 1 && team > 1) {
+    std::atomic<uint32_t> claimSearch{0}, claimWrite{0};
+    bool afterSearch = true;
+    auto step = [&]() noexcept {
+      if (afterSearch) {
+        total = offsets(chunks);
+        claimWrite = 0;
+      } else {
+        finishPass();
+        claimSearch = 0;
+      }
+      afterSearch = !afterSearch;
+    };
+    std::barrier sync(team, step);
+    detail::runJobs(team, team, [&](size_t member) {  // team jobs on team threads: all run at once
+      while (m > 1 && chunks > 1) {
+        for (uint32_t job; (job = claimSearch++) < chunks;) search(job, scratch[member]);
+        sync.arrive_and_wait();
+        for (uint32_t job; (job = claimWrite++) < chunks;) write(job);
+        sync.arrive_and_wait();
+      }
+    });
+  }
+  while (m > 1) {  // the rest (or everything, on one thread), sequentially
+    for (uint32_t job = 0; job < chunks; ++job) search(job, scratch[0]);
+    total = offsets(chunks);
+    for (uint32_t job = 0; job < chunks; ++job) write(job);
+    finishPass();
   }
 
   // 3. Leaves.
-  return detail::collapseLeavesBySah(full, options);
+  return detail::emitCollapsed({full.get(), nodes}, {info.get(), nodes}, threads);
 }
 
 }  // namespace bvhlab

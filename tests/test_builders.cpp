@@ -280,7 +280,16 @@ TEST_P(EveryBuilder, AllCentroidsEqual) {
     options.maxLeafSize = leafSize;
     const Bvh bvh = buildChecked(GetParam(), set, options);
     // Without a usable centroid axis a builder can only halve: the depth must stay logarithmic.
-    EXPECT_LE(computeStats(bvh, options.cost).depth, 2 + uint32_t(std::ceil(std::log2(double(set.size())))));
+    const uint32_t logDepth = 2 + uint32_t(std::ceil(std::log2(double(set.size()))));
+    if (!testing::splitsPrimitives(GetParam())) {
+      EXPECT_LE(computeStats(bvh, options.cost).depth, logDepth);
+    } else {
+      // Spatial splits need no centroid axis: a plane through the nested boxes keeps every reference
+      // on one side and sends the straddlers' clipped outer parts to the other, one layer of box
+      // sizes per level, each level paid for by the reference budget (here 17 sizes: depth ~30).
+      // Still nowhere near linear.
+      EXPECT_LE(computeStats(bvh, options.cost).depth, 4 * logDepth);
+    }
   }
 }
 
