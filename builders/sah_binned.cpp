@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -130,6 +131,32 @@ inline double select(bool c, double a, double b) {
   return std::bit_cast<double>((std::bit_cast<uint64_t>(a) & m) | (std::bit_cast<uint64_t>(b) & ~m));
 }
 
+// Batcher's odd-even merge sort of N elements: the network for the next power of two, less the
+// compare-exchanges that reach past N (padding that sorts last would not move).
+template <uint32_t N, class F>
+constexpr void forEachCompareExchange(F f) {
+  constexpr uint32_t P = std::bit_ceil(N);
+  for (uint32_t p = 1; p < P; p <<= 1)
+    for (uint32_t k = p; k >= 1; k >>= 1)
+      for (uint32_t j = k % p; j + k < P; j += 2 * k)
+        for (uint32_t i = 0; i < std::min(k, P - j - k); ++i)
+          if ((i + j) / (2 * p) == (i + j + k) / (2 * p) && i + j + k < N) f(i + j, i + j + k);
+}
+template <uint32_t N>
+constexpr auto makeSortingNetwork() {
+  constexpr uint32_t size = [] {
+    uint32_t count = 0;
+    forEachCompareExchange<N>([&](uint32_t, uint32_t) { ++count; });
+    return count;
+  }();
+  std::array<std::array<uint8_t, 2>, size> network{};
+  uint32_t next = 0;
+  forEachCompareExchange<N>([&](uint32_t a, uint32_t b) { network[next++] = {uint8_t(a), uint8_t(b)}; });
+  return network;
+}
+template <uint32_t N>
+constexpr auto kSortingNetwork = makeSortingNetwork<N>();
+
 // A box as two F4 corners; starts empty (+inf/-inf).
 struct Box4 {
   F4 lo = F4::splat(kInf);
@@ -199,7 +226,7 @@ struct Bin {
 
 class BinnedStepper {
  public:
-  BinnedStepper(std::vector<Ref>& refs, const BuildOptions& options, uint32_t bins)
+  BinnedStepper(Ref* refs, const BuildOptions& options, uint32_t bins)
       : refs_(refs), options_(options), bins_(bins), sides_(1) {
     for (auto& set : sets_) set.resize(3 * size_t(bins));
   }
@@ -219,7 +246,7 @@ class BinnedStepper {
         split = tinySplit(task, mapping);
       } else {
         reserveScratch(n);
-        split = n < EXP_SMALL * bins_ ? findSplitSmall(task, mapping) : findSplitLarge(task, mapping);
+        split = n < bins_ ? findSplitSmall(task, mapping) : findSplitLarge(task, mapping);
       }
     }
 
@@ -269,8 +296,9 @@ class BinnedStepper {
 
  private:
   void reserveScratch(uint32_t n) {
-    if (binOf_.size() >= n + kScratchPad) return;
-    binOf_.resize(n + kScratchPad);
+    if (binOf_ && binOf_->size() >= n + kScratchPad) return;
+    binOf_ = std::make_unique<detail::ScratchArray<uint32_t>>(n + kScratchPad);
+    std::fill_n(binOf_->data() + n, kScratchPad, 0u);  // the classification reads past the references
     sides_.resize(n / 64 + 2);
   }
 
@@ -303,7 +331,7 @@ class BinnedStepper {
   Split subsetSplit(const Task& task, const BinMapping& mapping) {
     static_assert(N == 3 || N == 4);
     constexpr uint32_t kAll = (1u << N) - 1;
-    const Ref* const refs = refs_.data() + task.begin;
+    const Ref* const refs = refs_ + task.begin;
     Box4 box[kAll];  // box[0] is empty
     float area[kAll];
 #pragma GCC unroll 16
@@ -351,46 +379,48 @@ class BinnedStepper {
   template <uint32_t N>
   Split tinySplit(const Task& task, const BinMapping& mapping) {
     static_assert(N <= kTinyMax && kTinyMax <= 16);
-    const Ref* const refs = refs_.data() + task.begin;
+    const Ref* const refs = refs_ + task.begin;
     Split best;
 #if defined(BVHLAB_BINNED_SSE)
-    // key = bin << 4 | position, per axis in lanes; rank = how many keys are smaller.
+    // key = bin << 4 | position (< 2^12: 16-bit lanes), one lane per axis, sorted by a sorting
+    // network: all axes at once.
     __m128i key[N];
     for (uint32_t k = 0; k < N; ++k) {
       const __m128i b = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_sub_ps(refs[k].centroid.v, mapping.origin.v), mapping.scale.v), mapping.last.v));
-      key[k] = _mm_or_si128(_mm_slli_epi32(b, 4), _mm_set1_epi32(int32_t(k)));
+      const __m128i b16 = _mm_packs_epi32(b, b);  // bins < 256
+      key[k] = _mm_or_si128(_mm_slli_epi16(b16, 4), _mm_set1_epi16(int16_t(k)));
     }
-    alignas(16) int32_t rank[N][4];
-    for (uint32_t k = 0; k < N; ++k) {
-      __m128i r = _mm_setzero_si128();
-      for (uint32_t j = 0; j < N; ++j) r = _mm_sub_epi32(r, _mm_cmplt_epi32(key[j], key[k]));
-      _mm_store_si128(reinterpret_cast<__m128i*>(rank[k]), r);
+#pragma GCC unroll 64
+    for (const auto& [i, j] : kSortingNetwork<N>) {
+      const __m128i lo = _mm_min_epi16(key[i], key[j]);
+      key[j] = _mm_max_epi16(key[i], key[j]);
+      key[i] = lo;
     }
-    alignas(16) int32_t sortedKey[N + 1][4];  // per axis, in order
-    uint8_t order[3][N];
-    for (uint32_t k = 0; k < N; ++k) {
-      alignas(16) int32_t kk[4];
-      _mm_store_si128(reinterpret_cast<__m128i*>(kk), key[k]);
-      for (int a = 0; a < 3; ++a) order[a][rank[k][a]] = uint8_t(k), sortedKey[rank[k][a]][a] = kk[a];
-    }
-    const __m128i binMask = _mm_setr_epi32(~15, ~15, ~15, 0);
     const __m128i one = _mm_setr_epi32(1, 1, 1, 0);
     uint32_t cut;
     const bool found = sweepLanes(N, [&](uint32_t j, Lanes& l) {
-      __m128 lo0 = refs[order[0][j]].lo.v, lo1 = refs[order[1][j]].lo.v, lo2 = refs[order[2][j]].lo.v, lw = _mm_setzero_ps();
-      __m128 hi0 = refs[order[0][j]].hi.v, hi1 = refs[order[1][j]].hi.v, hi2 = refs[order[2][j]].hi.v, hw = _mm_setzero_ps();
+      const __m128i k = key[j];
+      const Ref& r0 = refs[_mm_extract_epi16(k, 0) & 15];
+      const Ref& r1 = refs[_mm_extract_epi16(k, 1) & 15];
+      const Ref& r2 = refs[_mm_extract_epi16(k, 2) & 15];
+      __m128 lo0 = r0.lo.v, lo1 = r1.lo.v, lo2 = r2.lo.v, lw = _mm_setzero_ps();
+      __m128 hi0 = r0.hi.v, hi1 = r1.hi.v, hi2 = r2.hi.v, hw = _mm_setzero_ps();
       _MM_TRANSPOSE4_PS(lo0, lo1, lo2, lw);
       _MM_TRANSPOSE4_PS(hi0, hi1, hi2, hw);
       l.lx = lo0, l.ly = lo1, l.lz = lo2, l.hx = hi0, l.hy = hi1, l.hz = hi2, l.count = one;
-      if (j + 1 < N) {
-        const __m128i here = _mm_and_si128(_mm_load_si128(reinterpret_cast<const __m128i*>(sortedKey[j])), binMask);
-        const __m128i next = _mm_and_si128(_mm_load_si128(reinterpret_cast<const __m128i*>(sortedKey[j + 1])), binMask);
-        l.noCut = _mm_cmpeq_epi32(here, next);  // same bin: no boundary after j
+      if (j + 1 < N) {  // the same bin as the next: no boundary after j (padding lanes 3..7 never cut)
+        const __m128i same = _mm_cmpeq_epi16(_mm_srai_epi16(k, 4), _mm_srai_epi16(key[j + 1], 4));
+        l.noCut = _mm_unpacklo_epi16(same, same);
       }
     }, best, cut);
     uint64_t sides = 0;
-    if (found)
-      for (uint32_t t = 0; t <= cut; ++t) sides |= uint64_t(1) << order[best.axis][t];
+    if (found) {
+      alignas(16) int16_t lanes[8];
+      for (uint32_t t = 0; t <= cut; ++t) {
+        _mm_store_si128(reinterpret_cast<__m128i*>(lanes), key[t]);
+        sides |= uint64_t(1) << (lanes[best.axis] & 15);
+      }
+    }
     sides_[0] = sides;
 #else
     alignas(16) int32_t bin[N][4];
@@ -467,8 +497,8 @@ class BinnedStepper {
   void binRefs(const Task& task, const BinMapping& mapping, uint32_t first, uint32_t stride, int set,
                uint64_t (*occupancy)[kMaxBins / 64]) {
     const uint32_t n = task.end - task.begin;
-    const Ref* const refs = refs_.data() + task.begin;
-    uint32_t* const binOf = binOf_.data();
+    const Ref* const refs = refs_ + task.begin;
+    uint32_t* const binOf = binOf_->data();
     Bin* const base = sets_[set].data();
 #if defined(BVHLAB_BINNED_SSE)
     const __m128i offsets = _mm_setr_epi32(0, int32_t(bins_ * sizeof(Bin)), int32_t(2 * bins_ * sizeof(Bin)), 0);
@@ -617,8 +647,8 @@ class BinnedStepper {
   struct Lanes {
     __m128 lx, ly, lz, hx, hy, hz;
     __m128i count, noCut;
-    __m128 leftArea, rightArea;
-    __m128i leftCount, rightCount;
+    __m128 leftArea;
+    __m128i leftCount;
   };
 
   // The SAH over boundaries after positions 0..m - 2 of the three axes at once, each position given
@@ -641,38 +671,16 @@ class BinnedStepper {
       l.leftArea = halfAreas(lx, ly, lz, hx, hy, hz);
       l.leftCount = count;
     }
-    lx = _mm_set1_ps(kInf), ly = lx, lz = lx, hx = _mm_set1_ps(-kInf), hy = hx, hz = hx;
-    count = _mm_setzero_si128();
-    for (uint32_t j = m - 1; j > 0; --j) {  // right to left: suffix unions (area 0 while empty: no inf * 0)
-      Lanes& l = lanes_[j];
-      lx = _mm_min_ps(lx, l.lx), ly = _mm_min_ps(ly, l.ly), lz = _mm_min_ps(lz, l.lz);
-      hx = _mm_max_ps(hx, l.hx), hy = _mm_max_ps(hy, l.hy), hz = _mm_max_ps(hz, l.hz);
-      count = _mm_add_epi32(count, l.count);
-      const __m128i empty = _mm_cmpeq_epi32(count, _mm_setzero_si128());
-      l.rightArea = _mm_andnot_ps(_mm_castsi128_ps(empty), halfAreas(lx, ly, lz, hx, hy, hz));
-      l.rightCount = count;
-    }
-    const __m128d ci = _mm_set1_pd(options_.cost.intersectionCost), inf = _mm_set1_pd(kInf);
-    __m128d best01 = inf, best23 = inf;
+    // Right to left: suffix unions, and the boundary before each position. Scanning down, `<=` keeps
+    // the lowest position among equal costs: the first minimum.
+    const double ci = options_.cost.intersectionCost;
+    const bool unitCi = ci == 1.0, smallCounts = uint32_t(_mm_cvtsi128_si32(lanes_[m - 1].leftCount)) < 0x80000000u;  // the node's count
+    __m128d best01 = _mm_set1_pd(kInf), best23 = best01;
     __m128i at01 = _mm_setzero_si128(), at23 = _mm_setzero_si128();
-    for (uint32_t j = 0; j + 1 < m; ++j) {
-      const Lanes& l = lanes_[j];
-      const Lanes& r = lanes_[j + 1];
-      const __m128 la23 = _mm_movehl_ps(l.leftArea, l.leftArea), ra23 = _mm_movehl_ps(r.rightArea, r.rightArea);
-      const __m128d c01 = _mm_mul_pd(ci, _mm_add_pd(_mm_mul_pd(_mm_cvtps_pd(l.leftArea), toDouble(l.leftCount)),
-                                                    _mm_mul_pd(_mm_cvtps_pd(r.rightArea), toDouble(r.rightCount))));
-      const __m128d c23 = _mm_mul_pd(ci, _mm_add_pd(_mm_mul_pd(_mm_cvtps_pd(la23), toDouble(_mm_unpackhi_epi64(l.leftCount, l.leftCount))),
-                                                    _mm_mul_pd(_mm_cvtps_pd(ra23), toDouble(_mm_unpackhi_epi64(r.rightCount, r.rightCount)))));
-      const __m128i none = _mm_or_si128(_mm_cmpeq_epi32(r.rightCount, _mm_setzero_si128()), l.noCut);
-      const __m128d none01 = _mm_castsi128_pd(_mm_unpacklo_epi32(none, none)), none23 = _mm_castsi128_pd(_mm_unpackhi_epi32(none, none));
-      const __m128d better01 = _mm_andnot_pd(none01, _mm_cmplt_pd(c01, best01));
-      const __m128d better23 = _mm_andnot_pd(none23, _mm_cmplt_pd(c23, best23));
-      const __m128i at = _mm_set1_epi64x(j);
-      best01 = _mm_or_pd(_mm_and_pd(better01, c01), _mm_andnot_pd(better01, best01));
-      best23 = _mm_or_pd(_mm_and_pd(better23, c23), _mm_andnot_pd(better23, best23));
-      at01 = _mm_or_si128(_mm_and_si128(_mm_castpd_si128(better01), at), _mm_andnot_si128(_mm_castpd_si128(better01), at01));
-      at23 = _mm_or_si128(_mm_and_si128(_mm_castpd_si128(better23), at), _mm_andnot_si128(_mm_castpd_si128(better23), at23));
-    }
+    if (unitCi && smallCounts)
+      suffixSweep<true, true>(m, ci, best01, best23, at01, at23);
+    else
+      suffixSweep<false, false>(m, ci, best01, best23, at01, at23);
     alignas(16) double lowest[4];
     alignas(16) int64_t at[4];
     _mm_store_pd(lowest, best01), _mm_store_pd(lowest + 2, best23);
@@ -707,15 +715,45 @@ class BinnedStepper {
     return true;
   }
 
+  template <bool kUnitCi, bool kSmallCounts>
+  void suffixSweep(uint32_t m, double ci, __m128d& best01, __m128d& best23, __m128i& at01, __m128i& at23) {
+    __m128 lx = _mm_set1_ps(kInf), ly = lx, lz = lx, hx = _mm_set1_ps(-kInf), hy = hx, hz = hx;
+    __m128i count = _mm_setzero_si128();
+    const __m128d ci2 = _mm_set1_pd(ci);
+    auto toDouble = [](__m128i u) {  // the low two lanes, unsigned, as doubles (exactly)
+      if constexpr (kSmallCounts) return _mm_cvtepi32_pd(u);
+      const __m128i flipped = _mm_xor_si128(u, _mm_set1_epi32(int32_t(0x80000000u)));
+      return _mm_add_pd(_mm_cvtepi32_pd(flipped), _mm_set1_pd(2147483648.0));
+    };
+    for (uint32_t j = m - 1; j > 0; --j) {
+      const Lanes& r = lanes_[j];
+      lx = _mm_min_ps(lx, r.lx), ly = _mm_min_ps(ly, r.ly), lz = _mm_min_ps(lz, r.lz);
+      hx = _mm_max_ps(hx, r.hx), hy = _mm_max_ps(hy, r.hy), hz = _mm_max_ps(hz, r.hz);
+      count = _mm_add_epi32(count, r.count);
+      const __m128i none = _mm_or_si128(_mm_cmpeq_epi32(count, _mm_setzero_si128()), lanes_[j - 1].noCut);
+      // Area 0 where the suffix is empty (no inf * 0; those lanes are no candidates anyway).
+      const __m128 rightArea = _mm_andnot_ps(_mm_castsi128_ps(none), halfAreas(lx, ly, lz, hx, hy, hz));
+      const Lanes& l = lanes_[j - 1];
+      __m128d c01 = _mm_add_pd(_mm_mul_pd(_mm_cvtps_pd(l.leftArea), toDouble(l.leftCount)),
+                               _mm_mul_pd(_mm_cvtps_pd(rightArea), toDouble(count)));
+      __m128d c23 = _mm_add_pd(_mm_mul_pd(_mm_cvtps_pd(_mm_movehl_ps(l.leftArea, l.leftArea)), toDouble(_mm_unpackhi_epi64(l.leftCount, l.leftCount))),
+                               _mm_mul_pd(_mm_cvtps_pd(_mm_movehl_ps(rightArea, rightArea)), toDouble(_mm_unpackhi_epi64(count, count))));
+      if constexpr (!kUnitCi) c01 = _mm_mul_pd(ci2, c01), c23 = _mm_mul_pd(ci2, c23);  // 1 * c == c exactly
+      const __m128d none01 = _mm_castsi128_pd(_mm_unpacklo_epi32(none, none)), none23 = _mm_castsi128_pd(_mm_unpackhi_epi32(none, none));
+      const __m128d better01 = _mm_andnot_pd(none01, _mm_cmple_pd(c01, best01));
+      const __m128d better23 = _mm_andnot_pd(none23, _mm_cmple_pd(c23, best23));
+      const __m128i at = _mm_set1_epi64x(j - 1);
+      best01 = _mm_or_pd(_mm_and_pd(better01, c01), _mm_andnot_pd(better01, best01));
+      best23 = _mm_or_pd(_mm_and_pd(better23, c23), _mm_andnot_pd(better23, best23));
+      at01 = _mm_or_si128(_mm_and_si128(_mm_castpd_si128(better01), at), _mm_andnot_si128(_mm_castpd_si128(better01), at01));
+      at23 = _mm_or_si128(_mm_and_si128(_mm_castpd_si128(better23), at), _mm_andnot_si128(_mm_castpd_si128(better23), at23));
+    }
+  }
+
   // Half areas of the boxes in lanes (corners given per coordinate): (x y + y z) + z x, per lane.
   static __m128 halfAreas(__m128 lx, __m128 ly, __m128 lz, __m128 hx, __m128 hy, __m128 hz) {
     const __m128 ex = _mm_sub_ps(hx, lx), ey = _mm_sub_ps(hy, ly), ez = _mm_sub_ps(hz, lz);
     return _mm_add_ps(_mm_add_ps(_mm_mul_ps(ex, ey), _mm_mul_ps(ey, ez)), _mm_mul_ps(ez, ex));
-  }
-  // The low two lanes, unsigned 32-bit integers, as doubles (exactly).
-  static __m128d toDouble(__m128i u) {
-    const __m128i flipped = _mm_xor_si128(u, _mm_set1_epi32(int32_t(0x80000000u)));
-    return _mm_add_pd(_mm_cvtepi32_pd(flipped), _mm_set1_pd(2147483648.0));
   }
   std::array<Lanes, kMaxBins> lanes_;
 #else
@@ -762,7 +800,7 @@ class BinnedStepper {
   // the sweep's count. Classification: one bit per reference, 16 per instruction.
   uint32_t partition(const Task& task, const Split& split) {
     const uint32_t n = task.end - task.begin, nLeft = split.leftCount;
-    const uint32_t* bin = binOf_.data();
+    const uint32_t* bin = binOf_->data();
     uint64_t* left = sides_.data();  // bit k: reference begin + k goes left
     const uint32_t words = (n + 63) / 64, shift = 8 * uint32_t(split.axis);
 #if defined(BVHLAB_BINNED_SSE)
@@ -794,7 +832,7 @@ class BinnedStepper {
   uint32_t partitionBySides(const Task& task, uint32_t nLeft) {
     const uint32_t n = task.end - task.begin, words = (n + 63) / 64;
     const uint64_t* left = sides_.data();
-    Ref* refs = refs_.data() + task.begin;
+    Ref* refs = refs_ + task.begin;
     if (n <= 64) {  // one word (0 < nLeft < n)
       const uint64_t low = (uint64_t(1) << nLeft) - 1;
       for (uint64_t p = ~left[0] & low, q = left[0] & ~low; p; p &= p - 1) {
@@ -840,7 +878,7 @@ class BinnedStepper {
   // split does not depend on where equal centroids happen to sit.
   void medianSplit(const Task& task, int axis) {
     const uint32_t n = task.end - task.begin;
-    auto first = refs_.begin() + task.begin;
+    Ref* const first = refs_ + task.begin;
     std::nth_element(first, first + n / 2, first + n, [axis](const Ref& a, const Ref& b) {
       const float ca = a.centroid[axis], cb = b.centroid[axis];
       return ca < cb || (ca == cb && a.id() < b.id());
@@ -858,11 +896,11 @@ class BinnedStepper {
   // Nodes this large bin into 2 or 4 sets (measured: see docs/builders.md).
   static constexpr uint32_t kTwoSetsMin = 1024, kFourSetsMin = 1u << 31;
   static constexpr uint32_t kScratchPad = 64;  // the classification reads whole 64-byte blocks
-  std::vector<Ref>& refs_;
+  Ref* refs_;
   const BuildOptions& options_;
   uint32_t bins_;
   std::array<std::vector<Bin>, 4> sets_;  // bin sets: 3 x bins each; all empty between nodes
-  std::vector<uint32_t> binOf_;            // the current node's references' bins, a byte per axis
+  std::unique_ptr<detail::ScratchArray<uint32_t>> binOf_;  // the current node's references' bins, a byte per axis
   std::vector<uint64_t> sides_;            // partition: one bit per reference
   std::array<std::array<uint8_t, kMaxBins>, 3> occupied_;  // small nodes: each axis's occupied bins, in order
 };
@@ -875,7 +913,7 @@ Bvh buildSahBinnedBvh(const BuildInput& input, const BuildOptions& options) {
     throw std::invalid_argument("sah-binned: bins = " + std::to_string(bins) + " is outside 2.." +
                                 std::to_string(kMaxBins));
   const uint32_t n = uint32_t(input.boxes.size());
-  std::vector<Ref> refs(n);
+  detail::ScratchArray<Ref> refs(n);
   Box4 box, centroids;
   for (uint32_t i = 0; i < n; ++i) {
     Ref& r = refs[i];
@@ -887,7 +925,7 @@ Bvh buildSahBinnedBvh(const BuildInput& input, const BuildOptions& options) {
 
   Bvh bvh;
   bvh.nodes = detail::buildTopDown(box.aabb(), Task{0, 0, n, centroids}, detail::resolveThreads(options.threads),
-                                   [&] { return BinnedStepper(refs, options, bins); });
+                                   [&] { return BinnedStepper(refs.data(), options, bins); });
   bvh.primIndices.resize(n);
   for (uint32_t i = 0; i < n; ++i) bvh.primIndices[i] = refs[i].id();
   return bvh;

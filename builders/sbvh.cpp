@@ -325,7 +325,9 @@ class Stepper {
 
   SpatialSplit findSpatialSplit(const std::vector<Ref>& refs, const Aabb& box, int64_t budget) {
     SpatialSplit best;
-    // At most max(4, n) slabs for n references (measured: the same SAH, half the time).
+    // At most max(4, n) slabs for n references: near the leaves, where references span most of a
+    // node and nearly all of the binning time goes, 32 slabs for 8 references bought nothing
+    // (measured on the three meshes: SAH within 0.05%, about a third less time).
     const uint32_t bins = std::min<uint32_t>(s_.bins, std::max<uint32_t>(4, uint32_t(refs.size())));
     const int64_t n = int64_t(refs.size());
     const double ci = s_.options.cost.intersectionCost;

@@ -1,5 +1,6 @@
 // Builder inputs for the builder tests and benchmarks (tests/test_builders.cpp,
-// experiments/bench/bench_builders.cpp): generated triangle soups and the bunny, as boxes + centroids.
+// experiments/bench/bench_builders.cpp): generated triangle soups and the bunny, as boxes + centroids
+// (and their vertices, for builders that clip triangles).
 // Header-only and not used by the library itself: the mesh loader needs datasets/OpenMesh, which the
 // test and benchmark executables link.
 #pragma once

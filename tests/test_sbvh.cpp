@@ -397,7 +397,9 @@ TEST(Sbvh, InvariantsWithDuplicateReferences) {
       const TreeCheck check = checkSbvh(bvh, set, options);
       EXPECT_EQ(stats.references, check.references);
       EXPECT_EQ(stats.primitives, set.size());
-      if (set.name.rfind("thin", 0) == 0) EXPECT_GT(check.references, set.size()) << "no spatial split on thin triangles";
+      if (set.name.rfind("thin", 0) == 0) {
+        EXPECT_GT(check.references, set.size()) << "no spatial split on thin triangles";
+      }
     }
   }
 }
@@ -547,7 +549,9 @@ TEST(Sbvh, MirrorKernelsFindTheBruteForceClosestHits) {
       BuildOptions options;
       options.maxLeafSize = leaf;
       const Bvh bvh = buildBvh("sbvh", BuildInput{set.boxes, set.centroids, soup.v0, soup.v1, soup.v2}, options);
-      if (set.name.rfind("grid", 0) != 0) ASSERT_GT(bvh.primIndices.size(), set.size());  // the grid needs no split
+      if (set.name.rfind("grid", 0) != 0) {  // the grid needs no split
+        ASSERT_GT(bvh.primIndices.size(), set.size());
+      }
       const PackedBvh packed = packBvh(bvh, soup);
       EXPECT_EQ(packed.triangles.size(), size_t(kTriangleTexels) * bvh.primIndices.size());
       const glsl::Storage storage(packed);

@@ -1,12 +1,19 @@
-// Build time, SAH cost and node count of every registered builder (leaf size 4, Ct = Ci = 1) on the
-// bunny (75k triangles) and a generated 1M-triangle mesh, next to Embree's rtcBuildBVH at MEDIUM
-// quality called directly with minimal callbacks ("embree-raw": the reference, same process, same
-// run). The end of the output is a table of ratios against embree-raw (fastest repetition of each).
-//   bench_builders [--benchmark_filter=...]   (the bunny comes from `bash datasets/fetch.sh`)
-//   On a shared machine: --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
+// Build time, SAH cost and node count of every registered builder (leaf size 4, Ct = Ci = 1) with 1
+// and with 2 threads, on the bunny (75k triangles), a 1M-triangle procedural scene
+// (datasets/procedural.hpp makeLargeMesh) and a 1M-triangle bumpy sphere, next to Embree's
+// rtcBuildBVH at MEDIUM quality called directly with minimal callbacks ("embree-raw", on an Embree
+// device limited to 1 or 2 threads): the reference, same process, same run.
+//
+// Every benchmark runs --reps repetitions (default 5; ->Repetitions(n)->ReportAggregatesOnly()), in
+// random interleaving order unless --benchmark_enable_random_interleaving is given, and the
+// figures are the MEDIAN over the repetitions (with min and max, ->ComputeStatistics). The end of
+// the output is a table per mesh: median time with 1 and 2 threads, SAH and the ratios against
+// embree-raw with 2 threads, then the sah-binned target line (1 thread vs embree-raw with 2 threads).
+//   bench_builders [--reps=N] [--benchmark_filter=...]   (the bunny comes from `bash datasets/fetch.sh`)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <new>
 #include <string>
@@ -18,6 +25,7 @@
 
 #include "builders/builder.hpp"
 #include "builders/test_inputs.hpp"
+#include "datasets/procedural.hpp"
 
 namespace {
 
@@ -30,7 +38,17 @@ const PrimitiveSet& bunny() {
   static const PrimitiveSet set = bvhlab::testing::loadTriangles(bvhlab::testing::bunnyPath());
   return set;
 }
-const PrimitiveSet& bigMesh() {  // 1000 x 500 quads: 1,000,000 triangles
+const PrimitiveSet& largeMesh() {  // makeLargeMesh: dense and sparse regions, long thin gaps, overlaps
+  static const PrimitiveSet set = [] {
+    PrimitiveSet s;
+    s.name = "large1M";
+    const Mesh mesh = makeLargeMesh(1'000'000);
+    for (const glm::uvec3& t : mesh.triangles) s.addTriangle(mesh.positions[t.x], mesh.positions[t.y], mesh.positions[t.z]);
+    return s;
+  }();
+  return set;
+}
+const PrimitiveSet& sphereMesh() {  // 1000 x 500 quads: 1,000,000 triangles
   static const PrimitiveSet set = bvhlab::testing::sphereSoup(1000, 500, 0.2f);
   return set;
 }
@@ -89,9 +107,21 @@ void rawStats(const RawNode* root, const RTCBounds& rootBounds, double& sah, siz
   sah = sum / halfArea(rootBounds);
 }
 
-void embreeRaw(benchmark::State& state, const PrimitiveSet* set) {
+// One Embree device per thread count (a device's thread pool is its own: "threads=N").
+RTCDevice embreeDevice(unsigned threads) {
+  static std::map<unsigned, RTCDevice> devices;
+  auto& device = devices[threads];
+  if (!device) device = rtcNewDevice(("threads=" + std::to_string(threads)).c_str());
+  return device;
+}
+
+using MeshFn = const PrimitiveSet& (*)();  // meshes are made on first use (a filter may skip them)
+
+void embreeRaw(benchmark::State& state, MeshFn mesh, unsigned threads) {
+  const PrimitiveSet* set = &mesh();
   if (set->size() == 0) return state.SkipWithError("mesh missing: run `bash datasets/fetch.sh`");
-  static RTCDevice device = rtcNewDevice(nullptr);
+  RTCDevice device = embreeDevice(threads);
+  if (!device) return state.SkipWithError("rtcNewDevice failed");
   std::vector<RTCBuildPrimitive> source(set->size()), prims;
   RTCBounds rootBounds{+INFINITY, +INFINITY, +INFINITY, 0, -INFINITY, -INFINITY, -INFINITY, 0};
   for (size_t i = 0; i < set->size(); ++i) {
@@ -137,16 +167,18 @@ void embreeRaw(benchmark::State& state, const PrimitiveSet* set) {
 
 // ---- every registered builder ---------------------------------------------------------------------
 
-void buildWith(benchmark::State& state, std::string builder, const PrimitiveSet* set, uint32_t threads) {
+void buildWith(benchmark::State& state, std::string builder, MeshFn mesh, uint32_t threads) {
+  const PrimitiveSet* set = &mesh();
   if (set->size() == 0) return state.SkipWithError("mesh missing: run `bash datasets/fetch.sh`");
   BuildOptions options;
   options.maxLeafSize = kLeafSize;
   options.threads = threads;
-  validateBuildInput(set->input(), options);  // once, outside the timed loop (buildBvh does it per call)
+  const BuildInput input = set->inputWithTriangles();  // builders that clip (sbvh) get the triangles
+  validateBuildInput(input, options);  // once, outside the timed loop (buildBvh does it per call)
   const BuilderInfo& info = findBuilder(builder);
   Bvh bvh;
   for (auto _ : state) {
-    bvh = info.build(set->input(), options);
+    bvh = info.build(input, options);
     benchmark::DoNotOptimize(bvh.nodes.data());
   }
   const BuildStats stats = computeStats(bvh, options.cost);
@@ -154,76 +186,113 @@ void buildWith(benchmark::State& state, std::string builder, const PrimitiveSet*
   state.counters["nodes"] = double(stats.nodes);
 }
 
-// Console output as usual, plus a ratio table against embree-raw at the end.
+// Console output as usual (aggregates only), plus a table per mesh at the end, from the medians.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
     ConsoleReporter::ReportRuns(runs);
     for (const Run& run : runs) {
-      if (run.error_occurred || run.run_type != Run::RT_Iteration) continue;
-      const auto sah = run.counters.find("sah");
-      const Result result{run.benchmark_name(), run.GetAdjustedRealTime(),
-                          sah == run.counters.end() ? 0.0 : double(sah->second)};
-      // With --benchmark_repetitions the table keeps each benchmark's fastest repetition: on a
-      // shared machine the minimum is the figure least disturbed by other work.
-      auto same = std::find_if(results_.begin(), results_.end(), [&](const Result& r) { return r.name == result.name; });
-      if (same == results_.end())
-        results_.push_back(result);
-      else
-        same->time = std::min(same->time, result.time);
+      if (run.error_occurred || run.run_type != Run::RT_Aggregate) continue;
+      // Names are "builder/mesh/threads:N" (run_name.str(): without the aggregate's suffix).
+      const std::string name = run.run_name.str();
+      const size_t a = name.find('/'), b = name.find("/threads:");
+      if (a == std::string::npos || b == std::string::npos) continue;
+      Result& r = results_[{name.substr(a + 1, b - a - 1), name.substr(0, a)}];
+      const int threads = std::atoi(name.c_str() + b + 9) == 1 ? 0 : 1;
+      const double t = run.GetAdjustedRealTime();
+      if (run.aggregate_name == "median") {
+        r.time[threads] = t;
+        const auto sah = run.counters.find("sah");
+        if (sah != run.counters.end()) r.sah = sah->second;
+      } else if (run.aggregate_name == "min") {
+        r.low[threads] = t;
+      } else if (run.aggregate_name == "max") {
+        r.high[threads] = t;
+      }
     }
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
-    // Names are "builder/mesh[/...]".
-    auto meshOf = [](const std::string& name) {
-      const size_t a = name.find('/') + 1, b = name.find('/', a);
-      return name.substr(a, b == std::string::npos ? std::string::npos : b - a);
-    };
-    // Mesh by mesh, the reference first, then by name (random interleaving reports in any order).
-    auto isReference = [](const Result& r) { return r.name.rfind("embree-raw/", 0) == 0; };
-    std::sort(results_.begin(), results_.end(), [&](const Result& a, const Result& b) {
-      return std::make_tuple(meshOf(a.name), !isReference(a), a.name) < std::make_tuple(meshOf(b.name), !isReference(b), b.name);
-    });
-    std::map<std::string, const Result*> reference;  // mesh -> embree-raw
-    for (const Result& r : results_)
-      if (isReference(r)) reference[meshOf(r.name)] = &r;
-    std::printf("\n%-40s %10s %10s %10s %10s\n", "vs embree-raw (MEDIUM), best run", "time ms", "x time", "SAH",
-                "x SAH");
-    for (const Result& r : results_) {
-      const auto ref = reference.find(meshOf(r.name));
-      if (ref == reference.end()) continue;
-      std::printf("%-40s %10.2f %10.2f %10.3f %10.4f\n", r.name.c_str(), r.time, r.time / ref->second->time, r.sah,
-                  r.sah / ref->second->sah);
+    std::string mesh;
+    for (const auto& [key, r] : results_) {
+      if (key.first != mesh) {
+        mesh = key.first;
+        std::printf("\n%s: median of the repetitions [min, max], ms; ratios against embree-raw with 2 threads\n", mesh.c_str());
+        std::printf("%-14s %26s %26s %9s %9s %9s %9s\n", "builder", "1 thread", "2 threads", "x t(1)", "x t(2)", "SAH",
+                    "x SAH");
+      }
+      const Result* ref = find(mesh, "embree-raw");
+      auto cell = [](const Result& x, int k) {
+        char buf[64];
+        if (x.time[k] > 0)
+          std::snprintf(buf, sizeof buf, "%8.2f [%7.2f,%7.2f]", x.time[k], x.low[k], x.high[k]);
+        else
+          std::snprintf(buf, sizeof buf, "%s", "-");
+        return std::string(buf);
+      };
+      auto ratio = [&](double x) { return ref && ref->time[1] > 0 && x > 0 ? x / ref->time[1] : NAN; };
+      std::printf("%-14s %26s %26s %9.3f %9.3f %9.3f %9.4f\n", key.second.c_str(), cell(r, 0).c_str(), cell(r, 1).c_str(),
+                  ratio(r.time[0]), ratio(r.time[1]), r.sah, ref && ref->sah > 0 ? r.sah / ref->sah : NAN);
+    }
+    std::printf("\nTarget (issue 15): sah-binned with 1 thread <= 0.5x embree-raw (MEDIUM) with 2 threads, SAH <= 1.01x\n");
+    for (const auto& [key, r] : results_) {
+      if (key.second != "sah-binned") continue;
+      const Result* ref = find(key.first, "embree-raw");
+      if (!ref || ref->time[1] <= 0 || r.time[0] <= 0) continue;
+      std::printf("  %-10s sah-binned(1 thread) / embree-raw(2 threads) = %.3f   SAH ratio = %.4f\n", key.first.c_str(),
+                  r.time[0] / ref->time[1], ref->sah > 0 ? r.sah / ref->sah : NAN);
     }
   }
 
  private:
   struct Result {
-    std::string name;
-    double time;  // in the benchmark's unit (ms)
-    double sah;
+    double time[2] = {0, 0}, low[2] = {0, 0}, high[2] = {0, 0};  // [1 thread, 2 threads], ms
+    double sah = 0;
   };
-  std::vector<Result> results_;
+  const Result* find(const std::string& mesh, const std::string& builder) const {
+    const auto it = results_.find({mesh, builder});
+    return it == results_.end() ? nullptr : &it->second;
+  }
+  std::map<std::pair<std::string, std::string>, Result> results_;  // (mesh, builder)
 };
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::vector<std::pair<std::string, const PrimitiveSet*>> meshes = {{"bunny", &bunny()}, {"sphere1M", &bigMesh()}};
+  // Our own flag, and random interleaving by default (a shared machine drifts; interleaved
+  // repetitions see the same drift).
+  int reps = 5;
+  bool interleaving = false;
+  std::vector<char*> args;
+  for (int i = 0; i < argc; ++i) {
+    if (std::strncmp(argv[i], "--reps=", 7) == 0) {
+      reps = std::max(1, std::atoi(argv[i] + 7));
+      continue;
+    }
+    if (std::strncmp(argv[i], "--benchmark_enable_random_interleaving", 38) == 0) interleaving = true;
+    args.push_back(argv[i]);
+  }
+  std::string interleave = "--benchmark_enable_random_interleaving=true";
+  if (!interleaving) args.push_back(interleave.data());
+  int count = int(args.size());
+
+  auto minimum = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
+  auto maximum = [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); };
+  auto configure = [&](benchmark::internal::Benchmark* b) {
+    b->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(0.2)->Repetitions(reps)->ReportAggregatesOnly(true);
+    b->ComputeStatistics("min", minimum)->ComputeStatistics("max", maximum);
+  };
+  const std::vector<std::pair<std::string, MeshFn>> meshes = {{"bunny", bunny}, {"large1M", largeMesh}, {"sphere1M", sphereMesh}};
   for (const auto& [meshName, set] : meshes) {
-    benchmark::RegisterBenchmark(("embree-raw/" + meshName).c_str(), embreeRaw, set)
-        ->Unit(benchmark::kMillisecond)->UseRealTime();
-    for (const BuilderInfo& info : builders()) {
-      benchmark::RegisterBenchmark((info.name + "/" + meshName).c_str(), buildWith, info.name, set, 0u)
-          ->Unit(benchmark::kMillisecond)->UseRealTime();
-      if (info.name.rfind("sah-", 0) == 0)  // the threaded builders, single-threaded too
-        benchmark::RegisterBenchmark((info.name + "/" + meshName + "/threads:1").c_str(), buildWith, info.name, set, 1u)
-            ->Unit(benchmark::kMillisecond)->UseRealTime();
+    for (unsigned threads : {1u, 2u}) {
+      const std::string suffix = "/" + meshName + "/threads:" + std::to_string(threads);
+      configure(benchmark::RegisterBenchmark(("embree-raw" + suffix).c_str(), embreeRaw, set, threads));
+      for (const BuilderInfo& info : builders())
+        configure(benchmark::RegisterBenchmark((info.name + suffix).c_str(), buildWith, info.name, set, threads));
     }
   }
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::Initialize(&count, args.data());
+  if (benchmark::ReportUnrecognizedArguments(count, args.data())) return 1;
   RatioReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   benchmark::Shutdown();
