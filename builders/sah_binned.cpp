@@ -1,17 +1,26 @@
 // Binned SAH builder (Wald 2007, "On fast Construction of SAH-based Bounding Volume Hierarchies"):
 // at each node the centroids are dropped into equal-width bins on each axis in one pass, the SAH is
-// evaluated at every bin boundary, and the references are partitioned in place. A node's children
-// get their boxes from the bins and their centroid bounds from one pass over each child's range, so
-// no node rescans its primitives for its own bounds, and nothing is allocated per node. Threads:
+// evaluated at every bin boundary, and the references are partitioned in place. Threads:
 // build_util.hpp's driver (the tree does not depend on the thread count).
 //
-// Speed (docs/builders.md, "sah-binned"): the binning pass stores each reference's three bin indices
-// (one byte per axis), so the partition classifies 16 references per instruction and swaps only the
-// misplaced ones, in the same pairs as a two-sided (Hoare) scan; nodes with fewer references than
-// bins bin into compacted arrays of their occupied bins only; larger nodes bin into two interleaved
-// bin sets (consecutive references of a coherent mesh hit the same bin, and one set would chain every
-// update through memory). Every decision is the one the straightforward binned build makes: the
-// same float half areas, the same double costs, the same first minimum, so the tree is the same.
+// The tree is the one the textbook binned build makes (tests/test_sah_binned.cpp builds both): the
+// same bins, the same float half areas, the same double costs, the same first minimum over axes x,
+// y, z and bins in order, the same leaf test and median fallback. What is faster (docs/builders.md,
+// "sah-binned", has the measurements):
+// - References are 48 bytes (box corners, centroid; the index in the upper corner's spare lane) in
+//   one uninitialised, huge-page-advised array; a bin keeps its count in its lower corner's spare
+//   lane, so binning a reference on an axis is two loads, a min, an integer add, a max, two stores.
+// - Binning stores each reference's three bins (a byte per axis); the partition classifies from
+//   them (no recomputation) and swaps only the misplaced references, in the pairs a two-sided
+//   (Hoare) scan would swap, so even the reference order is the textbook's.
+// - The three axes' sweeps run together, one axis per SIMD lane (SSE2): bins transposed, prefix and
+//   suffix unions, half areas and double costs four lanes at a time.
+// - Nodes by size: 2 references, one comparison; 3 or 4, the half areas of all subsets once, then a
+//   sorting network per axis; 5..32, the references themselves sorted by (bin, position) with a
+//   sorting network on all three axes at once and swept (no bins to fill or clear); up to the bin
+//   count, bins compacted to the occupied ones; larger nodes, all bins (two interleaved bin sets from
+//   1024 references, so that a run of references in one bin does not chain every update through one
+//   memory location).
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -51,8 +60,9 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // Four floats with the handful of operations binning needs: SSE where the target has it, a plain
 // loop elsewhere. (GCC does not vectorise the loop form itself: std::min/max on floats are not
-// min/max instructions to it without -ffinite-math-only.) No NaN ever reaches these: inputs are
-// validated finite, and lane 3 holds 0 or +-inf padding that no decision reads.
+// min/max instructions to it without -ffinite-math-only.) Lanes 0..2 are x, y, z, validated finite;
+// lane 3 is bookkeeping (an index or a count as an integer, or +-inf / 0 padding) that reaches no
+// arithmetic whose result is read and decides nothing.
 struct alignas(16) F4 {
 #if defined(BVHLAB_BINNED_SSE)
   __m128 v;
@@ -183,7 +193,7 @@ struct Task {
 
 struct Split {
   int axis = -1;            // -1: no SAH split (all centroids in one bin on every axis)
-  uint32_t bin = 0;         // left side = bins 0..bin
+  uint32_t bin = 0;         // left side = bins 0..bin (pairs: 1 when the two are in the wrong order)
   uint32_t leftCount = 0;   // references on the left side
   double cost = kInf;       // Ci * (A_L N_L + A_R N_R), without the node's own traversal term
   Box4 left, right;
@@ -258,26 +268,11 @@ class BinnedStepper {
     uint32_t mid;
     Box4 leftBox, rightBox, leftCentroids, rightCentroids;
     if (splitWins) {
-#if !defined(BVHLAB_BINNED_SSE)
-      if (n <= kTinyMax && n > 2) {  // the portable tinySplit leaves the sides in sides_[0] and no boxes
-        mid = partitionBySides(task, split.leftCount);
-        bounds(task.begin, mid, leftBox, leftCentroids);
-        bounds(mid, task.end, rightBox, rightCentroids);
-      } else
-#endif
-      if (n <= kTinyMax && n > 2) {  // tinySplit leaves the sides in sides_[0]
-        mid = partitionBySides(task, split.leftCount);
-        leftBox = split.left;
-        rightBox = split.right;
-        centroidBounds(task.begin, mid, leftCentroids);
-        centroidBounds(mid, task.end, rightCentroids);
-      } else {
-        mid = n == 2 ? partitionPair(task, split) : partition(task, split);
-        leftBox = split.left;
-        rightBox = split.right;
-        centroidBounds(task.begin, mid, leftCentroids);
-        centroidBounds(mid, task.end, rightCentroids);
-      }
+      mid = n == 2 ? partitionPair(task, split) : n <= kTinyMax ? partitionBySides(task, split.leftCount) : partition(task, split);
+      leftBox = split.left;
+      rightBox = split.right;
+      centroidBounds(task.begin, mid, leftCentroids);
+      centroidBounds(mid, task.end, rightCentroids);
     } else {
       // Median fallback: no SAH split beats a leaf (or none exists: all centroids equal), but the
       // node is over the leaf size limit. Halving bounds the depth by log2(n) from here.
@@ -302,27 +297,22 @@ class BinnedStepper {
     sides_.resize(n / 64 + 2);
   }
 
-  // 3..kTinyMax references: per axis, the references ordered by (bin, position) (ranks by counting,
-  // no branches) and swept in that order, a boundary wherever the bin changes: the same sets, counts
-  // and float half areas as a sweep over the occupied bins, so the same costs and the same first
-  // minimum. Leaves the chosen left side as bits in sides_[0].
+  // 3..kTinyMax references: per axis, the references ordered by (bin, position) and swept in that
+  // order, a boundary wherever the bin changes: the same sets, counts and float half areas as a
+  // sweep over the occupied bins, so the same costs and the same first minimum. Leaves the chosen
+  // left side as bits in sides_[0] (for partitionBySides).
   Split tinySplit(const Task& task, const BinMapping& mapping) {
-    switch (task.end - task.begin) {
-      case 3: return subsetSplit<3>(task, mapping);
-      case 4: return subsetSplit<4>(task, mapping);
-      case 5: return tinySplit<5>(task, mapping);
-      case 6: return tinySplit<6>(task, mapping);
-      case 7: return tinySplit<7>(task, mapping);
-      case 8: return tinySplit<8>(task, mapping);
-      case 9: return tinySplit<9>(task, mapping);
-      case 10: return tinySplit<10>(task, mapping);
-      case 11: return tinySplit<11>(task, mapping);
-      case 12: return tinySplit<12>(task, mapping);
-      case 13: return tinySplit<13>(task, mapping);
-      case 14: return tinySplit<14>(task, mapping);
-      case 15: return tinySplit<15>(task, mapping);
-      default: return tinySplit<16>(task, mapping);
-    }
+    const uint32_t n = task.end - task.begin;
+    if (n == 3) return subsetSplit<3>(task, mapping);
+    if (n == 4) return subsetSplit<4>(task, mapping);
+    if (n == 5) return tinySplit<5>(task, mapping);
+    if (n == 6) return tinySplit<6>(task, mapping);
+    if (n == 7) return tinySplit<7>(task, mapping);
+    if (n == 8) return tinySplit<8>(task, mapping);
+    if (n <= 12) return tinySplit<12>(task, mapping);
+    if (n <= 16) return tinySplit<16>(task, mapping);
+    if (n <= 24) return tinySplit<24>(task, mapping);
+    return tinySplit<32>(task, mapping);
   }
   // 3 or 4 references: the box and float half area of every subset, once (each a union of its
   // references' boxes, so the same bits as the bins' unions), then per axis the references sorted by
@@ -376,40 +366,44 @@ class BinnedStepper {
     return best;
   }
 
-  template <uint32_t N>
+  // 5..kTinyMax references (at most M): keys bin << 5 | position, padded to M with keys that sort
+  // last, sorted per axis, the first n positions swept.
+  template <uint32_t M>
   Split tinySplit(const Task& task, const BinMapping& mapping) {
-    static_assert(N <= kTinyMax && kTinyMax <= 16);
+    static_assert(M <= kTinyMax && kTinyMax <= 32);
+    constexpr int kShift = 5;  // key = bin << kShift | position
+    const uint32_t n = task.end - task.begin;
     const Ref* const refs = refs_ + task.begin;
     Split best;
 #if defined(BVHLAB_BINNED_SSE)
-    // key = bin << 4 | position (< 2^12: 16-bit lanes), one lane per axis, sorted by a sorting
-    // network: all axes at once.
-    __m128i key[N];
-    for (uint32_t k = 0; k < N; ++k) {
+    // 16-bit lanes (keys < 2^13), one per axis: the network sorts all axes at once.
+    __m128i key[M];
+    for (uint32_t k = 0; k < n; ++k) {
       const __m128i b = _mm_cvttps_epi32(_mm_min_ps(_mm_mul_ps(_mm_sub_ps(refs[k].centroid.v, mapping.origin.v), mapping.scale.v), mapping.last.v));
       const __m128i b16 = _mm_packs_epi32(b, b);  // bins < 256
-      key[k] = _mm_or_si128(_mm_slli_epi16(b16, 4), _mm_set1_epi16(int16_t(k)));
+      key[k] = _mm_or_si128(_mm_slli_epi16(b16, kShift), _mm_set1_epi16(int16_t(k)));
     }
-#pragma GCC unroll 64
-    for (const auto& [i, j] : kSortingNetwork<N>) {
+    for (uint32_t k = n; k < M; ++k) key[k] = _mm_set1_epi16(0x7fff);
+#pragma GCC unroll 256
+    for (const auto& [i, j] : kSortingNetwork<M>) {
       const __m128i lo = _mm_min_epi16(key[i], key[j]);
       key[j] = _mm_max_epi16(key[i], key[j]);
       key[i] = lo;
     }
     const __m128i one = _mm_setr_epi32(1, 1, 1, 0);
     uint32_t cut;
-    const bool found = sweepLanes(N, [&](uint32_t j, Lanes& l) {
+    const bool found = sweepLanes(n, [&](uint32_t j, Lanes& l) {
       const __m128i k = key[j];
-      const Ref& r0 = refs[_mm_extract_epi16(k, 0) & 15];
-      const Ref& r1 = refs[_mm_extract_epi16(k, 1) & 15];
-      const Ref& r2 = refs[_mm_extract_epi16(k, 2) & 15];
+      const Ref& r0 = refs[_mm_extract_epi16(k, 0) & 31];
+      const Ref& r1 = refs[_mm_extract_epi16(k, 1) & 31];
+      const Ref& r2 = refs[_mm_extract_epi16(k, 2) & 31];
       __m128 lo0 = r0.lo.v, lo1 = r1.lo.v, lo2 = r2.lo.v, lw = _mm_setzero_ps();
       __m128 hi0 = r0.hi.v, hi1 = r1.hi.v, hi2 = r2.hi.v, hw = _mm_setzero_ps();
       _MM_TRANSPOSE4_PS(lo0, lo1, lo2, lw);
       _MM_TRANSPOSE4_PS(hi0, hi1, hi2, hw);
       l.lx = lo0, l.ly = lo1, l.lz = lo2, l.hx = hi0, l.hy = hi1, l.hz = hi2, l.count = one;
-      if (j + 1 < N) {  // the same bin as the next: no boundary after j (padding lanes 3..7 never cut)
-        const __m128i same = _mm_cmpeq_epi16(_mm_srai_epi16(k, 4), _mm_srai_epi16(key[j + 1], 4));
+      if (j + 1 < n) {  // the same bin as the next: no boundary after j (lanes 3..7 never cut)
+        const __m128i same = _mm_cmpeq_epi16(_mm_srai_epi16(k, kShift), _mm_srai_epi16(key[j + 1], kShift));
         l.noCut = _mm_unpacklo_epi16(same, same);
       }
     }, best, cut);
@@ -418,48 +412,49 @@ class BinnedStepper {
       alignas(16) int16_t lanes[8];
       for (uint32_t t = 0; t <= cut; ++t) {
         _mm_store_si128(reinterpret_cast<__m128i*>(lanes), key[t]);
-        sides |= uint64_t(1) << (lanes[best.axis] & 15);
+        sides |= uint64_t(1) << (lanes[best.axis] & 31);
       }
     }
     sides_[0] = sides;
 #else
-    alignas(16) int32_t bin[N][4];
-    for (uint32_t k = 0; k < N; ++k) mapping.binsOf(refs[k].centroid, bin[k]);
+    alignas(16) int32_t bin[M][4];
+    for (uint32_t k = 0; k < n; ++k) mapping.binsOf(refs[k].centroid, bin[k]);
     const double ci = options_.cost.intersectionCost;
     uint64_t bestSides = 0;
     for (int a = 0; a < 3; ++a) {
       if (!mapping.usable[a]) continue;
-      int32_t key[N];
-      uint32_t order[N];
-      for (uint32_t k = 0; k < N; ++k) key[k] = bin[k][a] << 4 | int32_t(k);
-      for (uint32_t k = 0; k < N; ++k) {
+      int32_t key[M];
+      uint32_t order[M];
+      for (uint32_t k = 0; k < n; ++k) key[k] = bin[k][a] << kShift | int32_t(k);
+      for (uint32_t k = 0; k < n; ++k) {
         uint32_t rank = 0;
-        for (uint32_t j = 0; j < N; ++j) rank += key[j] < key[k];
+        for (uint32_t j = 0; j < n; ++j) rank += key[j] < key[k];
         order[rank] = k;
       }
-      float leftArea[N], rightArea[N];
+      float leftArea[M], rightArea[M];
       Box4 left, right;
-      for (uint32_t t = 0; t + 1 < N; ++t) {
+      for (uint32_t t = 0; t + 1 < n; ++t) {
         const Ref& l = refs[order[t]];
-        const Ref& r = refs[order[N - 1 - t]];
+        const Ref& r = refs[order[n - 1 - t]];
         left.grow(l.lo, l.hi), right.grow(r.lo, r.hi);
-        leftArea[t] = left.halfArea(), rightArea[N - 1 - t] = right.halfArea();
+        leftArea[t] = left.halfArea(), rightArea[n - 1 - t] = right.halfArea();
       }
       double lowest = kInf;
-      uint32_t cut = N;
-      for (uint32_t t = 0; t + 1 < N; ++t) {
-        const double cost = ci * (double(leftArea[t]) * (t + 1) + double(rightArea[t + 1]) * (N - 1 - t));
-        const bool better = (key[order[t]] >> 4) != (key[order[t + 1]] >> 4) && cost < lowest;
+      uint32_t cut = n;
+      for (uint32_t t = 0; t + 1 < n; ++t) {
+        const double cost = ci * (double(leftArea[t]) * (t + 1) + double(rightArea[t + 1]) * (n - 1 - t));
+        const bool better = (key[order[t]] >> kShift) != (key[order[t + 1]] >> kShift) && cost < lowest;
         lowest = better ? cost : lowest;
         cut = better ? t : cut;
       }
-      if (cut < N && lowest < best.cost) {
+      if (cut < n && lowest < best.cost) {
         best.axis = a, best.cost = lowest, best.leftCount = cut + 1;
         bestSides = 0;
         for (uint32_t t = 0; t <= cut; ++t) bestSides |= uint64_t(1) << order[t];
       }
     }
     sides_[0] = bestSides;
+    for (uint32_t k = 0; k < n; ++k) (bestSides >> k & 1 ? best.left : best.right).grow(refs[k].lo, refs[k].hi);
 #endif
     return best;
   }
@@ -489,10 +484,9 @@ class BinnedStepper {
     return task.begin + 1;
   }
 
-  // Bins references [begin, begin + count) of the node (k = their index in the node) into bin set
-  // `set` (every `stride`-th reference from `first`), stores their bins (a byte per axis) and, if
-  // asked, marks the occupied bins. Written so that nothing is re-read after a store (the box stores
-  // go through __m128, which may alias anything).
+  // Bins the node's references first, first + stride, ... into bin set `set`, stores their bins (a
+  // byte per axis, by position in the node) and, if asked, marks the occupied bins. Written so that
+  // nothing is re-read after a store (the box stores go through __m128, which may alias anything).
   template <bool kOccupancy>
   void binRefs(const Task& task, const BinMapping& mapping, uint32_t first, uint32_t stride, int set,
                uint64_t (*occupancy)[kMaxBins / 64]) {
@@ -544,15 +538,15 @@ class BinnedStepper {
   // chain their updates through memory), merged on the way into the sweep.
   Split findSplitLarge(const Task& task, const BinMapping& mapping) {
     const uint32_t n = task.end - task.begin;
-    const uint32_t sets = n >= kFourSetsMin ? 4 : n >= kTwoSetsMin ? 2 : 1;
+    const uint32_t sets = n >= kTwoSetsMin ? 2 : 1;
     for (uint32_t set = 0; set < sets; ++set) binRefs<false>(task, mapping, set, sets, set, nullptr);
     alignas(16) int32_t lastBin[4];
     mapping.binsOf(task.centroids.hi, lastBin);
     const uint32_t m = 1 + uint32_t(std::max({lastBin[0], lastBin[1], lastBin[2]}));
     Split best;
     const Bin* const s0 = sets_[0].data();
-    const uint32_t y = bins_, z = 2 * bins_;
 #if defined(BVHLAB_BINNED_SSE)
+    const uint32_t y = bins_, z = 2 * bins_;
     uint32_t cut;
     if (m >= 2 && sweepLanes(m, [&](uint32_t b, Lanes& l) {
           __m128 lo0 = s0[b].lo.v, lo1 = s0[y + b].lo.v, lo2 = s0[z + b].lo.v, count = _mm_setzero_ps();
@@ -892,14 +886,13 @@ class BinnedStepper {
     }
   }
 
-  static constexpr uint32_t kTinyMax = 16;
-  // Nodes this large bin into 2 or 4 sets (measured: see docs/builders.md).
-  static constexpr uint32_t kTwoSetsMin = 1024, kFourSetsMin = 1u << 31;
+  static constexpr uint32_t kTinyMax = 32;
+  static constexpr uint32_t kTwoSetsMin = 1024;  // nodes this large bin into two sets
   static constexpr uint32_t kScratchPad = 64;  // the classification reads whole 64-byte blocks
   Ref* refs_;
   const BuildOptions& options_;
   uint32_t bins_;
-  std::array<std::vector<Bin>, 4> sets_;  // bin sets: 3 x bins each; all empty between nodes
+  std::array<std::vector<Bin>, 2> sets_;  // bin sets: 3 x bins each; all empty between nodes
   std::unique_ptr<detail::ScratchArray<uint32_t>> binOf_;  // the current node's references' bins, a byte per axis
   std::vector<uint64_t> sides_;            // partition: one bit per reference
   std::array<std::array<uint8_t, kMaxBins>, 3> occupied_;  // small nodes: each axis's occupied bins, in order
