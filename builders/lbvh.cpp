@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "builders/morton.hpp"
 #include "builders/build_util.hpp"
 #include "builders/collapse.hpp"
 
@@ -19,21 +20,8 @@ namespace {
 
 constexpr int kBitsPerAxis = 21;  // 3 * 21 = 63 bits in a 64-bit code
 
-// Spreads the low 21 bits of v so that bit i lands at bit 3i.
-uint64_t spreadBits(uint64_t v) {
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffULL;
-  v = (v | v << 16) & 0x1f0000ff0000ffULL;
-  v = (v | v << 8) & 0x100f00f00f00f00fULL;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-  v = (v | v << 2) & 0x1249249249249249ULL;
-  return v;
-}
-
-struct Keyed {
-  uint64_t code;
-  uint32_t id;
-};
+using detail::Keyed;
+using detail::spreadBits;
 
 // LSD radix sort on the code, 8 bits per pass; stable, so equal codes keep their input order.
 // Passes whose digit is the same for every key are skipped.

@@ -45,6 +45,7 @@
 #endif
 #endif
 
+#include "builders/morton.hpp"
 #include "builders/build_util.hpp"
 #include "builders/collapse.hpp"
 
@@ -63,21 +64,8 @@ constexpr uint32_t kChunk = 8192;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 
-// Spreads the low 21 bits of v so that bit i lands at bit 3i (lbvh.cpp's code layout).
-uint64_t spreadBits(uint64_t v) {
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffULL;
-  v = (v | v << 16) & 0x1f0000ff0000ffULL;
-  v = (v | v << 8) & 0x100f00f00f00f00fULL;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-  v = (v | v << 2) & 0x1249249249249249ULL;
-  return v;
-}
-
-struct Keyed {
-  uint64_t code;
-  uint32_t id;
-};
+using detail::Keyed;
+using detail::spreadBits;
 
 // LSD radix sort on the code, 8 bits per pass; stable, so equal codes keep their input order (and
 // the order is unique: chunks and threads only split the work). Per pass, each chunk of kChunk keys
