@@ -4,10 +4,13 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <map>
 #include <vector>
+
+#include <unistd.h>  // getpid
 
 #include <gtest/gtest.h>
 
@@ -39,6 +42,28 @@ inline bool datasetsPresent() { return std::filesystem::exists(sourceDir() / "da
 #define BVHLAB_REQUIRE_DATASETS()                                                                \
   if (!bvhlab::test::datasetsPresent())                                                          \
   GTEST_SKIP() << "datasets missing: run `bash datasets/fetch.sh` (or `bash setup.sh test`)"
+
+// Default tracer options for a prepared scene: its max depth, a BVH stack sized to its tree.
+inline ShaderOptions tracerOptions(const PreparedScene& p) {
+  ShaderOptions o;
+  o.maxDepth = p.scene.settings.maxDepth;
+  o.bvhStackSize = stackSizeFor(std::max<uint32_t>(1, p.packed.depth));
+  return o;
+}
+
+// A scene written as TOML text (docs/scene-format.md), loaded through the real loader and prepared
+// with the default builder. The file goes to a per-process temp folder and is removed again.
+inline std::unique_ptr<PreparedScene> prepareToml(const std::string& toml, const std::string& name = "scene") {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("bvhlab_render_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path file = dir / (name + ".toml");
+  { std::ofstream(file) << toml; }
+  Scene s = loadScene(file);
+  std::error_code ec;
+  std::filesystem::remove_all(dir, ec);
+  return prepareScene(std::move(s), "sah-binned", BuildOptions{});
+}
 
 struct Rendered {
   std::vector<uint8_t> rgba;

@@ -1,9 +1,11 @@
 // The command line as a user meets it: JSON contract, backends, and bad input (one clear line,
 // non-zero exit, no partial output file).
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include <unistd.h>  // getpid
@@ -59,20 +61,63 @@ fs::path writeTemp(const std::string& name, const std::string& text) {
   return p;
 }
 
+// A bumpy N x N height field over [-1, 1]^2 as OFF text: 2 N^2 triangles, enough for a BVH of many
+// levels (the JSON's traversal counters are only meaningful when rays walk a tree).
+std::string heightFieldOff(int n) {
+  std::ostringstream off;
+  off << "OFF\n" << (n + 1) * (n + 1) << " " << 2 * n * n << " 0\n";
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const double x = 2.0 * i / n - 1.0, z = 2.0 * j / n - 1.0;
+      off << x << " " << 0.2 * std::sin(3.0 * x) * std::cos(4.0 * z) << " " << z << "\n";
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      off << "3 " << a << " " << c << " " << b << "\n3 " << b << " " << c << " " << d << "\n";
+    }
+  return off.str();
+}
+
+// The contract keys, on a mesh (a scene without one walks no tree and would report 0 visits whatever
+// the counters did), and the counters consistent with each other and with the tree.
 TEST(Cli, RenderJsonHasTheContractKeys) {
-  fs::path png = testDir() / "sphere.png";
+  constexpr int kN = 24, kTriangles = 2 * kN * kN, kW = 64, kH = 36;
+  const fs::path mesh = writeTemp("heightfield.off", heightFieldOff(kN));
+  fs::path png = testDir() / "mesh.png";
   fs::remove(png);
-  Result r = run("render " + scene("sphere.toml").string() + " -o " + png.string() +
-                 " --json --width 64 --height 36 --frames 2 --warmup 1");
+  Result r = run("render " + mesh.string() + " -o " + png.string() + " --json --width " + std::to_string(kW) +
+                 " --height " + std::to_string(kH) + " --frames 2 --warmup 1 --builder sah-binned --leaf-size 4");
   ASSERT_EQ(r.code, 0) << r.err;
   auto j = nlohmann::json::parse(r.out);
   for (const char* key : {"frame_ms", "frame_ms_min", "frames", "width", "height", "depth", "backend", "renderer",
                           "builder", "kernel", "leaf_size", "build_ms", "sah_cost", "node_visits_per_ray",
-                          "triangle_tests_per_ray"})
-    EXPECT_TRUE(j.contains(key)) << key;
+                          "triangle_tests_per_ray", "mesh_rays", "ray_cost", "nodes", "leaves", "triangles",
+                          "node_visits_p95", "triangle_tests_p95"})
+    ASSERT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["frames"], 2);
-  EXPECT_EQ(j["width"], 64);
+  EXPECT_EQ(j["width"], kW);
   EXPECT_TRUE(fs::exists(png));
+
+  EXPECT_EQ(j["triangles"].get<int>(), kTriangles);
+  const double nodes = j["nodes"].get<double>(), leaves = j["leaves"].get<double>();
+  EXPECT_GE(leaves, double(kTriangles) / 4.0) << "leaves hold at most leaf_size = 4 triangles";
+  EXPECT_EQ(nodes, 2.0 * leaves - 1.0) << "a binary tree";
+  EXPECT_GT(j["sah_cost"].get<double>(), 0.0);
+  // Every pixel's primary ray is traced into the mesh BVH (plus shadow rays towards the lights).
+  const double rays = j["mesh_rays"].get<double>();
+  EXPECT_GE(rays, double(kW * kH));
+  const double visits = j["node_visits_per_ray"].get<double>(), tests = j["triangle_tests_per_ray"].get<double>();
+  EXPECT_GT(visits, 1.0) << "rays into a multi-level tree visit more than its root";
+  EXPECT_LE(visits, nodes);
+  EXPECT_GT(tests, 0.0);
+  EXPECT_LE(tests, double(kTriangles));
+  EXPECT_LE(tests, 4.0 * visits) << "at most leaf_size tests per visited node";
+  EXPECT_NEAR(j["ray_cost"].get<double>(), visits + tests, 1e-9 * (visits + tests)) << "Ct = Ci = 1";
+  EXPECT_GT(j["node_visits_p95"].get<double>(), 0.0);
+  EXPECT_GT(j["triangle_tests_p95"].get<double>(), 0.0);
+  EXPECT_EQ(j["stack_overflow_pixels"].get<int>(), 0);
+  EXPECT_EQ(j["nonfinite_pixels"].get<int>(), 0);
 }
 
 TEST(Cli, EglAndOsmesaGiveTheSameImage) {
