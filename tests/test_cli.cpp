@@ -118,6 +118,9 @@ TEST(Cli, RenderJsonHasTheContractKeys) {
   EXPECT_GT(j["triangle_tests_p95"].get<double>(), 0.0);
   EXPECT_EQ(j["stack_overflow_pixels"].get<int>(), 0);
   EXPECT_EQ(j["nonfinite_pixels"].get<int>(), 0);
+  std::printf("[ measured ] %d-triangle height field: %g nodes, %g leaves, %g mesh rays, %.2f node visits and %.2f"
+              " triangle tests per ray, ray_cost %.2f\n", kTriangles, nodes, leaves, rays, visits, tests,
+              j["ray_cost"].get<double>());
 }
 
 TEST(Cli, EglAndOsmesaGiveTheSameImage) {

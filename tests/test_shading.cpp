@@ -456,6 +456,9 @@ TEST(Shading, PointLightShadowsFallWhereSimilarTrianglesPutThem) {
   const double intensity = 0.8, albedo = 0.7, ka = 0.5, ambient = 0.3;
   const Sphere sphere{{-1.2, 1.0, -0.6}, 0.5};
   const Box box{{0.6, 0.4, -0.1}, {1.4, 1.2, 0.7}};
+  // Beyond the light (and outside the camera's view): on the line from the light back to the floor
+  // around (3.25, 0, 0.2), so it would shadow that floor if shadow rays did not stop at the light.
+  const Sphere beyond{{-3.0, 5.0, 0.2}, 0.5};
   auto p = prepareToml(R"(
 [camera]
 eye = [0, 8, 0]
@@ -491,6 +494,11 @@ kind = "box"
 material = "block"
 translate = [1, 0.8, 0.3]
 scale = 0.4
+[[object]]
+kind = "sphere"
+material = "block"
+translate = [-3, 5, 0.2]
+scale = 0.5
 )");
   constexpr int W = 128, H = 96;
   const Image img = render(*p, W, H);
@@ -500,9 +508,15 @@ scale = 0.4
     const dvec3 d = light - q;
     const double len = glm::length(d);
     const dvec3 v = d / len;
-    return raySphere(q, v, sphere) < len || rayBox(q, v, box) < len;
+    return raySphere(q, v, sphere) < len || rayBox(q, v, box) < len || raySphere(q, v, beyond) < len;
   };
-  auto seesFloor = [&](dvec3 v) { return std::min(raySphere(cam.eye, v, sphere), rayBox(cam.eye, v, box)) == INFINITY; };
+  auto seesFloor = [&](dvec3 v) {
+    return std::min({raySphere(cam.eye, v, sphere), rayBox(cam.eye, v, box), raySphere(cam.eye, v, beyond)}) == INFINITY;
+  };
+  // The sphere beyond the light is not in view (the floor it would wrongly shadow is: wouldBeShadowed).
+  for (int j = 0; j < H; ++j)
+    for (int i = 0; i < W; ++i) ASSERT_EQ(raySphere(cam.eye, cam.pixelDir(i, j), beyond), INFINITY);
+  int wouldBeShadowed = 0;  // floor pixels in view that the sphere beyond the light lines up with
 
   int lit = 0, shadowed = 0, failures = 0;
   double worst = 0.0;
@@ -516,6 +530,10 @@ scale = 0.4
       if (!floor || ambiguous) continue;
       const dvec3 q = cam.eye + (-cam.eye.y / v.y) * v;
       const bool shadow = inShadow(q);
+      {
+        const dvec3 toLight = glm::normalize(light - q);
+        wouldBeShadowed += !shadow && raySphere(q, toLight, beyond) < INFINITY;
+      }
       for (double dx : {-0.01, 0.01})
         for (double dz : {-0.01, 0.01}) ambiguous |= inShadow(q + dvec3(dx, 0.0, dz)) != shadow;
       if (ambiguous) continue;
@@ -531,6 +549,7 @@ scale = 0.4
   EXPECT_EQ(failures, 0);
   EXPECT_GT(shadowed, 200) << "both shadows must be in view";
   EXPECT_GT(lit, W * H / 2);
+  EXPECT_GT(wouldBeShadowed, 50) << "shadow rays that overshoot the light would darken these";
 
   // Similar triangles, measured: along the image row through the box's centre z, the box's shadow ends
   // where the ray from the light over the box's top far edge (x = 1.4, y = 1.2) reaches the floor:
@@ -556,9 +575,9 @@ scale = 0.4
   ASSERT_FALSE(std::isnan(firstLitX));
   EXPECT_LE(lastShadowX, predicted);
   EXPECT_GE(firstLitX, predicted);
-  std::printf("[ measured ] shadows: %d lit + %d shadowed floor pixels within %.2f steps; box shadow edge"
-              " between x = %.4f and %.4f (pixel centres), similar triangles %.4f\n",
-              lit, shadowed, worst, lastShadowX, firstLitX, predicted);
+  std::printf("[ measured ] shadows: %d lit (%d of them lined up with the sphere beyond the light) + %d shadowed"
+              " floor pixels within %.2f steps; box shadow edge between x = %.4f and %.4f (pixel centres),"
+              " similar triangles %.4f\n", lit, wouldBeShadowed, shadowed, worst, lastShadowX, firstLitX, predicted);
 }
 
 }  // namespace
