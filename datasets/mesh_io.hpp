@@ -5,6 +5,12 @@
 // counts, so every file first goes through a cheap structural pre-check of our own (header counts
 // against file size, line shapes, index ranges, NaN/Inf), and the result is validated again after.
 // Every problem is one InputError line: "PATH[:LINE]: message".
+//
+// Positions are read in double precision and stay double (MeshData) until the caller rebases them
+// (rebasedMesh): a scanned or georeferenced mesh 1e5..1e7 from the origin keeps its detail, which
+// float (spacing 2^-7 at 1e5, 1 at 1e7) would round away. The code is split by format:
+// mesh_io_{off,obj,ply,stl}.cpp (our own scanners, which also collect the double positions),
+// mesh_io_openmesh.cpp (OpenMesh for faces, normals, UVs of OBJ/OFF/PLY), mesh_io_text.cpp.
 #pragma once
 #include <filesystem>
 #include <string>
@@ -14,9 +20,32 @@
 
 namespace bvhlab {
 
+// A mesh as its file states it: positions in double, in the file's own coordinates.
+struct MeshData {
+  std::string name;  // source path
+  std::vector<glm::dvec3> positions;
+  std::vector<glm::vec3> normals;  // per vertex or empty
+  std::vector<glm::vec2> uvs;      // per vertex or empty
+  std::vector<glm::uvec3> triangles;
+};
+
+// Loads a mesh with double positions (every format below; binary STL stores float, which converts
+// exactly). Same checks and errors as loadMesh.
+MeshData loadMeshData(const std::filesystem::path& path);
+
+// Centre of the bounding box of the vertices that triangles use (double; (0,0,0) without triangles).
+glm::dvec3 boundsCentre(const MeshData& mesh);
+
+// The mesh with positions float(p - origin): exact to float's relative precision of |p - origin|, so
+// choose `origin` near the geometry (Scene::origin, or boundsCentre) for far meshes. Throws
+// InputError naming the mesh when a rebased coordinate does not fit a float.
+Mesh rebasedMesh(const MeshData& mesh, glm::dvec3 origin = glm::dvec3(0.0));
+
 // Loads a mesh in its own (object) space. Polygons are fan-triangulated (exact for convex faces).
 // Normals and UVs are kept when the file gives one for every vertex (OBJ: one per position, last
-// wins), otherwise left empty. Mesh::name is the path; Mesh::material is 0.
+// wins), otherwise left empty. Mesh::name is the path; Mesh::material is 0. Positions are rounded
+// to float in the file's coordinates (rebasedMesh(loadMeshData(path))): use loadMeshData for meshes
+// far from the origin.
 Mesh loadMesh(const std::filesystem::path& path);
 
 // Lower-case extensions (with the dot) that loadMesh reads: .obj .off .ply .stl

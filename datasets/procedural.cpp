@@ -160,8 +160,21 @@ Image makeCheckerTexture(int size, int squares, glm::vec3 a, glm::vec3 b) {
 
 // ---- meshes --------------------------------------------------------------------------------------------
 
+namespace {
+// The resource limit (procedural.hpp): `triangles` is computed in 64 bits from the request, so a
+// resolution whose product overflows int is caught too.
+void checkTriangleBudget(const std::string& request, uint64_t triangles) {
+  if (triangles > kMaxProceduralTriangles)
+    throw InputError(request + ": asks for " + std::to_string(triangles) + " triangles, more than the limit of " +
+                     std::to_string(kMaxProceduralTriangles) +
+                     " (kMaxProceduralTriangles, datasets/procedural.hpp: about 16-24 GB with the BVH)");
+}
+}  // namespace
+
 Mesh makeUvSphere(int segments, int rings) {
   if (segments < 3 || rings < 2) throw std::invalid_argument("makeUvSphere: needs segments >= 3 and rings >= 2");
+  checkTriangleBudget("makeUvSphere(" + std::to_string(segments) + ", " + std::to_string(rings) + ")",
+                      2 * uint64_t(segments) * uint64_t(rings - 1));
   Mesh m;
   m.name = "uv-sphere";
   for (int i = 0; i <= rings; ++i) {
@@ -190,7 +203,8 @@ Mesh makeUvSphere(int segments, int rings) {
 }
 
 Mesh makeCube(int n) {
-  if (n < 1 || n > 4096) throw std::invalid_argument("makeCube: n must be in [1, 4096]");
+  if (n < 1) throw std::invalid_argument("makeCube: n must be >= 1");
+  checkTriangleBudget("makeCube(" + std::to_string(n) + ")", 12 * uint64_t(n) * uint64_t(n));
   Mesh m;
   m.name = "cube";
   // Face frames: normal, and u/v axes with u x v = normal (outward, counter-clockwise).
@@ -219,7 +233,9 @@ Mesh makeCube(int n) {
 }
 
 Mesh makeGridPlane(int nx, int nz) {
-  if (nx < 1 || nz < 1 || nx > 16384 || nz > 16384) throw std::invalid_argument("makeGridPlane: bad resolution");
+  if (nx < 1 || nz < 1) throw std::invalid_argument("makeGridPlane: bad resolution");
+  checkTriangleBudget("makeGridPlane(" + std::to_string(nx) + ", " + std::to_string(nz) + ")",
+                      2 * uint64_t(nx) * uint64_t(nz));
   Mesh m;
   m.name = "grid-plane";
   for (int i = 0; i <= nz; ++i)
@@ -242,6 +258,7 @@ Mesh makeGridPlane(int nx, int nz) {
 
 Mesh makeTriangleSoup(size_t count, uint64_t seed, float minSize, float maxSize) {
   if (!(minSize > 0.0f && maxSize >= minSize)) throw std::invalid_argument("makeTriangleSoup: bad size range");
+  checkTriangleBudget("makeTriangleSoup(" + std::to_string(count) + ")", count);
   Mesh m;
   m.name = "soup" + std::to_string(count);
   SplitMix64 rng(seed);
@@ -297,7 +314,7 @@ float fbm(glm::vec3 p, uint64_t seed) {
 
 Mesh makeLargeMesh(size_t triangles, uint64_t seed) {
   if (triangles < 100) throw std::invalid_argument("makeLargeMesh: needs at least 100 triangles");
-  if (triangles > (size_t(1) << 28)) throw std::invalid_argument("makeLargeMesh: more than 2^28 triangles");
+  checkTriangleBudget("makeLargeMesh(" + std::to_string(triangles) + ")", triangles);
   // Sphere part: segments = 2 * rings gives 4 rings (rings - 1) triangles; take the largest that fits 3/4.
   const size_t sphereBudget = triangles * 3 / 4;
   int rings = std::max(2, int(std::sqrt(double(sphereBudget) / 4.0)));

@@ -102,13 +102,19 @@ struct RenderSettings {
   bool reinhard = false;  // tone map before the sRGB encode
 };
 
+// Distance from the world origin (largest coordinate) at which a scene is stored relative to a nearby
+// origin (Scene::origin). Below it positions keep their coordinates exactly; at 1024 float spacing is
+// 2^-13 = 1.2e-4, about where it reaches the tracer's secondary-ray offsets and rounding would show.
+constexpr double kRebaseDistance = 1024.0;
+
 struct Scene {
   std::filesystem::path source;  // scene file (or mesh file) it came from
   // World position of this scene's coordinate origin. Every position (camera, lights, object
   // translations, baked mesh vertices) is stored relative to it. The loader sets it to the camera eye
   // when the eye is 1024 or more from the world origin (camera-relative rendering, computed in double
-  // precision), else it stays 0. Mesh files hold their vertices in float already: a mesh whose own
-  // coordinates are far from its origin loses precision when it is read, before any rebasing.
+  // precision), else it stays 0. A bare mesh scene (loadMeshScene) uses the mesh's bounding box centre
+  // instead, by the same distance rule. Mesh files are read in double and baked relative to this
+  // origin in double, so a mesh whose own coordinates are far from the world origin keeps its detail.
   glm::dvec3 origin{0.0};
   Camera camera;
   std::vector<Light> lights;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <map>
 #include <set>
@@ -612,4 +613,174 @@ TEST(MeshIo, CorruptedFilesNeverCrash) {
     }
   EXPECT_GT(rejected, 0);
   EXPECT_EQ(loaded + rejected, int(seeds.size()) * 60);
+}
+
+// ---- far meshes (issue 16): positions stay double until rebased -------------------------------------
+
+namespace {
+
+// A small mesh with coordinates that need every bit of a float near the origin (thirds, sevenths).
+const std::vector<glm::dvec3> kNearCorners = {
+    {0.0, 0.0, 0.0}, {1.0 / 3.0, 0.0, 1.0 / 7.0}, {0.1, 0.2, 0.3}, {-0.25, 1.0 / 3.0, 0.05}};
+const std::vector<glm::uvec3> kNearTriangles = {{0, 1, 2}, {0, 2, 3}, {1, 3, 2}};
+
+std::string g17(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// The mesh moved by `offset`, in `format`, every coordinate with 17 significant digits.
+std::string farMeshFile(const std::string& format, glm::dvec3 offset) {
+  std::string s;
+  auto xyz = [&](glm::dvec3 p) { return g17(p.x) + " " + g17(p.y) + " " + g17(p.z); };
+  if (format == "obj") {
+    for (const glm::dvec3& p : kNearCorners) s += "v " + xyz(offset + p) + "\n";
+    for (const glm::uvec3& t : kNearTriangles)
+      s += "f " + std::to_string(t.x + 1) + " " + std::to_string(t.y + 1) + " " + std::to_string(t.z + 1) + "\n";
+  } else if (format == "off") {
+    s = "OFF\n" + std::to_string(kNearCorners.size()) + " " + std::to_string(kNearTriangles.size()) + " 0\n";
+    for (const glm::dvec3& p : kNearCorners) s += xyz(offset + p) + "\n";
+    for (const glm::uvec3& t : kNearTriangles)
+      s += "3 " + std::to_string(t.x) + " " + std::to_string(t.y) + " " + std::to_string(t.z) + "\n";
+  } else if (format == "ply" || format == "plyb") {
+    const bool binary = format == "plyb";
+    s = std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") + " 1.0\nelement vertex " +
+        std::to_string(kNearCorners.size()) + "\nproperty double x\nproperty double y\nproperty double z\n" +
+        "element face " + std::to_string(kNearTriangles.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+    for (const glm::dvec3& p : kNearCorners) {
+      const glm::dvec3 q = offset + p;
+      if (binary) s.append(reinterpret_cast<const char*>(&q[0]), 3 * sizeof(double));  // little-endian host
+      else s += xyz(q) + "\n";
+    }
+    for (const glm::uvec3& t : kNearTriangles) {
+      if (binary) {
+        s.push_back(char(3));
+        const int32_t idx[3] = {int32_t(t.x), int32_t(t.y), int32_t(t.z)};
+        s.append(reinterpret_cast<const char*>(idx), sizeof idx);
+      } else {
+        s += "3 " + std::to_string(t.x) + " " + std::to_string(t.y) + " " + std::to_string(t.z) + "\n";
+      }
+    }
+  } else if (format == "stl") {
+    s = "solid far\n";
+    for (const glm::uvec3& t : kNearTriangles) {
+      s += " facet normal 0 0 0\n  outer loop\n";
+      for (int k = 0; k < 3; ++k) s += "   vertex " + xyz(offset + kNearCorners[t[k]]) + "\n";
+      s += "  endloop\n endfacet\n";
+    }
+    s += "endsolid far\n";
+  }
+  return s;
+}
+
+}  // namespace
+
+// Every text format, and binary PLY with `property double`, keeps far coordinates to double precision:
+// at 1e6 (float spacing 0.0625) and 1e7 (spacing 1) the corners come back within 1e-8 of the file's
+// values (double's spacing there is 1.2e-10 / 1.9e-9); a reader that narrows to float is off by up to
+// half a float spacing (0.03 / 0.5), which these bounds reject.
+TEST(MeshIo, FarCoordinatesKeepDoublePrecisionInEveryFormat) {
+  TempDir tmp;
+  for (double d : {1e6, 1e7}) {
+    const glm::dvec3 offset = d * glm::dvec3(1.0, 0.5, -1.0);
+    for (const std::string format : {"obj", "off", "ply", "plyb", "stl"}) {
+      SCOPED_TRACE(format + " at " + g17(d));
+      const fs::path p = tmp / ("far_" + format + (format == "plyb" ? ".ply" : "." + format.substr(0, 3)));
+      writeFile(p, farMeshFile(format, offset));
+      const MeshData m = loadMeshData(p);
+      ASSERT_EQ(m.triangles.size(), kNearTriangles.size());
+      ASSERT_EQ(m.positions.size(), kNearCorners.size());  // STL corners are welded back into 4 vertices
+      for (size_t t = 0; t < kNearTriangles.size(); ++t)
+        for (int k = 0; k < 3; ++k) {
+          const glm::dvec3 got = m.positions[m.triangles[t][k]] - offset, want = kNearCorners[kNearTriangles[t][k]];
+          EXPECT_LE(glm::length(got - want), 1e-8) << "triangle " << t << " corner " << k;
+        }
+      // Rebased at the bounding box centre (what loadMeshScene does), the float mesh keeps that precision.
+      const glm::dvec3 centre = boundsCentre(m);
+      const Mesh rebased = rebasedMesh(m, centre);
+      for (size_t v = 0; v < m.positions.size(); ++v)
+        EXPECT_LE(glm::length(glm::dvec3(rebased.positions[v]) - (m.positions[v] - centre)), 1e-6);
+    }
+  }
+}
+
+// Binary STL stores float: the double path adds no further rounding (the values come back bit-exact).
+TEST(MeshIo, BinaryStlFloatsConvertExactly) {
+  TempDir tmp;
+  std::string s(80, ' ');
+  const uint32_t one = 1;
+  s.append(reinterpret_cast<const char*>(&one), 4);
+  const float rec[12] = {0, 0, 1, 1e6f + 0.0625f, 5e5f, -1e6f, 1e6f + 0.125f, 5e5f, -1e6f, 1e6f, 5e5f + 0.0625f, -1e6f};
+  s.append(reinterpret_cast<const char*>(rec), sizeof rec);
+  s.append(2, '\0');
+  writeFile(tmp / "f.stl", s);
+  const MeshData m = loadMeshData(tmp / "f.stl");
+  ASSERT_EQ(m.positions.size(), 3u);
+  EXPECT_EQ(m.positions[0], glm::dvec3(1e6 + 0.0625, 5e5, -1e6));
+  EXPECT_EQ(m.positions[2], glm::dvec3(1e6, 5e5 + 0.0625, -1e6));
+}
+
+// ---- resource limits (issue 16): absurd claimed counts fail with a clear error before allocation ----
+
+TEST(MeshIo, AbsurdDeclaredCountsAreRefusedBeforeAllocation) {
+  TempDir tmp;
+  std::string stl(80, ' ');  // no "solid": a binary STL header claiming 4e9 triangles, one record present
+  const uint32_t claimed = 4'000'000'000u;
+  stl.append(reinterpret_cast<const char*>(&claimed), 4);
+  stl.append(50, '\0');
+  const std::string plyHead = "ply\nformat binary_little_endian 1.0\nelement vertex 2147483648\nproperty float x\n"
+                              "property float y\nproperty float z\n";
+  const std::string plyFaces = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                               "property float y\nproperty float z\nelement face 4000000000\n"
+                               "property list uchar int vertex_indices\nend_header\n" + std::string(36, '\0') +
+                               std::string("\x03\0\0\0\0\1\0\0\0\2\0\0\0", 13);
+  struct Case {
+    std::string file, content, expect;
+  };
+  const std::vector<Case> cases = {
+      {"huge.stl", stl, ": binary STL size mismatch: header declares 4000000000 triangles (200000000084 bytes)"},
+      {"hugev.ply", plyHead + "end_header\n" + std::string(36, '\0'),
+       ": truncated: binary data too short for 2147483648 vertex records (12 bytes each"},
+      {"hugev_ascii.ply", "ply\nformat ascii 1.0\nelement vertex 2147483648\nproperty float x\nproperty float y\n"
+                          "property float z\nend_header\n0 0 0\n",
+       ": truncated: file ends after 1 of 2147483648 vertex records"},
+      {"hugef.ply", plyFaces, ": truncated: binary data ends inside face 1"},
+      {"huge.off", "OFF\n2147483648 4000000000 0\n0 0 0\n", ":2: truncated: header declares 2147483648 vertices and "
+                                                            "4000000000 faces but the file has only"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.file);
+    const fs::path p = tmp / c.file;
+    writeFile(p, c.content);
+    const std::string msg = inputErrorOf([&] { loadMeshData(p); });
+    EXPECT_EQ(msg.rfind(p.string(), 0), 0u) << msg;
+    EXPECT_NE(msg.find(c.expect), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("out of memory"), std::string::npos) << msg;  // refused, not caught after bad_alloc
+  }
+}
+
+// 10^9 triangles (about 100 GB with the BVH) from any generator: an InputError naming the generator, the
+// request and the limit, thrown before allocation (the test process would be killed otherwise).
+TEST(Procedural, HugeRequestsAreRefusedWithTheNamedLimit) {
+  const std::string limit = std::to_string(kMaxProceduralTriangles);
+  struct Case {
+    std::function<void()> call;
+    std::string expect;
+  };
+  const std::vector<Case> cases = {
+      {[] { makeTriangleSoup(1'000'000'000); }, "makeTriangleSoup(1000000000): asks for 1000000000 triangles"},
+      {[] { makeLargeMesh(1'000'000'000); }, "makeLargeMesh(1000000000): asks for 1000000000 triangles"},
+      {[] { makeCube(10'000); }, "makeCube(10000): asks for 1200000000 triangles"},
+      {[] { makeGridPlane(1 << 20, 1 << 20); }, "makeGridPlane(1048576, 1048576): asks for 2199023255552 triangles"},
+      {[] { makeUvSphere(1 << 16, 1 << 16); }, "makeUvSphere(65536, 65536): asks for 8589803520 triangles"},
+  };
+  for (const Case& c : cases) {
+    const std::string msg = inputErrorOf(c.call);
+    EXPECT_NE(msg.find(c.expect), std::string::npos) << msg;
+    EXPECT_NE(msg.find("limit of " + limit + " (kMaxProceduralTriangles"), std::string::npos) << msg;
+  }
+  // At the limit's scale the generators still work (the limit is not below what experiments use).
+  EXPECT_EQ(makeTriangleSoup(1000).triangles.size(), 1000u);
+  EXPECT_GE(kMaxProceduralTriangles, size_t(10'000'000));  // experiments/configs/large.toml asks for 10M
 }

@@ -452,3 +452,40 @@ TEST(SceneDocs, TheCompleteExampleLoads) {
   EXPECT_EQ(s.meshes.size(), 1u);
   EXPECT_EQ(s.world.kind, WorldKind::Map);
 }
+
+// Issue 16: a mesh file whose own coordinates are 1e7 from the origin, used by a scene near the origin
+// (translate brings it back) and by a scene at its own place (the camera there, rebased to the eye).
+// Either way the baked vertices keep double precision: within 1e-6 of the exact values, where a float
+// reading of the file (spacing 1 at 1e7) is off by up to 0.5 and a float bake by as much.
+TEST(SceneIo, FarMeshFilesAreBakedInDouble) {
+  TempDir tmp;
+  const glm::dvec3 far(1e7, 5e6, -1e7);
+  const glm::dvec3 corners[3] = {{0.0, 0.0, 0.0}, {0.3, 0.0, 0.1}, {0.0, 0.7, 1.0 / 3.0}};
+  std::string obj;
+  char line[128];
+  for (const glm::dvec3& c : corners) {
+    std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", far.x + c.x, far.y + c.y, far.z + c.z);
+    obj += line;
+  }
+  writeFile(tmp / "far.obj", obj + "f 1 2 3\n");
+  // Near the origin: translate = -far.
+  writeFile(tmp / "near.toml", "[camera]\neye = [0, 1, 5]\ntarget = [0, 0, 0]\n[[object]]\nkind = \"mesh\"\n"
+                               "mesh = \"far.obj\"\ntranslate = [-10000000, -5000000, 10000000]\n");
+  // At the mesh: the eye is far, the scene is rebased to it.
+  writeFile(tmp / "there.toml", "[camera]\neye = [10000000, 5000001, -9999995]\ntarget = [10000000, 5000000, -10000000]\n"
+                                "[[object]]\nkind = \"mesh\"\nmesh = \"far.obj\"\n");
+  for (const char* name : {"near.toml", "there.toml"}) {
+    SCOPED_TRACE(name);
+    const Scene s = loadScene(tmp / name);
+    ASSERT_EQ(s.meshes.size(), 1u);
+    ASSERT_EQ(s.meshes[0].positions.size(), 3u);
+    const glm::dvec3 base = std::string(name) == "near.toml" ? glm::dvec3(0.0) : far - s.origin;
+    for (int k = 0; k < 3; ++k)
+      EXPECT_LE(glm::length(glm::dvec3(s.meshes[0].positions[k]) - (base + corners[k])), 1e-6) << "corner " << k;
+  }
+  // A bare far mesh is rebased to its bounding box centre, so its float vertices are small and exact.
+  const Scene bare = loadMeshScene(tmp / "far.obj");
+  EXPECT_LE(glm::length(bare.origin - (far + glm::dvec3(0.15, 0.35, 1.0 / 6.0))), 1e-6);
+  for (int k = 0; k < 3; ++k)
+    EXPECT_LE(glm::length(glm::dvec3(bare.meshes[0].positions[k]) + bare.origin - (far + corners[k])), 1e-6);
+}

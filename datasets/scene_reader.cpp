@@ -1,0 +1,523 @@
+// The TOML scene reader (scene_io.hpp's loadScene, docs/scene-format.md): every key validated, every
+// error one line "FILE:LINE: message". Positions are read in double and stored relative to
+// Scene::origin; mesh files are read in double (loadMeshData) and baked to world space in double.
+#include <algorithm>
+#include <cmath>
+#include <initializer_list>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <string_view>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <toml++/toml.h>
+
+#include "datasets/image_io.hpp"
+#include "datasets/mesh_io.hpp"
+#include "datasets/procedural.hpp"
+#include "datasets/scene_io.hpp"
+
+namespace bvhlab {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::string_view kBuiltinPrefix = "builtin:";
+constexpr int kBuiltinTextureSize = 512;
+constexpr int kMaxImageSide = 16384;
+constexpr int kMaxDepth = 32;
+
+struct Range {
+  double lo, hi;
+  bool loOpen, hiOpen;
+  bool contains(double v) const {
+    return (loOpen ? v > lo : v >= lo) && (hiOpen ? v < hi : v <= hi);
+  }
+  std::string describe() const {
+    auto num = [](double x) {
+      std::ostringstream s;
+      s << x;
+      return s.str();
+    };
+    if (std::isinf(hi)) return std::string(loOpen ? "> " : ">= ") + num(lo);
+    return std::string(loOpen ? "(" : "[") + num(lo) + ", " + num(hi) + (hiOpen ? ")" : "]");
+  }
+};
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr Range kNonNegative{0.0, kInf, false, true};
+constexpr Range kPositive{0.0, kInf, true, true};
+constexpr Range kUnit{0.0, 1.0, false, false};
+constexpr Range kAny{-kInf, kInf, true, true};
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// Reads one TOML scene file into a Scene; all validation and error formatting lives here.
+class SceneReader {
+ public:
+  explicit SceneReader(const fs::path& file) : file_(file), dir_(file.parent_path()) {}
+
+  Scene read() {
+    std::error_code ec;
+    if (!fs::exists(file_, ec)) throw InputError(file_.string() + ": scene file not found");
+    toml::table root;
+    try {
+      root = toml::parse_file(file_.string());
+    } catch (const toml::parse_error& e) {
+      failAt(e.source().begin.line, "TOML syntax error: " + std::string(e.description()));
+    }
+    scene_.source = file_;
+    checkKeys(root, {"description", "camera", "render", "world", "light", "material", "object"}, "the top level");
+    if (auto* d = root.get("description"); d && !d->is_string()) fail(*d, "description must be a string");
+
+    const toml::table* camera = tableAt(root, "camera");
+    if (!camera) failAt(1, "missing [camera] section (eye and target are required)");
+    readCamera(*camera);
+    if (const toml::table* t = tableAt(root, "render")) readRender(*t);
+    if (const toml::table* t = tableAt(root, "world")) readWorld(*t);
+    for (const toml::table* t : tableArray(root, "light")) readLight(*t);
+    for (const toml::table* t : tableArray(root, "material")) readMaterial(*t);
+    const auto objects = tableArray(root, "object");
+    if (objects.empty()) failAt(1, "scene has no [[object]]");
+    for (const toml::table* t : objects) readObject(*t);
+    return std::move(scene_);
+  }
+
+ private:
+  fs::path file_, dir_;
+  Scene scene_;
+  std::map<std::string, int> imageIndex_;     // canonical path or builtin name -> Scene::images
+  std::map<std::string, MeshData> meshCache_; // canonical path -> object-space mesh (double positions)
+  std::map<std::string, int> materialIndex_;  // name -> Scene::materials
+
+  // ---- errors ----
+  [[noreturn]] void failAt(size_t line, const std::string& message) const {
+    throw InputError(file_.string() + ":" + std::to_string(line) + ": " + message);
+  }
+  [[noreturn]] void fail(const toml::node& node, const std::string& message) const {
+    failAt(node.source().begin.line, message);
+  }
+
+  // ---- structure ----
+  void checkKeys(const toml::table& t, std::initializer_list<std::string_view> allowed, const std::string& where) const {
+    for (auto&& [key, node] : t) {
+      if (std::find(allowed.begin(), allowed.end(), key.str()) != allowed.end()) continue;
+      std::string list;
+      for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      failAt(key.source().begin.line ? key.source().begin.line : node.source().begin.line,
+             "unknown key '" + std::string(key.str()) + "' in " + where + " (allowed: " + list + ")");
+    }
+  }
+
+  const toml::table* tableAt(const toml::table& root, std::string_view key) const {
+    const toml::node* n = root.get(key);
+    if (!n) return nullptr;
+    if (!n->is_table()) fail(*n, "'" + std::string(key) + "' must be a table: write [" + std::string(key) + "]");
+    return n->as_table();
+  }
+
+  std::vector<const toml::table*> tableArray(const toml::table& root, std::string_view key) const {
+    std::vector<const toml::table*> out;
+    const toml::node* n = root.get(key);
+    if (!n) return out;
+    const toml::array* a = n->as_array();
+    if (!a || !a->is_array_of_tables())
+      fail(*n, "'" + std::string(key) + "' must be an array of tables: write [[" + std::string(key) + "]]");
+    for (const toml::node& e : *a) out.push_back(e.as_table());
+    return out;
+  }
+
+  // ---- typed values ----
+  double number(const toml::node& n, const std::string& name, Range range = kAny) const {
+    if (!n.is_number()) fail(n, name + " must be a number");
+    const double v = n.value<double>().value_or(0.0);
+    if (!std::isfinite(v)) fail(n, name + " is NaN or infinite");
+    if (!range.contains(v)) fail(n, name + " must be " + range.describe() + " (got " + fmt(v) + ")");
+    return v;
+  }
+  float getFloat(const toml::table& t, std::string_view key, const std::string& where, float def,
+                 Range range = kAny) const {
+    const toml::node* n = t.get(key);
+    return n ? float(number(*n, where + "." + std::string(key), range)) : def;
+  }
+  int getInt(const toml::table& t, std::string_view key, const std::string& where, int def, int lo, int hi) const {
+    const toml::node* n = t.get(key);
+    if (!n) return def;
+    const std::string name = where + "." + std::string(key);
+    if (!n->is_integer()) fail(*n, name + " must be an integer");
+    const int64_t v = n->value<int64_t>().value_or(0);
+    if (v < lo || v > hi) fail(*n, name + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + std::to_string(v) + ")");
+    return int(v);
+  }
+  bool getBool(const toml::table& t, std::string_view key, const std::string& where, bool def) const {
+    const toml::node* n = t.get(key);
+    if (!n) return def;
+    if (!n->is_boolean()) fail(*n, where + "." + std::string(key) + " must be true or false");
+    return n->value<bool>().value_or(def);
+  }
+  std::optional<std::string> getString(const toml::table& t, std::string_view key, const std::string& where) const {
+    const toml::node* n = t.get(key);
+    if (!n) return std::nullopt;
+    if (!n->is_string()) fail(*n, where + "." + std::string(key) + " must be a string");
+    return n->value<std::string>();
+  }
+  std::string requireString(const toml::table& t, std::string_view key, const std::string& where) const {
+    auto s = getString(t, key, where);
+    if (!s) failAt(t.source().begin.line, where + ": missing required key '" + std::string(key) + "'");
+    return *s;
+  }
+  // An array of exactly N numbers, each in `range`.
+  template <int N>
+  glm::vec<N, float> vecOf(const toml::node& n, const std::string& name, Range range = kAny) const {
+    const toml::array* a = n.as_array();
+    if (!a || a->size() != size_t(N)) fail(n, name + " must be an array of " + std::to_string(N) + " numbers");
+    glm::vec<N, float> v;
+    for (int i = 0; i < N; ++i) v[i] = float(number(*a->get(size_t(i)), name + "[" + std::to_string(i) + "]", range));
+    return v;
+  }
+  // A position, read in double precision and stored relative to the scene's origin (Scene::origin), so
+  // a scene far from the world origin keeps the float precision of the same scene near it.
+  std::optional<glm::vec3> getPoint(const toml::table& t, std::string_view key, const std::string& where) const {
+    const toml::node* n = t.get(key);
+    if (!n) return std::nullopt;
+    return glm::vec3(pointOf(*n, where + "." + std::string(key)) - scene_.origin);
+  }
+  glm::dvec3 pointOf(const toml::node& n, const std::string& name) const {
+    const toml::array* a = n.as_array();
+    if (!a || a->size() != 3) fail(n, name + " must be an array of 3 numbers");
+    glm::dvec3 v;
+    for (int i = 0; i < 3; ++i) v[i] = number(*a->get(size_t(i)), name + "[" + std::to_string(i) + "]");
+    return v;
+  }
+  std::optional<glm::vec3> getVec3(const toml::table& t, std::string_view key, const std::string& where,
+                                   Range range = kAny) const {
+    const toml::node* n = t.get(key);
+    if (!n) return std::nullopt;
+    return vecOf<3>(*n, where + "." + std::string(key), range);
+  }
+  glm::vec3 requireVec3(const toml::table& t, std::string_view key, const std::string& where, Range range = kAny) const {
+    auto v = getVec3(t, key, where, range);
+    if (!v) failAt(t.source().begin.line, where + ": missing required key '" + std::string(key) + "'");
+    return *v;
+  }
+  // A number s (meaning [s, s, s] / [s, s]) or an array of N numbers.
+  template <int N>
+  glm::vec<N, float> scalarOrVec(const toml::node& n, const std::string& name, Range range) const {
+    if (n.is_number()) return glm::vec<N, float>(float(number(n, name, range)));
+    return vecOf<N>(n, name, range);
+  }
+
+  // Keys that only some kinds accept: a clear message instead of a bare "unknown key".
+  void rejectForeignKeys(const toml::table& t, const std::string& where, const std::string& kind,
+                         std::initializer_list<std::pair<std::string_view, std::string_view>> keyToKind) const {
+    for (auto [key, owner] : keyToKind)
+      if (owner != kind)
+        if (const toml::node* n = t.get(key))
+          fail(*n, where + ": key '" + std::string(key) + "' is only valid with kind = \"" + std::string(owner) + "\"");
+  }
+
+  // ---- files ----
+  fs::path resolve(const std::string& relative) const { return (dir_ / relative).lexically_normal(); }
+
+  // A readable message for a file the scene names that is not there.
+  [[noreturn]] void failMissing(const toml::node& n, const std::string& what, const std::string& given,
+                                const fs::path& resolved) const {
+    std::string msg = what + " '" + given + "' not found (looked for " + resolved.string() + ")";
+    std::error_code ec;
+    if (resolved.string().find("datasets/cache") != std::string::npos && !fs::is_directory(resolved.parent_path(), ec))
+      msg += "; the dataset cache is missing: run `bash datasets/fetch.sh`";
+    fail(n, msg);
+  }
+
+  int imageFor(const toml::node& n, const std::string& spec, const std::string& what) {
+    std::string key;
+    fs::path path;
+    if (spec.rfind(kBuiltinPrefix, 0) == 0) {
+      key = spec;
+      if (spec != "builtin:logo" && spec != "builtin:checker")
+        fail(n, what + ": unknown builtin image '" + spec + "' (builtin:logo, builtin:checker)");
+    } else {
+      if (spec.empty()) fail(n, what + " path is empty");
+      path = resolve(spec);
+      std::error_code ec;
+      if (!fs::is_regular_file(path, ec)) failMissing(n, what, spec, path);
+      key = fs::weakly_canonical(path, ec).string();
+    }
+    if (auto it = imageIndex_.find(key); it != imageIndex_.end()) return it->second;
+    Image img;
+    if (key == "builtin:logo") img = makeLogoTexture(kBuiltinTextureSize);
+    else if (key == "builtin:checker") img = makeCheckerTexture(kBuiltinTextureSize, 8);
+    else {
+      try {
+        img = loadImage(path);
+      } catch (const InputError& e) {
+        fail(n, what + ": " + e.what());
+      }
+    }
+    scene_.images.push_back(std::move(img));
+    const int index = int(scene_.images.size()) - 1;
+    imageIndex_[key] = index;
+    return index;
+  }
+
+  const MeshData& meshFor(const toml::node& n, const std::string& spec) {
+    if (spec.empty()) fail(n, "mesh path is empty");
+    const fs::path path = resolve(spec);
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) failMissing(n, "mesh", spec, path);
+    const std::string key = fs::weakly_canonical(path, ec).string();
+    if (auto it = meshCache_.find(key); it != meshCache_.end()) return it->second;
+    try {
+      return meshCache_.emplace(key, loadMeshData(path)).first->second;
+    } catch (const InputError& e) {
+      fail(n, std::string("mesh: ") + e.what());
+    }
+  }
+
+  // ---- sections ----
+  void readCamera(const toml::table& t) {
+    const std::string w = "camera";
+    checkKeys(t, {"eye", "target", "up", "fov"}, "[camera]");
+    Camera& c = scene_.camera;
+    if (!t.get("eye")) failAt(t.source().begin.line, w + ": missing required key 'eye'");
+    if (!t.get("target")) failAt(t.source().begin.line, w + ": missing required key 'target'");
+    // Camera-relative coordinates for far scenes: every position is stored relative to the eye (the
+    // subtraction in double precision). Below kRebaseDistance the origin stays at 0, so scenes near the
+    // world origin keep their coordinates exactly; beyond it, float spacing (>= 2^-13 = 1.2e-4 at 1024)
+    // reaches the tracer's secondary-ray offsets and rounding of positions would show in the image.
+    const glm::dvec3 eye = pointOf(*t.get("eye"), w + ".eye");
+    if (glm::any(glm::greaterThanEqual(glm::abs(eye), glm::dvec3(kRebaseDistance)))) scene_.origin = eye;
+    c.eye = *getPoint(t, "eye", w);
+    c.target = *getPoint(t, "target", w);
+    c.up = getVec3(t, "up", w).value_or(glm::vec3(0, 1, 0));
+    c.fovDeg = getFloat(t, "fov", w, c.fovDeg, Range{0.0, 180.0, true, true});
+    const glm::vec3 view = c.target - c.eye;
+    // Relative tolerances: a view vector shorter than 1e-6 of the eye's magnitude, or an up vector
+    // within ~0.06 degrees of it, leaves the camera basis undefined or numerically meaningless.
+    const float scale = std::max({1.0f, glm::length(c.eye), glm::length(c.target)});
+    if (!(glm::length(view) > 1e-6f * scale)) failAt(t.source().begin.line, "camera: eye and target coincide");
+    if (!(glm::length(c.up) > 0.0f)) fail(*t.get("up"), "camera.up must not be zero");
+    if (!(glm::length(glm::cross(glm::normalize(view), glm::normalize(c.up))) > 1e-3f))
+      failAt(t.source().begin.line, "camera: up is parallel to the view direction");
+  }
+
+  void readRender(const toml::table& t) {
+    const std::string w = "render";
+    checkKeys(t, {"width", "height", "max_depth", "exposure", "tonemap"}, "[render]");
+    RenderSettings& r = scene_.settings;
+    r.width = getInt(t, "width", w, r.width, 1, kMaxImageSide);
+    r.height = getInt(t, "height", w, r.height, 1, kMaxImageSide);
+    r.maxDepth = getInt(t, "max_depth", w, r.maxDepth, 1, kMaxDepth);
+    r.exposure = getFloat(t, "exposure", w, r.exposure, kPositive);
+    if (auto tm = getString(t, "tonemap", w)) {
+      if (*tm == "none") r.reinhard = false;
+      else if (*tm == "reinhard") r.reinhard = true;
+      else fail(*t.get("tonemap"), "render.tonemap must be \"none\" or \"reinhard\" (got \"" + *tm + "\")");
+    }
+  }
+
+  void readWorld(const toml::table& t) {
+    const std::string w = "world";
+    checkKeys(t, {"kind", "color", "zenith", "horizon", "ground", "map", "rotation", "intensity", "ambient"}, "[world]");
+    World& world = scene_.world;
+    const std::string kind = getString(t, "kind", w).value_or("sky");
+    if (kind == "sky") world.kind = WorldKind::Sky;
+    else if (kind == "color") world.kind = WorldKind::Color;
+    else if (kind == "map") world.kind = WorldKind::Map;
+    else fail(*t.get("kind"), "world.kind must be \"sky\", \"color\" or \"map\" (got \"" + kind + "\")");
+    rejectForeignKeys(t, w, kind, {{"color", "color"}, {"zenith", "sky"}, {"horizon", "sky"}, {"ground", "sky"},
+                                   {"map", "map"}, {"rotation", "map"}});
+    world.color = getVec3(t, "color", w, kNonNegative).value_or(world.color);
+    world.zenith = getVec3(t, "zenith", w, kNonNegative).value_or(world.zenith);
+    world.horizon = getVec3(t, "horizon", w, kNonNegative).value_or(world.horizon);
+    world.ground = getVec3(t, "ground", w, kNonNegative).value_or(world.ground);
+    world.intensity = getFloat(t, "intensity", w, world.intensity, kNonNegative);
+    world.rotationDeg = getFloat(t, "rotation", w, world.rotationDeg);
+    world.ambient = getVec3(t, "ambient", w, kNonNegative).value_or(world.ambient);
+    if (world.kind == WorldKind::Map) {
+      auto map = getString(t, "map", w);
+      if (!map) failAt(t.source().begin.line, "world: kind = \"map\" needs map = \"FILE\" (or \"builtin:...\")");
+      world.image = imageFor(*t.get("map"), *map, "world map");
+    }
+  }
+
+  void readLight(const toml::table& t) {
+    const std::string w = "light " + std::to_string(scene_.lights.size() + 1);
+    checkKeys(t, {"kind", "position", "direction", "color", "intensity"}, "[[light]]");
+    Light l;
+    const std::string kind = requireString(t, "kind", w);
+    if (kind != "point" && kind != "directional")
+      fail(*t.get("kind"), w + ": kind must be \"point\" or \"directional\" (got \"" + kind + "\")");
+    rejectForeignKeys(t, w, kind, {{"position", "point"}, {"direction", "directional"}});
+    if (kind == "point") {
+      l.kind = LightKind::Point;
+      if (!t.get("position")) failAt(t.source().begin.line, w + ": missing required key 'position'");
+      l.position = *getPoint(t, "position", w);
+    } else {
+      l.kind = LightKind::Directional;
+      l.direction = requireVec3(t, "direction", w);
+      if (!(glm::length(l.direction) > 0.0f)) fail(*t.get("direction"), w + ": direction must not be zero");
+      l.direction = glm::normalize(l.direction);
+    }
+    l.color = getVec3(t, "color", w, kNonNegative).value_or(l.color);
+    l.intensity = getFloat(t, "intensity", w, l.intensity, kNonNegative);
+    scene_.lights.push_back(l);
+  }
+
+  void readMaterial(const toml::table& t) {
+    checkKeys(t, {"name", "color", "texture", "uv_scale", "diffuse", "ambient", "specular", "shininess",
+                  "reflectivity", "transparency", "ior", "emission"},
+              "[[material]]");
+    Material m;
+    m.name = requireString(t, "name", "material " + std::to_string(scene_.materials.size() + 1));
+    if (m.name.empty()) fail(*t.get("name"), "material name is empty");
+    const std::string w = "material '" + m.name + "'";
+    if (materialIndex_.count(m.name)) fail(*t.get("name"), "duplicate material name '" + m.name + "'");
+    m.color = getVec3(t, "color", w, kUnit).value_or(m.color);
+    if (auto tex = getString(t, "texture", w)) m.texture = imageFor(*t.get("texture"), *tex, w + " texture");
+    if (const toml::node* n = t.get("uv_scale")) m.uvScale = scalarOrVec<2>(*n, w + ".uv_scale", kPositive);
+    m.diffuse = getFloat(t, "diffuse", w, m.diffuse, kUnit);
+    m.ambient = getFloat(t, "ambient", w, m.ambient, kUnit);
+    m.specular = getFloat(t, "specular", w, m.specular, kUnit);
+    m.shininess = getFloat(t, "shininess", w, m.shininess, Range{0.0, 1.0e4, true, false});
+    m.reflectivity = getFloat(t, "reflectivity", w, m.reflectivity, kUnit);
+    m.transparency = getFloat(t, "transparency", w, m.transparency, kUnit);
+    m.ior = getFloat(t, "ior", w, m.ior, kPositive);
+    m.emission = getVec3(t, "emission", w, kNonNegative).value_or(m.emission);
+    if (m.reflectivity + m.transparency > 1.0f) {
+      const toml::node* n = t.get("transparency") ? t.get("transparency") : t.get("reflectivity");
+      fail(*n, w + ": reflectivity + transparency must be <= 1 (got " + fmt(m.reflectivity) + " + " +
+                   fmt(m.transparency) + ")");
+    }
+    materialIndex_[m.name] = int(scene_.materials.size());
+    scene_.materials.push_back(m);
+  }
+
+  int defaultMaterial() {
+    if (auto it = materialIndex_.find("default"); it != materialIndex_.end()) return it->second;
+    Material m;
+    m.name = "default";
+    materialIndex_[m.name] = int(scene_.materials.size());
+    scene_.materials.push_back(m);
+    return materialIndex_[m.name];
+  }
+
+  void readObject(const toml::table& t) {
+    checkKeys(t, {"kind", "name", "material", "translate", "rotate", "scale", "major_radius", "minor_radius",
+                  "infinite", "mesh", "fit"},
+              "[[object]]");
+    Object o;
+    const std::string ordinal = "object " + std::to_string(scene_.objects.size() + 1);
+    const std::string kind = requireString(t, "kind", ordinal);
+    bool known = false;
+    for (int k = 0; k < kObjectKindCount; ++k)
+      if (kind == objectKindName(ObjectKind(k))) {
+        o.kind = ObjectKind(k);
+        known = true;
+      }
+    if (!known)
+      fail(*t.get("kind"), ordinal + ": unknown kind \"" + kind +
+                               "\" (sphere, box, cylinder, cone, torus, plane, mesh)");
+    o.name = getString(t, "name", ordinal).value_or(kind + std::to_string(scene_.objects.size() + 1));
+    const std::string w = ordinal + " (" + o.name + ")";
+    rejectForeignKeys(t, w, kind, {{"major_radius", "torus"}, {"minor_radius", "torus"}, {"infinite", "plane"},
+                                   {"mesh", "mesh"}, {"fit", "mesh"}});
+
+    if (auto name = getString(t, "material", w)) {
+      auto it = materialIndex_.find(*name);
+      if (it == materialIndex_.end()) {
+        std::string known;
+        for (const Material& m : scene_.materials) known += (known.empty() ? "" : ", ") + m.name;
+        fail(*t.get("material"), w + ": unknown material '" + *name + "'" +
+                                     (known.empty() ? " (no [[material]] defined before it)" : " (known: " + known + ")"));
+      }
+      o.material = it->second;
+    } else {
+      o.material = defaultMaterial();
+    }
+
+    // World = translate + R S local, so subtracting the origin from the translation rebases the object.
+    // The float transform places analytic objects; mesh vertices go through the same transform in
+    // double (toWorldD below), since a mesh file's own coordinates may be far from the origin.
+    const glm::dvec3 translateD =
+        t.get("translate") ? pointOf(*t.get("translate"), w + ".translate") - scene_.origin : -scene_.origin;
+    const glm::vec3 translate(translateD);
+    const glm::vec3 scale = t.get("scale") ? scalarOrVec<3>(*t.get("scale"), w + ".scale", kPositive) : glm::vec3(1.0f);
+    o.transform = composeTransform(translate, glm::vec3(0.0f), scale);
+    glm::dmat4 toWorldD = composeTransformD(translateD, glm::dvec3(0.0), glm::dvec3(scale));
+    if (const toml::node* r = t.get("rotate")) {
+      if (const toml::table* aa = r->as_table()) {
+        checkKeys(*aa, {"axis", "angle"}, w + ".rotate");
+        const glm::vec3 axis = requireVec3(*aa, "axis", w + ".rotate");
+        if (!(glm::length(axis) > 0.0f)) fail(*aa->get("axis"), w + ".rotate.axis must not be zero");
+        const toml::node* angle = aa->get("angle");
+        if (!angle) fail(*aa, w + ".rotate: missing required key 'angle' (degrees)");
+        const float degrees = float(number(*angle, w + ".rotate.angle"));
+        o.transform = composeTransform(translate, axis, degrees, scale);
+        toWorldD = composeTransformD(translateD, glm::dvec3(axis), double(degrees), glm::dvec3(scale));
+      } else if (r->is_array()) {
+        const glm::vec3 degrees = vecOf<3>(*r, w + ".rotate");
+        o.transform = composeTransform(translate, degrees, scale);
+        toWorldD = composeTransformD(translateD, glm::dvec3(degrees), glm::dvec3(scale));
+      } else {
+        fail(*r, w + ".rotate must be [x, y, z] degrees or { axis = [x, y, z], angle = degrees }");
+      }
+    }
+
+    if (o.kind == ObjectKind::Torus) {
+      o.majorRadius = getFloat(t, "major_radius", w, o.majorRadius, kPositive);
+      o.minorRadius = getFloat(t, "minor_radius", w, o.minorRadius, kPositive);
+      if (o.minorRadius > o.majorRadius) {
+        const toml::node* n = t.get("minor_radius") ? t.get("minor_radius") : t.get("major_radius");
+        fail(n ? *n : static_cast<const toml::node&>(t),
+             w + ": minor_radius must be <= major_radius (a spindle torus intersects itself)");
+      }
+    }
+    if (o.kind == ObjectKind::Plane) o.infinite = getBool(t, "infinite", w, false);
+    if (o.kind == ObjectKind::Mesh) {
+      const std::string spec = requireString(t, "mesh", w);
+      const MeshData& data = meshFor(*t.get("mesh"), spec);
+      if (const toml::node* fit = t.get("fit")) {
+        const float size = float(number(*fit, w + ".fit", kPositive));
+        toWorldD = toWorldD * fitTransform(data, size);
+      }
+      Mesh mesh;
+      try {
+        mesh = bakeMesh(data, toWorldD);
+      } catch (const InputError& e) {
+        fail(*t.get("mesh"), std::string("mesh: ") + e.what());
+      }
+      mesh.material = o.material;
+      o.transform = glm::mat4(toWorldD);  // informational for meshes (the renderer reads the baked vertices)
+      o.mesh = int(scene_.meshes.size());
+      scene_.meshes.push_back(std::move(mesh));
+    }
+    scene_.objects.push_back(o);
+  }
+
+  // Moves the mesh's bounding box so its bottom centre is at the origin and scales it uniformly so
+  // its largest extent is `size`.
+  // In double: the anchor may be far from the origin (a georeferenced mesh fitted into a scene).
+  static glm::dmat4 fitTransform(const MeshData& mesh, float size) {
+    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    for (const glm::dvec3& p : mesh.positions) {
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+    const glm::dvec3 ext = hi - lo;
+    const double largest = std::max({ext.x, ext.y, ext.z});
+    const double s = largest > 0.0 ? double(size) / largest : 1.0;
+    const glm::dvec3 anchor(0.5 * lo.x + 0.5 * hi.x, lo.y, 0.5 * lo.z + 0.5 * hi.z);
+    return glm::scale(glm::dmat4(1.0), glm::dvec3(s)) * glm::translate(glm::dmat4(1.0), -anchor);
+  }
+};
+
+}  // namespace
+
+Scene loadScene(const fs::path& path) { return SceneReader(path).read(); }
+
+}  // namespace bvhlab
