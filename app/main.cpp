@@ -21,6 +21,8 @@
 #include "render/measure_command.hpp"
 #include "render/render_cli.hpp"
 #include "render/render_command.hpp"
+#include "render/render_job.hpp"
+#include "render/trace_command.hpp"
 #include "render/viewer.hpp"
 #include "traversal/kernels.hpp"
 
@@ -36,22 +38,22 @@ struct BuildCommand {
 };
 
 int buildCommand(const BuildCommand& c) {
+  // The same checks and warnings as render's (render/render_job.hpp), before the mesh is read.
+  RenderCommand asRender;
+  asRender.builder = c.builder;
+  asRender.leafSize = c.leafSize;
+  asRender.bins = c.bins;
+  asRender.optimize = c.optimize;
+  asRender.sbvhAlpha = c.sbvhAlpha;
+  asRender.plocRadius = c.plocRadius;
+  OptionReview review;
+  const BuildOptions options = renderBuildOptions(asRender, &review);
+  for (const std::string& w : review.warnings) std::fprintf(stderr, "bvhlab: warning: %s\n", w.c_str());
   Scene scene = loadInput(c.mesh);
   TriangleSoup soup = gatherTriangles(scene);
   if (soup.size() == 0) throw InputError(c.mesh + ": no triangles to build a BVH over");
   std::vector<Aabb> boxes = triangleBoxes(soup);
   std::vector<glm::vec3> centroids = triangleCentroids(soup);
-  BuildOptions options;
-  if (c.leafSize < 1 || c.leafSize > int(kMaxLeafSize))
-    throw std::invalid_argument("--leaf-size must be in 1.." + std::to_string(kMaxLeafSize));
-  if (!(c.sbvhAlpha >= 0.0f && c.sbvhAlpha <= 1.0f))
-    throw std::invalid_argument("--sbvh-alpha must be in 0..1 (a fraction of the root's area)");
-  if (c.plocRadius < 1 || c.plocRadius > 1024) throw std::invalid_argument("--ploc-radius must be in 1..1024");
-  options.maxLeafSize = uint32_t(c.leafSize);
-  options.bins = uint32_t(std::max(0, c.bins));
-  options.optimize = c.optimize;
-  options.sbvhAlpha = c.sbvhAlpha;
-  options.plocRadius = uint32_t(c.plocRadius);
   BuildStats stats;
   Bvh bvh = buildBvh(c.builder, BuildInput{boxes, centroids, soup.v0, soup.v1, soup.v2}, options, &stats);
   PackedBvh packed = packBvh(bvh, soup);
@@ -61,7 +63,9 @@ int buildCommand(const BuildCommand& c) {
     nlohmann::json j = {{"mesh", c.mesh},
                         {"builder", c.builder},
                         {"optimize", c.optimize.empty() ? nlohmann::json() : nlohmann::json(c.optimize)},
-                        {"leaf_size", c.leafSize},
+                        {"leaf_size", stats.leafSize},  // what the leaves were limited to
+                        {"leaf_size_requested", c.leafSize},
+                        {"warnings", review.warnings},
                         {"primitives", stats.primitives},
                         {"references", stats.references},
                         {"nodes", stats.nodes},
@@ -99,28 +103,38 @@ int main(int argc, char** argv) {
   RenderCliText renderText;
   addRenderOptions(*render, rc, renderText);
 
+  TraceCommand tc;
+  RenderCliText traceText;
+  auto* traceCmd = app.add_subcommand(
+      "trace", "trace a ray workload (primary/shadow/specular/diffuse/ao) with a GLSL kernel and Embree, interleaved");
+  addTraceOptions(*traceCmd, tc, traceText);
+
   MeasureCommand mc;
   auto* measureCmd = app.add_subcommand(
       "measure", "time a group of renders interleaved in one process (what `bvhlab run` calls; experiments/README.md)");
   measureCmd->add_option("spec", mc.spec, "group file (JSON: the runs' render arguments and the [measure] settings)")
-      ->required();
+      ->required()
+      ->check(notADirectory("a group file (JSON)"));
 
   BuildCommand bc;
   auto* build = app.add_subcommand("build", "build a BVH over a mesh and print its statistics");
-  build->add_option("--mesh", bc.mesh, "mesh or scene file")->required();
-  build->add_option("--builder", bc.builder, "BVH builder")->capture_default_str();
-  build->add_option("--leaf-size", bc.leafSize, "max triangles per leaf")->capture_default_str();
+  build->option_defaults()->always_capture_default();
+  build->add_option("--mesh", bc.mesh, "mesh or scene file")->required()->check(notADirectory("a mesh or scene file"));
+  build->add_option("--builder", bc.builder, "BVH builder");
+  build->add_option("--leaf-size", bc.leafSize, "max triangles per leaf");
   build->add_option("--bins", bc.bins, "bins for sah-binned and sbvh (0 = default)");
   build->add_option("--optimize", bc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
-  build->add_option("--sbvh-alpha", bc.sbvhAlpha, "sbvh: overlap threshold for spatial splits")->capture_default_str();
-  build->add_option("--ploc-radius", bc.plocRadius, "ploc: nearest-neighbour search radius")->capture_default_str();
+  build->add_option("--sbvh-alpha", bc.sbvhAlpha, "sbvh: overlap threshold for spatial splits");
+  build->add_option("--ploc-radius", bc.plocRadius, "ploc: nearest-neighbour search radius");
   build->add_flag("--json", bc.json, "print JSON");
 
   RunOptions ro;
   std::string config, outDir, shard, binary;
   bool noRetry = false, noReport = false;
   auto* runCmd = app.add_subcommand("run", "run an experiment config (a sweep) and write its report");
-  runCmd->add_option("config", config, "experiment config .toml (see experiments/README.md)")->required();
+  runCmd->add_option("config", config, "experiment config .toml (see experiments/README.md)")
+      ->required()
+      ->check(notADirectory("an experiment config .toml (experiments/configs/ has examples)"));
   runCmd->add_option("--out", outDir, "output directory (default results/<experiment name>)");
   runCmd->add_option("--shard", shard, "run only slice I of N: I/N");
   runCmd->add_flag("--no-retry", noRetry, "keep failed runs as failed instead of retrying them");
@@ -140,7 +154,10 @@ int main(int argc, char** argv) {
   ViewerOptions vo;
   std::string viewEye, viewTarget, viewUp;
   auto* viewCmd = app.add_subcommand("view", "interactive first-person viewer (needs a display; docs/viewer.md)");
-  viewCmd->add_option("input", vo.input, "scene .toml or mesh file")->required();
+  viewCmd->option_defaults()->always_capture_default();
+  viewCmd->add_option("input", vo.input, "scene .toml or mesh file")
+      ->required()
+      ->check(notADirectory("a scene .toml or a mesh file (OBJ/OFF/PLY/STL)"));
   viewCmd->add_option("--width", vo.width, "window width");
   viewCmd->add_option("--height", vo.height, "window height");
   viewCmd->add_option("--builder", vo.builder, "initial BVH builder (B cycles)");
@@ -168,6 +185,7 @@ int main(int argc, char** argv) {
 
   HardCasesCommand hc;
   auto* hardCmd = app.add_subcommand("hard-cases", "robustness variants on the hard-case suite: leaks, exact-oracle disagreement");
+  hardCmd->option_defaults()->always_capture_default();
   hardCmd->add_option("--robust", hc.robust, "variant to run (repeatable; default: every variant)");
   hardCmd->add_option("--json", hc.json, "write the results as JSON here ('-' = stdout)");
   hardCmd->add_flag("--gpu", hc.gpu, "also count the GLSL kernel's leaks (camera inside closed meshes)");
@@ -209,6 +227,10 @@ int main(int argc, char** argv) {
       return runRender(rc);
     }
     if (measureCmd->parsed()) return runMeasure(mc);
+    if (traceCmd->parsed()) {
+      applyRenderCliText(tc.render, traceText);
+      return runTrace(tc);
+    }
     if (viewCmd->parsed()) {
       if (!viewEye.empty()) vo.eye = parseVec3(viewEye, "--eye");
       if (!viewTarget.empty()) vo.target = parseVec3(viewTarget, "--target");

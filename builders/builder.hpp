@@ -12,6 +12,10 @@ struct BuilderInfo {
   std::string name;         // e.g. "sah-binned"
   std::string description;  // one line for `bvhlab builders`
   std::function<Bvh(const BuildInput&, const BuildOptions&)> build;
+  // Which options it reads (the others are ignored: a user who sets them gets a warning) and the
+  // largest leaf it builds (a larger --leaf-size is capped, with a warning).
+  bool usesBins = false, usesSbvhAlpha = false, usesPlocRadius = false;
+  uint32_t leafSizeCap = kMaxLeafSize;
 };
 
 const std::vector<BuilderInfo>& builders();
@@ -24,6 +28,19 @@ const BuilderInfo& findBuilder(const std::string& name);
 // half area is finite. Throws InputError for bad data (naming the primitive index) and
 // std::invalid_argument for bad options.
 void validateBuildInput(const BuildInput& input, const BuildOptions& options);
+
+// What `builder` will do with `options`, known before anything is loaded: throws
+// std::invalid_argument (naming the flag) for values no builder accepts (unknown builder or pass,
+// leaf size outside 1..kMaxLeafSize, bins not 0 or 2..kMaxBins), and returns the leaf size the builder
+// honours plus one warning per option it ignores or caps. Options equal to BuildOptions{}'s defaults
+// are taken as not set.
+struct OptionReview {
+  uint32_t leafSize = 0;  // what the tree's leaves are limited to (= options.maxLeafSize unless capped)
+  std::vector<std::string> warnings;
+};
+OptionReview reviewBuildOptions(const std::string& builder, const BuildOptions& options);
+constexpr uint32_t kMaxBuildBins = 256;  // sah-binned and sbvh store a bin index in one byte
+constexpr uint32_t kEmbreeMaxLeafSize = 32;  // RTC_BUILD_MAX_PRIMITIVES_PER_LEAF (checked in builders/embree.cpp)
 
 // The post-passes BuildOptions::optimize accepts (besides "" = none).
 const std::vector<std::string>& optimizePasses();

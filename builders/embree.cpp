@@ -15,6 +15,7 @@
 
 #include <embree3/rtcore.h>
 
+#include "builders/builder.hpp"
 #include "builders/bvh.hpp"
 
 namespace bvhlab {
@@ -84,6 +85,7 @@ Bvh buildWithEmbree(const BuildInput& input, const BuildOptions& options, RTCBui
   args.maxDepth = 1024;
   args.minLeafSize = 1;
   // Embree caps leaves at RTC_BUILD_MAX_PRIMITIVES_PER_LEAF (32); smaller leaves honour the limit.
+  static_assert(kEmbreeMaxLeafSize == uint32_t(RTC_BUILD_MAX_PRIMITIVES_PER_LEAF));
   args.maxLeafSize = std::min<uint32_t>(options.maxLeafSize, RTC_BUILD_MAX_PRIMITIVES_PER_LEAF);
   args.traversalCost = options.cost.traversalCost;
   args.intersectionCost = options.cost.intersectionCost;

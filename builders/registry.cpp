@@ -1,6 +1,7 @@
 // The builder registry and the one entry point that validates, times and measures a build.
 // Adding a builder: write builders/NAME.cpp with a `Bvh buildX(const BuildInput&, const BuildOptions&)`
 // and add its declaration + one line to the table below.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -27,14 +28,19 @@ const std::vector<BuilderInfo>& builders() {
   static const std::vector<BuilderInfo> table = {
       {"median", "complete binary tree, object-median splits on the longest axis, full leaves",
        buildMedianBvh},
-      {"sah-binned", "binned SAH (options.bins bins per axis, 64 by default), median fallback", buildSahBinnedBvh},
+      {"sah-binned", "binned SAH (options.bins bins per axis, 64 by default), median fallback", buildSahBinnedBvh,
+       /*usesBins=*/true},
       {"sah-sweep", "full-sweep SAH: exact best object split over centroids sorted on all axes", buildSahSweepBvh},
-      {"sbvh", "SBVH: binned object + spatial splits (triangles clipped), alpha, reference budget, unsplitting", buildSbvh},
+      {"sbvh", "SBVH: binned object + spatial splits (triangles clipped), alpha, reference budget, unsplitting", buildSbvh,
+       /*usesBins=*/true, /*usesSbvhAlpha=*/true},
       {"lbvh", "Morton-code radix tree (LBVH), SAH-collapsed leaves", buildLbvh},
       {"ploc", "PLOC: bottom-up clustering in Morton order, neighbours within +-plocRadius, SAH-collapsed leaves",
-       buildPloc},
-      {"embree", "Embree 3 rtcBuildBVH, quality MEDIUM (the reference)", buildEmbreeBvh},
-      {"embree-low", "Embree 3 rtcBuildBVH, quality LOW (Morton codes)", buildEmbreeLowBvh},
+       buildPloc, false, false, /*usesPlocRadius=*/true},
+      // Embree's builder caps leaves at RTC_BUILD_MAX_PRIMITIVES_PER_LEAF (builders/embree.cpp).
+      {"embree", "Embree 3 rtcBuildBVH, quality MEDIUM (the reference)", buildEmbreeBvh, false, false, false,
+       kEmbreeMaxLeafSize},
+      {"embree-low", "Embree 3 rtcBuildBVH, quality LOW (Morton codes)", buildEmbreeLowBvh, false, false, false,
+       kEmbreeMaxLeafSize},
   };
   return table;
 }
@@ -101,6 +107,32 @@ void validateBuildInput(const BuildInput& input, const BuildOptions& options) {
                      " are too large (extent or area overflows float)");
 }
 
+OptionReview reviewBuildOptions(const std::string& builder, const BuildOptions& options) {
+  const BuilderInfo& info = findBuilder(builder);
+  if (!options.optimize.empty() && options.optimize != "reinsert")
+    throw std::invalid_argument("unknown --optimize pass '" + options.optimize + "'; valid: reinsert");
+  if (options.maxLeafSize < 1 || options.maxLeafSize > kMaxLeafSize)
+    throw std::invalid_argument("--leaf-size must be in 1.." + std::to_string(kMaxLeafSize) + " (got " +
+                                std::to_string(options.maxLeafSize) + ")");
+  if (options.bins == 1 || options.bins > kMaxBuildBins)
+    throw std::invalid_argument("--bins must be 0 (the builder's default) or 2.." + std::to_string(kMaxBuildBins) +
+                                " (got " + std::to_string(options.bins) + ")");
+  OptionReview review;
+  review.leafSize = std::min(options.maxLeafSize, info.leafSizeCap);
+  const BuildOptions defaults;
+  if (review.leafSize < options.maxLeafSize)
+    review.warnings.push_back(info.name + " builds leaves of at most " + std::to_string(info.leafSizeCap) +
+                              " triangles; --leaf-size " + std::to_string(options.maxLeafSize) + " is capped to " +
+                              std::to_string(review.leafSize));
+  if (options.bins != defaults.bins && !info.usesBins)
+    review.warnings.push_back(info.name + " ignores --bins (only sah-binned and sbvh bin)");
+  if (options.sbvhAlpha != defaults.sbvhAlpha && !info.usesSbvhAlpha)
+    review.warnings.push_back(info.name + " ignores --sbvh-alpha (only sbvh makes spatial splits)");
+  if (options.plocRadius != defaults.plocRadius && !info.usesPlocRadius)
+    review.warnings.push_back(info.name + " ignores --ploc-radius (only ploc clusters)");
+  return review;
+}
+
 const std::vector<std::string>& optimizePasses() {
   static const std::vector<std::string> names = {"reinsert"};
   return names;
@@ -125,7 +157,7 @@ Bvh buildBvh(const std::string& builder, const BuildInput& input, const BuildOpt
   if (stats) {
     *stats = computeStats(bvh, options.cost);
     stats->builder = info.name;
-    stats->leafSize = options.maxLeafSize;
+    stats->leafSize = std::min(options.maxLeafSize, info.leafSizeCap);  // what the leaves were limited to
     stats->primitives = input.boxes.size();
     stats->buildMs = std::chrono::duration<double, std::milli>(stop - start).count();
     stats->sahBeforeOptimize = options.optimize.empty() ? stats->sahCost : sahBefore;

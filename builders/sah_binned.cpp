@@ -39,6 +39,7 @@
 #endif
 
 #include "builders/build_util.hpp"
+#include "builders/builder.hpp"
 
 namespace bvhlab {
 
@@ -55,7 +56,8 @@ namespace {
 // 64 matches Embree's SAH (1.0053x at 32) for ~5% more time; on a 1M-triangle bumpy sphere the
 // gap is wider (32 bins: 1.018x Embree, 64: 1.008x), so 64 it is.
 constexpr uint32_t kDefaultBins = 64;
-constexpr uint32_t kMaxBins = 256;  // bin indices are stored in one byte
+constexpr uint32_t kMaxBins = 256;
+static_assert(kMaxBins == kMaxBuildBins, "reviewBuildOptions (builders/registry.cpp) validates --bins against kMaxBuildBins");  // bin indices are stored in one byte
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // Four floats with the handful of operations binning needs: SSE where the target has it, a plain

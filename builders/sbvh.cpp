@@ -52,6 +52,7 @@
 #include <vector>
 
 #include "builders/build_util.hpp"
+#include "builders/builder.hpp"
 #include "builders/clip.hpp"
 
 namespace bvhlab {
@@ -69,6 +70,7 @@ namespace {
 // node never gets more spatial bins than references, see findSpatialSplit), so 32.
 constexpr uint32_t kDefaultBins = 32;
 constexpr uint32_t kMaxBins = 256;
+static_assert(kMaxBins == kMaxBuildBins, "reviewBuildOptions (builders/registry.cpp) validates --bins against kMaxBuildBins");
 
 struct Ref {
   Aabb box;

@@ -1,5 +1,6 @@
 #include "render/gl_context.hpp"
 
+#include <cstdio>
 #include <stdexcept>
 #include <vector>
 
@@ -17,6 +18,12 @@ Backend parseBackend(const std::string& name) {
 }
 
 const char* backendName(Backend b) { return b == Backend::OSMesa ? "osmesa" : "egl"; }
+
+bool isSoftwareRenderer(const std::string& r) {
+  for (const char* name : {"llvmpipe", "softpipe", "swrast", "Software Rasterizer"})
+    if (r.find(name) != std::string::npos) return true;
+  return false;
+}
 
 std::string GlContext::renderer() const {
   const GLubyte* s = glGetString(GL_RENDERER);
@@ -132,7 +139,14 @@ class EglContextImpl : public GlContext {
 
 std::unique_ptr<GlContext> createContext(Backend backend) {
   if (backend == Backend::OSMesa) return std::make_unique<OSMesaContextImpl>();
-  return std::make_unique<EglContextImpl>();
+  auto ctx = std::make_unique<EglContextImpl>();
+  static bool noted = false;
+  if (!noted && ctx->software()) {
+    noted = true;
+    std::fprintf(stderr, "bvhlab: note: --backend egl found no GPU and runs on Mesa's software renderer (%s)\n",
+                 ctx->renderer().c_str());
+  }
+  return ctx;
 }
 
 }  // namespace bvhlab

@@ -26,13 +26,69 @@ GLuint compileStage(GLenum stage, const std::string& source, const AssembledShad
     std::string log(std::max(len, 1), '\0');
     glGetShaderInfoLog(s, len, nullptr, log.data());
     glDeleteShader(s);
-    throw ShaderError(std::string(stage == GL_VERTEX_SHADER ? "vertex" : "fragment") +
+    throw ShaderError(std::string(stage == GL_VERTEX_SHADER ? "vertex" : stage == GL_COMPUTE_SHADER ? "compute" : "fragment") +
                       " shader failed to compile:\n" + (map ? map->mapLog(log) : log));
   }
   return s;
 }
 
 }  // namespace
+
+unsigned uploadBvhStream(const std::vector<glm::uvec4>& texels, Storage storage, const char* name, unsigned* buffer) {
+  static const glm::uvec4 kDummy(0u);  // streams of a mesh-less scene in the uber shader
+  const glm::uvec4* data = texels.empty() ? &kDummy : texels.data();
+  const GLsizeiptr count = texels.empty() ? 1 : static_cast<GLsizeiptr>(texels.size());
+  GLuint tex = 0;
+  if (storage == Storage::Tbo) {
+    GLint maxTexels = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &maxTexels);
+    if (count > maxTexels)
+      throw std::runtime_error(std::string(name) + " stream has " + std::to_string(count) +
+                               " texels, above GL_MAX_TEXTURE_BUFFER_SIZE = " + std::to_string(maxTexels) +
+                               " (try --storage tex2d)");
+    glCreateBuffers(1, buffer);
+    glNamedBufferStorage(*buffer, count * sizeof(glm::uvec4), data, 0);
+    glCreateTextures(GL_TEXTURE_BUFFER, 1, &tex);
+    glTextureBuffer(tex, GL_RGBA32UI, *buffer);
+  } else {
+    GLint maxSize = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &maxSize);
+    const GLsizeiptr width = kTex2DWidth, height = (count + width - 1) / width;
+    if (height > maxSize)
+      throw std::runtime_error(std::string(name) + " stream needs " + std::to_string(height) + " rows of " +
+                               std::to_string(width) + " texels, above GL_MAX_TEXTURE_SIZE = " +
+                               std::to_string(maxSize));
+    std::vector<glm::uvec4> padded(width * height, glm::uvec4(0u));
+    std::copy(data, data + count, padded.begin());
+    glCreateTextures(GL_TEXTURE_2D, 1, &tex);
+    glTextureStorage2D(tex, 1, GL_RGBA32UI, GLsizei(width), GLsizei(height));
+    glTextureSubImage2D(tex, 0, 0, 0, GLsizei(width), GLsizei(height), GL_RGBA_INTEGER, GL_UNSIGNED_INT,
+                        padded.data());
+    glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  }
+  checkGl(name);
+  return tex;
+}
+
+unsigned compileComputeProgram(const AssembledShader& shader) {
+  GLuint cs = compileStage(GL_COMPUTE_SHADER, shader.source, &shader);
+  GLuint program = glCreateProgram();
+  glAttachShader(program, cs);
+  glLinkProgram(program);
+  glDeleteShader(cs);
+  GLint ok = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &len);
+    std::string log(std::max(len, 1), '\0');
+    glGetProgramInfoLog(program, len, nullptr, log.data());
+    glDeleteProgram(program);
+    throw ShaderError("compute program failed to link:\n" + shader.mapLog(log));
+  }
+  return program;
+}
 
 GpuRenderer::GpuRenderer(const PreparedScene& scene, const ShaderOptions& shader, const FrameOptions& frame)
     : scene_(scene), options_(shader), frame_(frame) {
@@ -90,43 +146,6 @@ void GpuRenderer::compile() {
   glCreateVertexArrays(1, &vao_);
 }
 
-unsigned GpuRenderer::uploadStream(const std::vector<glm::uvec4>& texels, const char* name, unsigned* buffer) {
-  static const glm::uvec4 kDummy(0u);  // streams of a mesh-less scene in the uber shader
-  const glm::uvec4* data = texels.empty() ? &kDummy : texels.data();
-  const GLsizeiptr count = texels.empty() ? 1 : static_cast<GLsizeiptr>(texels.size());
-  GLuint tex = 0;
-  if (options_.storage == Storage::Tbo) {
-    GLint maxTexels = 0;
-    glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &maxTexels);
-    if (count > maxTexels)
-      throw std::runtime_error(std::string(name) + " stream has " + std::to_string(count) +
-                               " texels, above GL_MAX_TEXTURE_BUFFER_SIZE = " + std::to_string(maxTexels) +
-                               " (try --storage tex2d)");
-    glCreateBuffers(1, buffer);
-    glNamedBufferStorage(*buffer, count * sizeof(glm::uvec4), data, 0);
-    glCreateTextures(GL_TEXTURE_BUFFER, 1, &tex);
-    glTextureBuffer(tex, GL_RGBA32UI, *buffer);
-  } else {
-    GLint maxSize = 0;
-    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &maxSize);
-    const GLsizeiptr width = kTex2DWidth, height = (count + width - 1) / width;
-    if (height > maxSize)
-      throw std::runtime_error(std::string(name) + " stream needs " + std::to_string(height) + " rows of " +
-                               std::to_string(width) + " texels, above GL_MAX_TEXTURE_SIZE = " +
-                               std::to_string(maxSize));
-    std::vector<glm::uvec4> padded(width * height, glm::uvec4(0u));
-    std::copy(data, data + count, padded.begin());
-    glCreateTextures(GL_TEXTURE_2D, 1, &tex);
-    glTextureStorage2D(tex, 1, GL_RGBA32UI, GLsizei(width), GLsizei(height));
-    glTextureSubImage2D(tex, 0, 0, 0, GLsizei(width), GLsizei(height), GL_RGBA_INTEGER, GL_UNSIGNED_INT,
-                        padded.data());
-    glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  }
-  checkGl(name);
-  return tex;
-}
-
 void GpuRenderer::upload() {
   const SceneData& d = scene_.data;
   std::vector<uint8_t> block = d.uniformBlock();
@@ -139,9 +158,9 @@ void GpuRenderer::upload() {
                              std::to_string(block.size()) + " > " + std::to_string(maxBlock) + " bytes)");
 
   const PackedBvh& p = scene_.packed;
-  streams_[0] = uploadStream(p.nodes, "node", &streamBuffers_[0]);
-  streams_[1] = uploadStream(p.triangles, "triangle", &streamBuffers_[1]);
-  streams_[2] = uploadStream(p.attributes, "attribute", &streamBuffers_[2]);
+  streams_[0] = uploadBvhStream(p.nodes, options_.storage, "node", &streamBuffers_[0]);
+  streams_[1] = uploadBvhStream(p.triangles, options_.storage, "triangle", &streamBuffers_[1]);
+  streams_[2] = uploadBvhStream(p.attributes, options_.storage, "attribute", &streamBuffers_[2]);
 
   // Material textures (a 1x1x1 dummy keeps the uber shader's sampler complete).
   const TextureArray& ta = d.textures;

@@ -23,6 +23,14 @@ struct ShaderError : std::runtime_error {
 // Throws ShaderError whose message names module:line for every driver message.
 unsigned compileFullscreenProgram(const AssembledShader& shader);
 
+// A compute program from one assembled compute shader (e.g. assembleRayTracer); ShaderError as above.
+unsigned compileComputeProgram(const AssembledShader& shader);
+
+// One packed-BVH stream as a texture of the storage kind (a texture buffer or a 2D texture, the
+// layout's STORAGE kinds); for tbo, *buffer gets the buffer behind it. An empty stream uploads one
+// zero texel. Throws std::runtime_error naming the stream when it exceeds the kind's limit.
+unsigned uploadBvhStream(const std::vector<glm::uvec4>& texels, Storage storage, const char* name, unsigned* buffer);
+
 // Decoding of the statistics target (main.glsl's o_stats; the C++ mirror fills the same layout):
 // x node visits, y triangle tests, z mesh rays | stack-overflow bit 31, w primary id + 1 | non-finite bit 31.
 inline uint32_t statsPrimaryIdPlusOne(const glm::uvec4& s) { return s.w & 0x7FFFFFFFu; }  // 0: miss / shaded view
@@ -48,7 +56,6 @@ class GpuRenderer {
   void compile();
   void upload();
   void createFramebuffer();
-  unsigned uploadStream(const std::vector<glm::uvec4>& texels, const char* name, unsigned* buffer);
 
   const PreparedScene& scene_;
   ShaderOptions options_;

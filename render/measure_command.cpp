@@ -1,6 +1,7 @@
 #include "render/measure_command.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <chrono>
 #include <limits>
 #include <fstream>
@@ -90,6 +91,8 @@ json measureGroup(const json& spec) {
       auto scene = scenes.find(e->cmd.input);
       if (scene == scenes.end()) scene = scenes.emplace(e->cmd.input, loadInput(e->cmd.input)).first;
       e->setup = setupRender(e->cmd, &scene->second);
+      for (const std::string& w : e->setup.buildReview.warnings)
+        std::fprintf(stderr, "bvhlab: warning: run %s: %s\n", e->key.c_str(), w.c_str());
       const std::string tk = treeKey(e->cmd);
       auto tree = trees.find(tk);
       if (tree == trees.end())
@@ -195,7 +198,8 @@ json measureGroup(const json& spec) {
   }
 
   // ---- images, counts, JSON --------------------------------------------------------------------------
-  json out = {{"session", session}, {"rounds", rounds}, {"stop", stop}, {"renderer", renderer}};
+  json out = {{"session", session}, {"rounds", rounds}, {"stop", stop}, {"renderer", renderer},
+              {"gpu", !isSoftwareRenderer(renderer)}};
   json runs = json::object();
   const Entry* control = nullptr;
   for (auto& e : entries) {

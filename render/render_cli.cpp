@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
@@ -17,8 +18,20 @@ glm::dvec3 parseVec3(const std::string& s, const char* flag) {
   return v;
 }
 
+CLI::Validator notADirectory(const std::string& expected) {
+  return CLI::Validator(
+      [expected](std::string& path) {
+        std::error_code ec;
+        return std::filesystem::is_directory(path, ec) ? path + " is a directory; expected " + expected : std::string();
+      },
+      "", "not-a-directory");
+}
+
 void addRenderOptions(CLI::App& app, RenderCommand& rc, RenderCliText& text) {
-  app.add_option("input", rc.input, "scene .toml or mesh file")->required();
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.add_option("input", rc.input, "scene .toml or mesh file")
+      ->required()
+      ->check(notADirectory("a scene .toml or a mesh file (OBJ/OFF/PLY/STL)"));
   app.add_option("-o,--output", rc.output, "write the image here (PNG)");
   app.add_flag("--json", rc.json, "print one JSON object with timings and statistics");
   app.add_option("--width", rc.width, "image width");

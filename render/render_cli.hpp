@@ -17,6 +17,10 @@ struct RenderCliText {
   std::string eye, target, up;
 };
 
+// A CLI11 check for an input path: a directory is refused with a message that says so (a missing
+// file is left to the loader, whose message names the file and what it expected).
+CLI::Validator notADirectory(const std::string& expected);
+
 // Adds every `render` option to `app`, writing into `cmd` and `text`.
 void addRenderOptions(CLI::App& app, RenderCommand& cmd, RenderCliText& text);
 // Parses --eye/--target/--up into `cmd`; throws std::invalid_argument naming the flag.

@@ -11,6 +11,7 @@ namespace bvhlab {
 
 int runRender(const RenderCommand& cmd) {
   RenderSetup setup = setupRender(cmd);
+  for (const std::string& w : setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';
   std::shared_ptr<const PreparedScene> prepared = prepareScene(std::move(setup.scene), cmd.builder, setup.build);
   const bool wantStats = cmd.json || cmd.view == "visits" || !cmd.visitsOutput.empty();
 
@@ -50,6 +51,14 @@ int runRender(const RenderCommand& cmd) {
 
   const nlohmann::json out = finishRender(cmd, setup, *prepared, fo, std::move(image), stats, times, renderer, cmd.cpu);
   if (cmd.json) std::cout << out.dump() << std::endl;
+  // Say what was written: on stdout for a person, on stderr when stdout carries the JSON.
+  std::ostream& say = cmd.json ? std::cerr : std::cout;
+  if (!cmd.json)
+    say << "bvhlab: " << out["width"].get<int>() << "x" << out["height"].get<int>() << ", " << out["frames"].get<int>()
+        << (cmd.cpu ? " frame (C++ mirror)" : " frames") << ", median " << out["frame_ms"].get<double>() << " ms on "
+        << renderer << '\n';
+  if (!cmd.output.empty()) say << "bvhlab: wrote " << cmd.output << '\n';
+  if (!cmd.visitsOutput.empty()) say << "bvhlab: wrote " << cmd.visitsOutput << " (node visits per pixel)\n";
   if (const uint64_t overflows = stackOverflowPixels(stats); overflows > 0) {
     std::cerr << "bvhlab: error: traversal stack overflowed in " << overflows << " pixels\n";
     return 3;

@@ -28,8 +28,27 @@ std::string vecText(const glm::dvec3& v) {
 
 }  // namespace
 
+BuildOptions renderBuildOptions(const RenderCommand& cmd, OptionReview* review) {
+  if (cmd.leafSize < 1 || cmd.leafSize > int(kMaxLeafSize))
+    throw std::invalid_argument("--leaf-size must be in 1.." + std::to_string(kMaxLeafSize));
+  if (cmd.bins < 0) throw std::invalid_argument("--bins must be >= 0 (0 = the builder's default)");
+  if (!(cmd.sbvhAlpha >= 0.0f && cmd.sbvhAlpha <= 1.0f))
+    throw std::invalid_argument("--sbvh-alpha must be in 0..1 (a fraction of the root's area)");
+  if (cmd.plocRadius < 1 || cmd.plocRadius > 1024) throw std::invalid_argument("--ploc-radius must be in 1..1024");
+  BuildOptions b;
+  b.maxLeafSize = uint32_t(cmd.leafSize);
+  b.bins = uint32_t(cmd.bins);
+  b.optimize = cmd.optimize;
+  b.sbvhAlpha = cmd.sbvhAlpha;
+  b.plocRadius = uint32_t(cmd.plocRadius);
+  OptionReview r = reviewBuildOptions(cmd.builder, b);  // bad values throw before the input is read
+  if (review) *review = std::move(r);
+  return b;
+}
+
 RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
   RenderSetup s;
+  s.build = renderBuildOptions(cmd, &s.buildReview);
   if (!cmd.cameraPath.empty()) {
     if (cmd.eye || cmd.target || cmd.up || cmd.fov)
       throw std::invalid_argument("--camera-path sets the camera; drop --eye/--target/--up/--fov");
@@ -52,8 +71,6 @@ RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
     throw std::invalid_argument("--width/--height must be in 1..16384");
   if (rs.maxDepth < 1 || rs.maxDepth > 64) throw std::invalid_argument("--depth must be in 1..64");
   if (cmd.frames < 1 || cmd.warmup < 0) throw std::invalid_argument("--frames must be >= 1 and --warmup >= 0");
-  if (cmd.leafSize < 1 || cmd.leafSize > int(kMaxLeafSize))
-    throw std::invalid_argument("--leaf-size must be in 1.." + std::to_string(kMaxLeafSize));
 
   ShaderOptions& so = s.shader;
   so.maxDepth = rs.maxDepth;
@@ -83,26 +100,24 @@ RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
   // Refused now, not after the frames are rendered.
   if (!cmd.output.empty()) imageFormatFor(cmd.output);
   if (!cmd.visitsOutput.empty()) imageFormatFor(cmd.visitsOutput);
-  s.build.maxLeafSize = uint32_t(cmd.leafSize);
-  s.build.bins = uint32_t(std::max(0, cmd.bins));
-  s.build.optimize = cmd.optimize;
-  if (!(cmd.sbvhAlpha >= 0.0f && cmd.sbvhAlpha <= 1.0f))
-    throw std::invalid_argument("--sbvh-alpha must be in 0..1 (a fraction of the root's area)");
-  if (cmd.plocRadius < 1 || cmd.plocRadius > 1024) throw std::invalid_argument("--ploc-radius must be in 1..1024");
-  s.build.sbvhAlpha = cmd.sbvhAlpha;
-  s.build.plocRadius = uint32_t(cmd.plocRadius);
   return s;
 }
 
 std::string treeKey(const RenderCommand& c) {
-  std::string key = c.input + "|" + c.builder + "|" + std::to_string(c.leafSize) + "|" + std::to_string(c.bins) +
-                    "|" + c.optimize + "|" + std::to_string(c.sbvhAlpha) + "|" + std::to_string(c.plocRadius) +
-                    "|" + c.cameraPath;
-  for (const auto& v : {c.width, c.height, c.depth}) key += "|" + (v ? std::to_string(*v) : std::string("-"));
-  for (const auto& v : {c.eye, c.target}) key += "|" + (v ? vecText(*v) : std::string("-"));
-  key += "|" + (c.up ? vecText(glm::dvec3(*c.up)) : std::string("-"));
-  key += "|" + (c.fov ? std::to_string(*c.fov) : std::string("-"));
-  key += "|" + (c.exposure ? std::to_string(*c.exposure) : std::string("-"));
+  // Fields joined by '|' (appended one by one: GCC 12 misreports chained `"|" + string` with -Wrestrict).
+  std::string key;
+  const auto field = [&key](const std::string& text) {
+    if (!key.empty()) key += '|';
+    key += text;
+  };
+  for (const std::string& f : {c.input, c.builder, std::to_string(c.leafSize), std::to_string(c.bins), c.optimize,
+                               std::to_string(c.sbvhAlpha), std::to_string(c.plocRadius), c.cameraPath})
+    field(f);
+  for (const auto& v : {c.width, c.height, c.depth}) field(v ? std::to_string(*v) : "-");
+  for (const auto& v : {c.eye, c.target}) field(v ? vecText(*v) : "-");
+  field(c.up ? vecText(glm::dvec3(*c.up)) : "-");
+  field(c.fov ? std::to_string(*c.fov) : "-");
+  field(c.exposure ? std::to_string(*c.exposure) : "-");
   return key;
 }
 
@@ -206,6 +221,7 @@ nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, 
   out["effective_depth"] = effectiveDepth(analyzeScene(prepared.scene), so.maxDepth, so.uber);
   out["backend"] = cpu ? "cpu" : backendName(setup.backend);
   out["renderer"] = renderer;
+  out["gpu"] = !cpu && !isSoftwareRenderer(renderer);  // false on llvmpipe (EGL without a GPU lands there too)
   out["view"] = cmd.view;
   out["uber"] = so.uber;
   out["branching"] = branchingName(so.branching);
@@ -223,7 +239,9 @@ nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, 
   }
   out["builder"] = cmd.builder;
   out["kernel"] = so.kernel;
-  out["leaf_size"] = cmd.leafSize;
+  out["leaf_size"] = setup.buildReview.leafSize;  // what the leaves were limited to (a builder may cap it)
+  out["leaf_size_requested"] = cmd.leafSize;
+  out["warnings"] = setup.buildReview.warnings;
   out["triangles"] = prepared.soup.size();
   out["build_ms"] = b.buildMs;
   out["sah_cost"] = b.sahCost;

@@ -26,6 +26,7 @@ struct RenderSetup {
   Scene scene;      // loaded, settings and camera applied; moved into prepareScene
   ShaderOptions shader;
   BuildOptions build;
+  OptionReview buildReview;  // the leaf size the builder honours; warnings for options it ignores
   Backend backend = Backend::OSMesa;
   bool smaaOn = false;
   std::string smaaPreset;
@@ -35,6 +36,10 @@ struct RenderSetup {
 // Validates every option (throws std::invalid_argument / InputError naming the flag) and loads the
 // input. `loaded`: a copy of loadInput(cmd.input) to start from instead of reading the file again.
 RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded = nullptr);
+
+// The command's build options, checked (throws std::invalid_argument naming the flag) and reviewed
+// against the builder (builders/builder.hpp reviewBuildOptions); needs no input file.
+BuildOptions renderBuildOptions(const RenderCommand& cmd, OptionReview* review = nullptr);
 
 // Commands with the same key build the same PreparedScene (input, scene settings, camera, builder,
 // leaf size, bins): `measure` builds each tree once for all the kernels and knobs that use it.

@@ -162,6 +162,24 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   return s;
 }
 
+AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
+                                  bool anyHit, bool countStats) {
+  std::ostringstream d;
+  d << "#version 450 core\n#define BVH_STACK_SIZE " << bvhStackSize << "\n";
+  if (anyHit) d << "#define ANY_HIT 1\n";
+  if (countStats) d << "#define COUNT_STATS 1\n";
+  Assembler a;
+  a.raw("<defines>", d.str());
+  a.module("common.glsl");
+  a.module(storage == Storage::Tbo ? "storage_tbo.glsl" : "storage_tex2d.glsl");
+  a.module("layout.glsl");
+  a.module(robust.box == BoxTest::Robust ? "ray_box_robust.glsl" : "ray_box.glsl");
+  a.module(robust.triangle == TriangleTest::Watertight ? "ray_triangle_watertight.glsl" : "ray_triangle.glsl");
+  a.module(findKernel(kernel).glslFile);
+  a.module("trace_rays.glsl");
+  return a.take();
+}
+
 AssembledShader assembleModule(const std::string& defines, const std::string& module) {
   Assembler a;
   a.raw("<defines>", "#version 450 core\n" + defines);

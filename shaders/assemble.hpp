@@ -83,6 +83,10 @@ struct AssembledShader {
 // Effective max depth: lowered to 1 when nothing reflects or refracts (uber keeps the request).
 int effectiveDepth(const SceneFeatures& features, int requested, bool uber);
 AssembledShader assembleTracer(const SceneFeatures& features, const ShaderOptions& options);
+// `bvhlab trace`'s compute shader: the kernel over its storage and robustness modules plus
+// trace_rays.glsl (closest hit, or any hit), with or without the traversal counters.
+AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
+                                  bool anyHit, bool countStats);
 // A single-module full-screen pass (e.g. SMAA): `#version 450 core` + `defines` + the module.
 AssembledShader assembleModule(const std::string& defines, const std::string& module);
 std::string fullscreenVertexShader();

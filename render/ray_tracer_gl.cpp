@@ -1,0 +1,108 @@
+#include "render/ray_tracer_gl.hpp"
+
+#include <bit>
+#include <chrono>
+
+#include <glad/gl.h>
+
+#include "render/gl_context.hpp"
+#include "render/gpu_renderer.hpp"
+#include "traversal/kernels.hpp"
+
+namespace bvhlab {
+
+namespace {
+
+constexpr GLuint kLocalSize = 64;  // trace_rays.glsl's local_size_x
+
+std::vector<BatchHit> decode(const std::vector<glm::uvec4>& raw, bool anyHit, const std::vector<float>& tMax) {
+  std::vector<BatchHit> hits(raw.size());
+  for (size_t i = 0; i < raw.size(); ++i) {
+    hits[i].hit = raw[i].x != 0u;
+    if (anyHit) {
+      hits[i].t = tMax[i];
+    } else {
+      hits[i].prim = hits[i].hit ? raw[i].y : BatchHit::kNoPrim;
+      hits[i].t = std::bit_cast<float>(raw[i].z);
+    }
+  }
+  return hits;
+}
+
+}  // namespace
+
+GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& options) : options_(options) {
+  const int stack = stackSizeFor(std::max<uint32_t>(1, packed.depth));
+  timed_ = compileComputeProgram(
+      assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, false));
+  counted_ = compileComputeProgram(
+      assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, true));
+  streams_[0] = uploadBvhStream(packed.nodes, options.storage, "node", &streamBuffers_[0]);
+  streams_[1] = uploadBvhStream(packed.triangles, options.storage, "triangle", &streamBuffers_[1]);
+  streams_[2] = uploadBvhStream(packed.attributes, options.storage, "attribute", &streamBuffers_[2]);
+  const char* names[3] = {"u_nodes", "u_triangles", "u_attributes"};
+  for (GLuint program : {timed_, counted_}) {
+    glUseProgram(program);
+    for (int unit = 0; unit < 3; ++unit) glUniform1i(glGetUniformLocation(program, names[unit]), unit);
+  }
+  glCreateBuffers(1, &rayBuffer_);
+  glCreateBuffers(1, &resultBuffer_);
+  glCreateBuffers(1, &countBuffer_);
+  checkGl("GlRayTracer setup");
+}
+
+GlRayTracer::~GlRayTracer() {
+  glDeleteProgram(timed_);
+  glDeleteProgram(counted_);
+  glDeleteTextures(3, streams_);
+  glDeleteBuffers(3, streamBuffers_);
+  GLuint buffers[] = {rayBuffer_, resultBuffer_, countBuffer_};
+  glDeleteBuffers(3, buffers);
+}
+
+void GlRayTracer::setRays(const std::vector<BatchRay>& rays) {
+  count_ = rays.size();
+  const GLsizeiptr n = GLsizeiptr(std::max<size_t>(1, count_));
+  glNamedBufferData(rayBuffer_, n * GLsizeiptr(sizeof(BatchRay)), rays.empty() ? nullptr : rays.data(), GL_STATIC_DRAW);
+  glNamedBufferData(resultBuffer_, n * GLsizeiptr(sizeof(glm::uvec4)), nullptr, GL_STREAM_READ);
+  glNamedBufferData(countBuffer_, n * GLsizeiptr(sizeof(glm::uvec4)), nullptr, GL_STREAM_READ);
+  tMax_.resize(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) tMax_[i] = rays[i].tMax;
+  checkGl("uploading the rays");
+}
+
+double GlRayTracer::dispatch(unsigned program) {
+  const auto start = std::chrono::steady_clock::now();
+  glUseProgram(program);
+  glUniform1i(glGetUniformLocation(program, "u_count"), GLint(count_));
+  for (GLuint unit = 0; unit < 3; ++unit) glBindTextureUnit(unit, streams_[unit]);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, rayBuffer_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, resultBuffer_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, countBuffer_);
+  glDispatchCompute(GLuint((count_ + kLocalSize - 1) / kLocalSize), 1, 1);
+  glFinish();
+  checkGl("ray dispatch");
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+double GlRayTracer::trace() { return dispatch(timed_); }
+
+std::vector<BatchHit> GlRayTracer::results() const {
+  std::vector<glm::uvec4> raw(count_);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  if (count_) glGetNamedBufferSubData(resultBuffer_, 0, GLsizeiptr(count_ * sizeof(glm::uvec4)), raw.data());
+  checkGl("reading the ray results");
+  return decode(raw, options_.anyHit, tMax_);
+}
+
+std::vector<glm::uvec4> GlRayTracer::traceCounted(std::vector<BatchHit>* hits) {
+  dispatch(counted_);
+  std::vector<glm::uvec4> counts(count_);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  if (count_) glGetNamedBufferSubData(countBuffer_, 0, GLsizeiptr(count_ * sizeof(glm::uvec4)), counts.data());
+  checkGl("reading the ray counters");
+  if (hits) *hits = results();
+  return counts;
+}
+
+}  // namespace bvhlab

@@ -1,0 +1,50 @@
+// A GLSL traversal kernel tracing a buffer of rays (`bvhlab trace`): the packed BVH uploaded in the
+// chosen storage kind, the rays in a shader storage buffer, one compute invocation per ray
+// (shaders/trace_rays.glsl), results read back. Needs a current GL context for its whole life.
+#pragma once
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "layout/layout.hpp"
+#include "shaders/assemble.hpp"
+#include "traversal/ray_batch.hpp"
+
+namespace bvhlab {
+
+struct RayTracerOptions {
+  std::string kernel = "stack-ordered";
+  Storage storage = Storage::Tbo;
+  Robustness robust = Robustness::Watertight;
+  bool anyHit = false;  // traceAny instead of traceClosest
+};
+
+class GlRayTracer {
+ public:
+  // Compiles the timed program (no counters) and the counting one; uploads the tree.
+  GlRayTracer(const PackedBvh& packed, const RayTracerOptions& options);
+  ~GlRayTracer();
+  GlRayTracer(const GlRayTracer&) = delete;
+  GlRayTracer& operator=(const GlRayTracer&) = delete;
+
+  void setRays(const std::vector<BatchRay>& rays);
+  // One dispatch over every ray, waited for (glFinish); returns wall-clock ms.
+  double trace();
+  // The last trace()'s answers (prim = original triangle id).
+  std::vector<BatchHit> results() const;
+  // Traces once more with the counters compiled in: per ray (node visits, triangle tests, stack
+  // overflow, 0); `hits` gets that run's answers.
+  std::vector<glm::uvec4> traceCounted(std::vector<BatchHit>* hits = nullptr);
+
+ private:
+  double dispatch(unsigned program);
+  RayTracerOptions options_;
+  unsigned timed_ = 0, counted_ = 0;
+  unsigned streams_[3] = {0, 0, 0}, streamBuffers_[3] = {0, 0, 0};
+  unsigned rayBuffer_ = 0, resultBuffer_ = 0, countBuffer_ = 0;
+  size_t count_ = 0;
+  std::vector<float> tMax_;  // per ray, for any-hit answers
+};
+
+}  // namespace bvhlab

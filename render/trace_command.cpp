@@ -1,0 +1,227 @@
+#include "render/trace_command.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <random>
+
+#include <nlohmann/json.hpp>
+
+#include "render/frame_stats.hpp"
+#include "render/gl_context.hpp"
+#include "render/ray_tracer_gl.hpp"
+#include "render/render_job.hpp"
+#include "render/workloads.hpp"
+#include "traversal/embree_tracer.hpp"
+
+namespace bvhlab {
+
+namespace {
+
+// Two tracers' closest hits on different triangles at the same distance are a tie, not a mismatch:
+// rays through a shared edge or vertex, or coplanar overlapping triangles. "Same distance" allows
+// the two intersection algorithms' rounding of t: each is within a few ulps of the exact value
+// (Woop et al. 2013 for the watertight test), so 2^-16 relative is far above it and far below any
+// gap between distinct surfaces the scenes have.
+constexpr double kTieRelativeT = 0x1.0p-16;
+
+struct Agreement {
+  uint64_t mismatches = 0;  // hit vs miss, or different triangles at different distances
+  uint64_t ties = 0;        // different triangles at the same distance
+  uint64_t hitMiss = 0;     // of the mismatches: one found a hit, the other none
+};
+
+Agreement compare(const std::vector<BatchHit>& a, const std::vector<BatchHit>& b, bool anyHit) {
+  Agreement r;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (a[i].hit != b[i].hit) {
+      ++r.mismatches;
+      ++r.hitMiss;
+    } else if (!anyHit && a[i].hit && a[i].prim != b[i].prim) {
+      const double ta = a[i].t, tb = b[i].t;
+      // NaN compares false here and counts as a mismatch.
+      if (std::abs(ta - tb) <= kTieRelativeT * std::max(std::abs(ta), std::abs(tb)))
+        ++r.ties;
+      else
+        ++r.mismatches;
+    }
+  }
+  return r;
+}
+
+}  // namespace
+
+void addTraceOptions(CLI::App& app, TraceCommand& c, RenderCliText& text) {
+  RenderCommand& rc = c.render;
+  rc.frames = 11;  // enough rounds for a 95% interval of the paired ratio (>= 6)
+  app.option_defaults()->always_capture_default();
+  app.add_option("input", rc.input, "scene .toml or mesh file")
+      ->required()
+      ->check(notADirectory("a scene .toml or a mesh file (OBJ/OFF/PLY/STL)"));
+  app.add_option("--rays", c.rays, "workload: primary | shadow | specular | diffuse | ao");
+  app.add_option("--count", c.count, "rays (secondary workloads: one per primary hit chosen)");
+  app.add_option("--seed", c.seed, "seed of the secondary rays' random numbers");
+  app.add_option("--ao-radius", c.aoRadius, "ao ray length, as a fraction of the scene's diagonal");
+  app.add_flag("--json", rc.json, "print one JSON object");
+  app.add_option("--frames", rc.frames, "timed rounds (one GLSL and one Embree trace each, in a shuffled order)");
+  app.add_option("--warmup", rc.warmup, "untimed rounds first (llvmpipe compiles at the first dispatch)");
+  app.add_option("--backend", rc.backend, "osmesa | egl");
+  app.add_option("--builder", rc.builder, "BVH builder (see `bvhlab builders`)");
+  app.add_option("--kernel", rc.kernel, "traversal kernel (see `bvhlab kernels`)");
+  app.add_option("--leaf-size", rc.leafSize, "max triangles per BVH leaf");
+  app.add_option("--bins", rc.bins, "bins for sah-binned and sbvh (0 = default)");
+  app.add_option("--optimize", rc.optimize, "post-pass after the builder: reinsert");
+  app.add_option("--sbvh-alpha", rc.sbvhAlpha, "sbvh: overlap threshold for spatial splits");
+  app.add_option("--ploc-radius", rc.plocRadius, "ploc: nearest-neighbour search radius");
+  app.add_option("--storage", rc.storage, "tbo | tex2d");
+  app.add_option("--robust", rc.robust, "triangle/box tests as render --robust (the offset is the generator's)");
+  app.add_option("--embree-threads", c.embreeThreads, "Embree's threads (0 = every core)");
+  app.add_option("--eye", text.eye, "camera position x,y,z");
+  app.add_option("--target", text.target, "camera target x,y,z");
+  app.add_option("--up", text.up, "camera up x,y,z");
+  app.add_option("--fov", rc.fov, "vertical field of view in degrees");
+}
+
+int runTrace(const TraceCommand& c) {
+  const Workload workload = parseWorkload(c.rays);  // bad names fail before anything is loaded
+  const RenderCommand& rc = c.render;
+  RenderSetup setup = setupRender(rc);
+  for (const std::string& w : setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';
+  std::shared_ptr<const PreparedScene> prepared = prepareScene(std::move(setup.scene), rc.builder, setup.build);
+  const TriangleSoup& soup = prepared->soup;
+  if (soup.size() == 0) throw InputError(rc.input + ": no triangles to trace rays against");
+
+  EmbreeTracer embree(soup, c.embreeThreads);
+  WorkloadRequest req;
+  req.workload = workload;
+  req.count = c.count;
+  req.seed = c.seed;
+  req.aoRadius = c.aoRadius;
+  req.width = prepared->scene.settings.width;
+  req.height = prepared->scene.settings.height;
+  const RayWorkload rays = generateWorkload(req, prepared->scene, soup, [&embree](const std::vector<BatchRay>& r) {
+    std::vector<BatchHit> hits;
+    embree.closest(r, hits);
+    return hits;
+  });
+  const bool anyHit = isAnyHit(workload);
+
+  std::unique_ptr<GlContext> ctx = createContext(setup.backend);
+  RayTracerOptions to;
+  to.kernel = setup.shader.kernel;
+  to.storage = setup.shader.storage;
+  to.robust = setup.shader.robust;
+  to.anyHit = anyHit;
+  GlRayTracer gl(prepared->packed, to);
+  gl.setRays(rays.rays);
+
+  std::vector<BatchHit> embreeHits;
+  auto embreeTrace = [&] { return anyHit ? embree.occluded(rays.rays, embreeHits) : embree.closest(rays.rays, embreeHits); };
+  for (int i = 0; i < rc.warmup; ++i) {
+    gl.trace();
+    embreeTrace();
+  }
+  // Rounds: one trace of each, in an order drawn per round (fixed seed), so drift hits both alike and
+  // round i's two times pair up.
+  std::vector<double> glMs, embreeMs;
+  std::mt19937_64 order(0x7261795f74726163ull);
+  for (int i = 0; i < rc.frames; ++i) {
+    if (order() & 1u) {
+      glMs.push_back(gl.trace());
+      embreeMs.push_back(embreeTrace());
+    } else {
+      embreeMs.push_back(embreeTrace());
+      glMs.push_back(gl.trace());
+    }
+  }
+  const std::vector<BatchHit> glHits = gl.results();
+  const Agreement agree = compare(glHits, embreeHits, anyHit);
+  const std::vector<glm::uvec4> counts = gl.traceCounted();
+  uint64_t visits = 0, tests = 0, overflows = 0, glFound = 0, embreeFound = 0;
+  for (const glm::uvec4& k : counts) {
+    visits += k.x;
+    tests += k.y;
+    overflows += k.z != 0u;
+  }
+  for (size_t i = 0; i < glHits.size(); ++i) {
+    glFound += glHits[i].hit;
+    embreeFound += embreeHits[i].hit;
+  }
+
+  const double n = double(rays.rays.size());
+  const double ms = medianOf(glMs), eMs = medianOf(embreeMs);
+  const auto ci = medianInterval(glMs), eCi = medianInterval(embreeMs);
+  const auto ratio = pairedRatio(glMs, embreeMs);
+  const auto orNull = [](const std::optional<Interval>& i, bool high) {
+    return i ? nlohmann::json(high ? i->high : i->low) : nlohmann::json();
+  };
+  const BuildStats& b = prepared->stats;
+  const double visitsPerRay = n > 0 ? double(visits) / n : 0.0, testsPerRay = n > 0 ? double(tests) / n : 0.0;
+  nlohmann::json j;
+  j["input"] = rc.input;
+  j["workload"] = workloadName(workload);
+  j["any_hit"] = anyHit;
+  j["rays"] = rays.rays.size();
+  j["seed"] = c.seed;
+  j["primary_grid"] = {rays.gridWidth, rays.gridHeight};
+  j["primary_hits"] = rays.primaryHits;
+  if (workload == Workload::Ao) j["ao_distance"] = rays.aoDistance;
+  j["frames"] = glMs.size();
+  j["warmup"] = rc.warmup;
+  j["ms"] = ms;
+  j["ms_ci_low"] = orNull(ci, false);
+  j["ms_ci_high"] = orNull(ci, true);
+  j["ms_all"] = glMs;
+  j["mrays_per_s"] = ms > 0 ? n / (ms * 1e3) : 0.0;
+  j["embree_ms"] = eMs;
+  j["embree_ms_ci_low"] = orNull(eCi, false);
+  j["embree_ms_ci_high"] = orNull(eCi, true);
+  j["embree_ms_all"] = embreeMs;
+  j["embree_mrays_per_s"] = eMs > 0 ? n / (eMs * 1e3) : 0.0;
+  j["embree_threads"] = embree.threads();
+  j["embree_build_ms"] = embree.buildMs();
+  j["ratio_to_embree"] = ratio ? nlohmann::json(ratio->estimate) : nlohmann::json(eMs > 0 ? ms / eMs : 0.0);
+  j["ratio_ci_low"] = orNull(ratio, false);
+  j["ratio_ci_high"] = orNull(ratio, true);
+  j["node_visits_per_ray"] = visitsPerRay;
+  j["triangle_tests_per_ray"] = testsPerRay;
+  j["ray_cost"] = prepared->cost.traversalCost * visitsPerRay + prepared->cost.intersectionCost * testsPerRay;
+  j["stack_overflow_rays"] = overflows;
+  j["hits"] = glFound;
+  j["embree_hits"] = embreeFound;
+  j["hit_mismatches"] = agree.mismatches;
+  j["hit_miss_mismatches"] = agree.hitMiss;
+  j["hit_ties"] = agree.ties;
+  j["builder"] = rc.builder;
+  j["kernel"] = to.kernel;
+  j["leaf_size"] = setup.buildReview.leafSize;
+  j["warnings"] = setup.buildReview.warnings;
+  j["robust"] = robustnessName(to.robust);
+  j["storage"] = storageName(to.storage);
+  j["triangles"] = soup.size();
+  j["build_ms"] = b.buildMs;
+  j["sah_cost"] = b.sahCost;
+  j["references"] = b.references;
+  j["tree_hash"] = prepared->treeHash();
+  j["backend"] = backendName(setup.backend);
+  j["renderer"] = ctx->renderer();
+  j["gpu"] = !ctx->software();
+  if (rc.json) {
+    std::cout << j.dump() << std::endl;
+  } else {
+    std::printf("%s: %zu %s rays, %s over %s (leaf %u): %.2f ms (%.1f Mrays/s), Embree %.2f ms (%.1f Mrays/s, %u threads): "
+                "%.2fx Embree's time; %.1f node visits + %.1f triangle tests per ray; %llu hit mismatches, %llu ties\n",
+                rc.input.c_str(), rays.rays.size(), workloadName(workload), to.kernel.c_str(), rc.builder.c_str(),
+                setup.buildReview.leafSize, ms, j["mrays_per_s"].get<double>(), eMs, j["embree_mrays_per_s"].get<double>(),
+                embree.threads(), j["ratio_to_embree"].get<double>(), visitsPerRay, testsPerRay,
+                (unsigned long long)agree.mismatches, (unsigned long long)agree.ties);
+  }
+  if (overflows > 0) {
+    std::cerr << "bvhlab: error: traversal stack overflowed on " << overflows << " rays\n";
+    return 3;
+  }
+  return 0;
+}
+
+}  // namespace bvhlab

@@ -1,0 +1,28 @@
+// `bvhlab trace` (issue 13): a ray workload (render/workloads.hpp) traced by a GLSL kernel over the
+// chosen builder's tree and, in the same process with the frames interleaved, by Embree over the same
+// triangles; timings with intervals, counts per ray, and the answers compared ray by ray.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "render/render_cli.hpp"
+#include "render/render_command.hpp"
+
+namespace bvhlab {
+
+struct TraceCommand {
+  RenderCommand render;  // input, builder and its options, kernel, robust, storage, camera, backend, frames
+  std::string rays = "primary";
+  uint32_t count = 1u << 17;
+  uint64_t seed = 1;
+  float aoRadius = 0.1f;
+  unsigned embreeThreads = 0;  // 0 = hardware concurrency (llvmpipe uses every core too)
+};
+
+void addTraceOptions(CLI::App& app, TraceCommand& cmd, RenderCliText& text);
+// Prints one line (or the JSON object with --json). Returns the process exit code.
+int runTrace(const TraceCommand& cmd);
+
+}  // namespace bvhlab

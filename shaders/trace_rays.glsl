@@ -1,0 +1,33 @@
+// trace_rays.glsl — `bvhlab trace`: one compute invocation per ray of a buffer, through the chosen
+// traversal kernel (closest hit, or any hit with ANY_HIT), no shading. Rays and results live in shader
+// storage buffers (layouts: traversal/ray_batch.hpp). C++ side: render/ray_tracer_gl.hpp.
+//   result i = (found, original triangle id, floatBits(t), 0)   [any hit: (found, 0, 0, 0)]
+//   counts i = (node visits, triangle tests, stack overflow, 0)  [COUNT_STATS only]
+
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) readonly buffer RayBuffer { vec4 rays[]; };
+layout(std430, binding = 1) writeonly buffer ResultBuffer { uvec4 results[]; };
+#ifdef COUNT_STATS
+layout(std430, binding = 2) writeonly buffer CountBuffer { uvec4 counts[]; };
+#endif
+uniform int u_count;
+
+void main() {
+  int i = int(gl_GlobalInvocationID.x);
+  if (i >= u_count) return;
+  Ray ray = Ray(rays[2 * i].xyz, rays[2 * i + 1].xyz);
+  float tMin = rays[2 * i].w, tMax = rays[2 * i + 1].w;
+#ifdef ANY_HIT
+  bool found = traceAny(ray, tMin, tMax);
+  results[i] = uvec4(found ? 1u : 0u, 0u, 0u, 0u);
+#else
+  MeshHit hit;
+  bool found = traceClosest(ray, tMin, tMax, hit);
+  uint primitive = 0u, material, mesh;
+  if (found) loadTriangleIds(hit.tri, primitive, material, mesh);
+  results[i] = uvec4(found ? 1u : 0u, primitive, floatBitsToUint(found ? hit.t : tMax), 0u);
+#endif
+#ifdef COUNT_STATS
+  counts[i] = uvec4(g_nodeVisits, g_triTests, g_stackOverflow ? 1u : 0u, 0u);
+#endif
+}

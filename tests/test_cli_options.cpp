@@ -1,0 +1,157 @@
+// What the command line says about the options a user gives: a directory as input, --bins and
+// --leaf-size against what the builder does with them, the path `render` wrote, --help's defaults,
+// and whether a render ran on a GPU (EGL falls back to Mesa's software renderer without one).
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "builders/builder.hpp"
+#include "cli_run.hpp"
+#include "render/gl_context.hpp"
+
+namespace {
+
+using namespace bvhlab::clitest;
+using nlohmann::json;
+
+[[maybe_unused]] ::testing::Environment* const kRemoveTestDir = ::testing::AddGlobalTestEnvironment(new RemoveTestDir);
+
+// A 16 x 16 grid of quads as OFF text (512 triangles): enough for leaves to fill up.
+fs::path gridMesh() {
+  std::ostringstream off;
+  const int n = 16;
+  off << "OFF\n" << (n + 1) * (n + 1) << " " << 2 * n * n << " 0\n";
+  for (int y = 0; y <= n; ++y)
+    for (int x = 0; x <= n; ++x) off << x << " " << y << " " << ((x * 7 + y * 3) % 5) * 0.1 << "\n";
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const int a = y * (n + 1) + x, b = a + 1, c = a + n + 1, d = c + 1;
+      off << "3 " << a << " " << b << " " << d << "\n3 " << a << " " << d << " " << c << "\n";
+    }
+  return writeTemp("grid.off", off.str());
+}
+
+TEST(CliOptions, ADirectoryAsInputIsNamedAsOne) {
+  const std::string dir = (fs::path(BVHLAB_SOURCE_DIR) / "datasets/scenes").string();
+  for (const std::string& args : {"render " + dir, "build --mesh " + dir, "run " + dir}) {
+    Result r = run(args);
+    EXPECT_NE(r.code, 0) << args;
+    EXPECT_NE(r.err.find(dir + " is a directory"), std::string::npos) << args << ": " << r.err;
+  }
+}
+
+TEST(CliOptions, BadBinsAreRefusedBeforeTheMeshIsRead) {
+  // The mesh does not exist: the option error must come first.
+  for (const char* bins : {"-1", "1", "257"}) {
+    Result r = run(std::string("build --mesh no_such_mesh.off --bins ") + bins);
+    EXPECT_NE(r.code, 0) << bins;
+    EXPECT_NE(r.err.find("--bins"), std::string::npos) << bins << ": " << r.err;
+    EXPECT_EQ(r.err.find("no_such_mesh"), std::string::npos) << bins << ": " << r.err;
+  }
+}
+
+TEST(CliOptions, IgnoredBinsAndCappedLeavesWarnAndTheJsonSaysWhatWasUsed) {
+  const fs::path mesh = gridMesh();
+  Result r = run("build --mesh " + mesh.string() + " --builder median --bins 16 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: median ignores --bins"), std::string::npos) << r.err;
+  json j = json::parse(r.out);
+  ASSERT_EQ(j["warnings"].size(), 1u);
+  EXPECT_EQ(j["leaf_size"], 4);
+
+  r = run("build --mesh " + mesh.string() + " --builder embree --leaf-size 64 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("capped to 32"), std::string::npos) << r.err;
+  j = json::parse(r.out);
+  EXPECT_EQ(j["leaf_size"], 32);
+  EXPECT_EQ(j["leaf_size_requested"], 64);
+  EXPECT_LE(j["prims_per_leaf_max"].get<int>(), 32);
+
+  // A builder that reads --bins: no warning.
+  r = run("build --mesh " + mesh.string() + " --builder sah-binned --bins 16 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+  EXPECT_TRUE(json::parse(r.out)["warnings"].empty());
+
+  // render reports the same in its JSON.
+  r = run("render " + mesh.string() + " --builder embree --leaf-size 40 --bins 8 --json --width 16 --height 16 "
+          "--frames 1 --warmup 0");
+  ASSERT_EQ(r.code, 0) << r.err;
+  j = json::parse(r.out);
+  EXPECT_EQ(j["leaf_size"], 32);
+  EXPECT_EQ(j["warnings"].size(), 2u) << j["warnings"];
+}
+
+TEST(CliOptions, ReviewNamesTheOptionsEachBuilderIgnores) {
+  bvhlab::BuildOptions o;
+  o.bins = 16;
+  o.sbvhAlpha = 1e-3f;
+  o.plocRadius = 4;
+  EXPECT_TRUE(bvhlab::reviewBuildOptions("sah-binned", bvhlab::BuildOptions{}).warnings.empty());
+  EXPECT_EQ(bvhlab::reviewBuildOptions("median", o).warnings.size(), 3u);
+  EXPECT_EQ(bvhlab::reviewBuildOptions("sbvh", o).warnings.size(), 1u);        // ploc radius
+  EXPECT_EQ(bvhlab::reviewBuildOptions("ploc", o).warnings.size(), 2u);        // bins, alpha
+  EXPECT_EQ(bvhlab::reviewBuildOptions("sah-binned", o).warnings.size(), 2u);  // alpha, radius
+  o = {};
+  o.maxLeafSize = 200;
+  EXPECT_EQ(bvhlab::reviewBuildOptions("embree-low", o).leafSize, bvhlab::kEmbreeMaxLeafSize);
+  EXPECT_EQ(bvhlab::reviewBuildOptions("lbvh", o).leafSize, 200u);
+  o.bins = 1;
+  EXPECT_THROW(bvhlab::reviewBuildOptions("lbvh", o), std::invalid_argument);
+}
+
+TEST(CliOptions, RenderSaysWhatItWrote) {
+  const fs::path png = testDir() / "said.png";
+  Result r = run("render " + scene("sphere.toml").string() + " -o " + png.string() +
+                 " --width 32 --height 24 --frames 1 --warmup 0");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("wrote " + png.string()), std::string::npos) << r.out;
+  // With --json the JSON owns stdout; the note goes to stderr.
+  r = run("render " + scene("sphere.toml").string() + " -o " + png.string() +
+          " --width 32 --height 24 --frames 1 --warmup 0 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NO_THROW(json::parse(r.out)) << r.out;
+  EXPECT_NE(r.err.find("wrote " + png.string()), std::string::npos) << r.err;
+}
+
+TEST(CliOptions, HelpShowsDefaults) {
+  Result r = run("render --help");
+  ASSERT_EQ(r.code, 0);
+  for (const char* d : {"--frames INT=5", "--builder TEXT=sah-binned", "--leaf-size INT=4", "--robust TEXT=watertight"})
+    EXPECT_NE(r.out.find(d), std::string::npos) << d << "\n" << r.out;
+  r = run("build --help");
+  ASSERT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("--leaf-size INT=4"), std::string::npos) << r.out;
+}
+
+TEST(CliOptions, JsonSaysWhetherAGpuRendered) {
+  // OSMesa is Mesa's software path: never a GPU.
+  Result r = run("render " + scene("sphere.toml").string() + " --width 16 --height 16 --frames 1 --warmup 0 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  json j = json::parse(r.out);
+  EXPECT_EQ(j["gpu"], false) << j["renderer"];
+  EXPECT_TRUE(bvhlab::isSoftwareRenderer(j["renderer"].get<std::string>())) << j["renderer"];
+
+  r = run("render " + scene("sphere.toml").string() + " --width 16 --height 16 --frames 1 --warmup 0 --json "
+          "--backend egl");
+  if (r.code != 0 && r.err.find("egl:") != std::string::npos) GTEST_SKIP() << "no EGL here: " << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
+  j = json::parse(r.out);
+  const bool software = bvhlab::isSoftwareRenderer(j["renderer"].get<std::string>());
+  EXPECT_EQ(j["gpu"], !software) << j["renderer"];
+  // The fallback is said out loud, and only then.
+  EXPECT_EQ(r.err.find("found no GPU") != std::string::npos, software) << r.err;
+  if (software) std::printf("EGL ran on %s: no GPU here, EGL and OSMesa are both llvmpipe\n",
+                            j["renderer"].get<std::string>().c_str());
+}
+
+TEST(CliOptions, SoftwareRendererNames) {
+  EXPECT_TRUE(bvhlab::isSoftwareRenderer("llvmpipe (LLVM 15.0.6, 256 bits)"));
+  EXPECT_TRUE(bvhlab::isSoftwareRenderer("softpipe"));
+  EXPECT_FALSE(bvhlab::isSoftwareRenderer("NVIDIA H200/PCIe/SSE2"));
+  EXPECT_FALSE(bvhlab::isSoftwareRenderer("AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 15.0.7, DRM 3.54)"));
+}
+
+}  // namespace

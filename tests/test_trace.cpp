@@ -1,0 +1,300 @@
+// `bvhlab trace`'s pieces: the ray workloads (deterministic, and what each claims: shadow rays end at
+// the light, diffuse directions are cosine-distributed), the GLSL ray tracer against its C++ mirror
+// per ray (answer and counters), Embree's answers against ours, and the command's JSON.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "cli_run.hpp"
+#include "datasets/procedural.hpp"
+#include "datasets/scene_io.hpp"
+#include "render/gl_context.hpp"
+#include "render/prepared_scene.hpp"
+#include "render/ray_tracer_gl.hpp"
+#include "render/workloads.hpp"
+#include "traversal/embree_tracer.hpp"
+#include "traversal/kernels.hpp"
+
+namespace bvhlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+[[maybe_unused]] ::testing::Environment* const kRemoveTestDir =
+    ::testing::AddGlobalTestEnvironment(new clitest::RemoveTestDir);
+
+std::unique_ptr<PreparedScene> prepared(Mesh mesh, const std::string& builder = "sah-binned") {
+  MeshSceneOptions mo;
+  mo.groundPlane = false;
+  return prepareScene(makeMeshScene(std::move(mesh), mo), builder, BuildOptions{});
+}
+
+RayWorkload workload(const PreparedScene& p, Workload w, uint32_t count, uint64_t seed, const EmbreeTracer& embree) {
+  WorkloadRequest r;
+  r.workload = w;
+  r.count = count;
+  r.seed = seed;
+  r.width = p.scene.settings.width;
+  r.height = p.scene.settings.height;
+  return generateWorkload(r, p.scene, p.soup, [&embree](const std::vector<BatchRay>& rays) {
+    std::vector<BatchHit> hits;
+    embree.closest(rays, hits);
+    return hits;
+  });
+}
+
+bool sameRays(const std::vector<BatchRay>& a, const std::vector<BatchRay>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (a[i].origin != b[i].origin || a[i].dir != b[i].dir || a[i].tMin != b[i].tMin ||
+        !(a[i].tMax == b[i].tMax))
+      return false;
+  return true;
+}
+
+TEST(TraceWorkloads, AreDeterministicFromTheSeed) {
+  auto p = prepared(makeUvSphere(32, 16));
+  EmbreeTracer embree(p->soup, 2);
+  for (Workload w : {Workload::Primary, Workload::Shadow, Workload::Specular, Workload::Diffuse, Workload::Ao}) {
+    SCOPED_TRACE(workloadName(w));
+    const RayWorkload a = workload(*p, w, 2000, 7, embree), b = workload(*p, w, 2000, 7, embree);
+    EXPECT_EQ(a.rays.size(), 2000u);
+    EXPECT_TRUE(sameRays(a.rays, b.rays));
+    for (const BatchRay& r : a.rays) {
+      ASSERT_TRUE(std::isfinite(r.origin.x) && std::isfinite(r.dir.x) && std::isfinite(r.dir.y) && std::isfinite(r.dir.z));
+      ASSERT_NEAR(glm::length(r.dir), 1.0f, 1e-5f);
+    }
+    // Only the random workloads depend on the seed.
+    const RayWorkload c = workload(*p, w, 2000, 8, embree);
+    const bool random = w == Workload::Diffuse || w == Workload::Ao || (w == Workload::Shadow && p->scene.lights.size() > 1);
+    if (random) {
+      EXPECT_FALSE(sameRays(a.rays, c.rays));
+    } else if (w != Workload::Shadow) {
+      EXPECT_TRUE(sameRays(a.rays, c.rays));
+    }
+  }
+}
+
+TEST(TraceWorkloads, ShadowRaysEndAtALight) {
+  MeshSceneOptions mo;
+  mo.groundPlane = false;
+  Scene scene = makeMeshScene(makeUvSphere(32, 16), mo);
+  Light point;  // beside the directional key and fill of a mesh scene
+  point.position = scene.camera.eye + glm::vec3(0.0f, 2.0f, 0.0f);
+  scene.lights.push_back(point);
+  auto p = prepareScene(std::move(scene), "sah-binned", BuildOptions{});
+  size_t toPoint = 0;
+  EmbreeTracer embree(p->soup, 2);
+  const RayWorkload w = workload(*p, Workload::Shadow, 1000, 3, embree);
+  ASSERT_EQ(w.rays.size(), 1000u);
+  for (const BatchRay& r : w.rays) {
+    float best = INFINITY;
+    for (const Light& l : p->scene.lights) {
+      if (l.kind == LightKind::Directional) {
+        if (std::isinf(r.tMax)) best = std::min(best, glm::length(r.dir + glm::normalize(l.direction)));
+      } else {
+        // The end point, relative to the light's distance: float rounding of o + t d (a few ulps).
+        const float miss = glm::length(r.origin + r.tMax * r.dir - l.position) / std::max(1.0f, glm::length(l.position));
+        toPoint += std::isfinite(r.tMax) && miss < 1e-5f;
+        best = std::min(best, miss);
+      }
+    }
+    ASSERT_LT(best, 1e-5f) << "a shadow ray that ends at no light";
+  }
+  EXPECT_GT(toPoint, w.rays.size() / 5);  // one light in three is the point light
+}
+
+// With Malley's method cos^2(theta) = 1 - u1 is uniform on [0, 1] for a cosine-weighted direction;
+// uniform hemisphere sampling would give cos(theta) uniform instead (KS distance 0.25 from this).
+TEST(TraceWorkloads, DiffuseDirectionsAreCosineDistributed) {
+  auto p = prepared(makeGridPlane(8, 8));  // every hit's normal is +-Y
+  EmbreeTracer embree(p->soup, 2);
+  const uint32_t n = 20000;
+  for (Workload kind : {Workload::Diffuse, Workload::Ao}) {
+    const RayWorkload w = workload(*p, kind, n, 11, embree);
+    ASSERT_EQ(w.rays.size(), n);
+    std::vector<double> cos2, phi;
+    for (const BatchRay& r : w.rays) {
+      cos2.push_back(double(r.dir.y) * double(r.dir.y));
+      phi.push_back((std::atan2(double(r.dir.z), double(r.dir.x)) + M_PI) / (2.0 * M_PI));
+    }
+    // All on the side the camera sees (the camera is above the plane: +Y).
+    EXPECT_TRUE(std::all_of(w.rays.begin(), w.rays.end(), [](const BatchRay& r) { return r.dir.y >= 0.0f; }));
+    // Kolmogorov-Smirnov against U(0, 1): the critical value at alpha = 0.001 is 1.95 / sqrt(n).
+    auto ks = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      double d = 0.0;
+      for (size_t i = 0; i < v.size(); ++i)
+        d = std::max({d, double(i + 1) / double(v.size()) - v[i], v[i] - double(i) / double(v.size())});
+      return d;
+    };
+    const double critical = 1.95 / std::sqrt(double(n));
+    EXPECT_LT(ks(cos2), critical) << workloadName(kind) << ": cos^2(theta) is not uniform";
+    EXPECT_LT(ks(phi), critical) << workloadName(kind) << ": the azimuth is not uniform";
+    if (kind == Workload::Ao)
+      for (const BatchRay& r : w.rays) ASSERT_EQ(r.tMax, w.aoDistance);
+  }
+}
+
+TEST(TraceWorkloads, BadRequestsAreRefused) {
+  auto p = prepared(makeUvSphere(8, 4));
+  EmbreeTracer embree(p->soup, 1);
+  EXPECT_THROW(workload(*p, Workload::Primary, 0, 1, embree), std::invalid_argument);
+  EXPECT_THROW(parseWorkload("difuse"), std::invalid_argument);
+  // A camera that sees no triangle: no secondary rays can start anywhere.
+  Scene s = p->scene;
+  s.camera.target = s.camera.eye + (s.camera.eye - s.camera.target);
+  WorkloadRequest r;
+  r.workload = Workload::Diffuse;
+  r.count = 100;
+  EXPECT_THROW(generateWorkload(r, s, p->soup, [&](const std::vector<BatchRay>& rays) {
+                 std::vector<BatchHit> h;
+                 embree.closest(rays, h);
+                 return h;
+               }),
+               InputError);
+}
+
+std::unique_ptr<GlContext> contextOrSkip() {
+  try {
+    const char* backend = std::getenv("BVHLAB_GL_BACKEND");
+    return createContext(backend && *backend ? parseBackend(backend) : Backend::OSMesa);
+  } catch (const std::exception& e) {
+    return nullptr;
+  }
+}
+
+// Every kernel's GLSL run over a ray batch gives its C++ mirror's answer and counters, per ray, for
+// closest and any hit, on a random triangle soup (overlapping triangles: deep, messy trees).
+TEST(TraceGlsl, EqualsTheMirrorPerRay) {
+  auto ctx = contextOrSkip();
+  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  auto p = prepared(makeTriangleSoup(3000, 5, 0.01f, 0.1f));
+  EmbreeTracer embree(p->soup, 2);
+  for (Workload w : {Workload::Primary, Workload::Diffuse, Workload::Shadow}) {
+    const RayWorkload rays = workload(*p, w, 1500, 2, embree);
+    const bool anyHit = isAnyHit(w);
+    for (const KernelInfo& k : kernels())
+      for (Robustness robust : {Robustness::Watertight, Robustness{}}) {
+        SCOPED_TRACE(std::string(workloadName(w)) + " / " + k.name + " / " + robustnessName(robust));
+        RayTracerOptions o;
+        o.kernel = k.name;
+        o.robust = robust;
+        o.anyHit = anyHit;
+        GlRayTracer gl(p->packed, o);
+        gl.setRays(rays.rays);
+        std::vector<BatchHit> hits;
+        const std::vector<glm::uvec4> counts = gl.traceCounted(&hits);
+        gl.trace();
+        const std::vector<BatchHit> timed = gl.results();
+        const glsl::Storage storage(p->packed, stackSizeFor(p->packed.depth));
+        int failures = 0;
+        size_t found = 0;
+        for (size_t i = 0; i < rays.rays.size() && failures < 3; ++i) {
+          found += hits[i].hit;
+          const BatchRay& r = rays.rays[i];
+          glsl::Counters c;
+          glsl::MeshHit mh{};
+          bool found;
+          uint32_t prim = BatchHit::kNoPrim;
+          if (anyHit) {
+            found = k.any(robust)(storage, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, c);
+          } else {
+            found = k.closest(robust)(storage, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, mh, c);
+            uint material, mesh;
+            if (found) glsl::loadTriangleIds(storage, mh.tri, prim, material, mesh);
+          }
+          const bool same = hits[i].hit == found && counts[i].x == c.nodeVisits && counts[i].y == c.triTests &&
+                            counts[i].z == 0u && (anyHit || !found || hits[i].prim == prim) &&
+                            timed[i].hit == hits[i].hit && timed[i].prim == hits[i].prim;
+          if (!same) {
+            ++failures;
+            ADD_FAILURE() << "ray " << i << ": GLSL " << hits[i].hit << " prim " << hits[i].prim << " visits "
+                          << counts[i].x << " tests " << counts[i].y << "; mirror " << found << " prim " << prim
+                          << " visits " << c.nodeVisits << " tests " << c.triTests;
+          }
+        }
+        EXPECT_GT(found, rays.rays.size() / 20) << "too few hits for the comparison to mean much";
+      }
+  }
+}
+
+// Embree and the watertight GLSL kernels agree on every ray (closest-hit ties on shared edges aside).
+TEST(TraceGlsl, AgreesWithEmbree) {
+  auto ctx = contextOrSkip();
+  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  std::vector<std::pair<std::string, std::unique_ptr<PreparedScene>>> scenes;
+  scenes.emplace_back("sphere", prepared(makeUvSphere(64, 32)));
+  scenes.emplace_back("cube", prepared(makeCube(6), "median"));
+  scenes.emplace_back("soup", prepared(makeTriangleSoup(5000, 9), "sbvh"));
+  const fs::path bunny = fs::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes/bunny00.off";
+  if (fs::exists(bunny)) {
+    MeshSceneOptions mo;
+    mo.groundPlane = false;
+    scenes.emplace_back("bunny", prepareScene(loadMeshScene(bunny, mo), "ploc", BuildOptions{}));
+  }
+  // Rays that hit, per workload over all scenes (secondary rays off the convex sphere and cube hit nothing).
+  std::map<std::string, size_t> hitsPerWorkload;
+  for (const auto& [name, p] : scenes) {
+    EmbreeTracer embree(p->soup, 2);
+    for (Workload w : {Workload::Primary, Workload::Shadow, Workload::Specular, Workload::Diffuse, Workload::Ao}) {
+      SCOPED_TRACE(name + " / " + workloadName(w));
+      const RayWorkload rays = workload(*p, w, 4000, 1, embree);
+      RayTracerOptions o;
+      o.anyHit = isAnyHit(w);
+      GlRayTracer gl(p->packed, o);
+      gl.setRays(rays.rays);
+      gl.trace();
+      const std::vector<BatchHit> ours = gl.results();
+      std::vector<BatchHit> theirs;
+      o.anyHit ? embree.occluded(rays.rays, theirs) : embree.closest(rays.rays, theirs);
+      size_t mismatches = 0, hits = 0;
+      for (size_t i = 0; i < ours.size(); ++i) {
+        hits += ours[i].hit;
+        if (ours[i].hit != theirs[i].hit) {
+          ++mismatches;
+        } else if (!o.anyHit && ours[i].hit && ours[i].prim != theirs[i].prim) {
+          // A tie: the same distance (different triangles through a shared edge).
+          mismatches += std::abs(ours[i].t - theirs[i].t) > 1e-5f * std::max(ours[i].t, theirs[i].t);
+        }
+      }
+      EXPECT_EQ(mismatches, 0u);
+      hitsPerWorkload[workloadName(w)] += hits;
+    }
+  }
+  for (const std::string& w : workloadNames()) EXPECT_GT(hitsPerWorkload[w], 0u) << w << ": no ray hit anything";
+}
+
+TEST(TraceCli, JsonHasTheIssueKeys) {
+  const fs::path bunny = fs::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes/bunny00.off";
+  const std::string input = fs::exists(bunny) ? bunny.string() : clitest::scene("mesh.toml").string();
+  if (!fs::exists(input)) GTEST_SKIP() << "no mesh input";
+  clitest::Result r = clitest::run("trace " + input + " --rays diffuse --json --count 3000 --frames 6 --warmup 1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  for (const char* key : {"rays", "workload", "ms", "mrays_per_s", "embree_ms", "embree_mrays_per_s", "ratio_to_embree",
+                          "node_visits_per_ray", "triangle_tests_per_ray", "hit_mismatches"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["workload"], "diffuse");
+  EXPECT_EQ(j["rays"], 3000);
+  EXPECT_EQ(j["hit_mismatches"], 0);
+  EXPECT_GT(j["node_visits_per_ray"].get<double>(), 1.0);
+  EXPECT_GT(j["ms"].get<double>(), 0.0);
+  EXPECT_GT(j["embree_ms"].get<double>(), 0.0);
+  EXPECT_FALSE(j["ratio_ci_low"].is_null());  // 6 rounds: an interval exists
+
+  r = clitest::run("trace " + input + " --rays sideways");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("primary, shadow, specular, diffuse, ao"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace bvhlab
