@@ -4,6 +4,9 @@
 #   bash setup.sh test   install, fetch datasets, build, run every test (CTest)
 #   bash setup.sh deps   install Debian packages only
 #   bash setup.sh build  configure + build only
+#   bash setup.sh sanitize        ASan + UBSan build (clang, build-sanitize/), run the CPU tests (ctest -L cpu)
+#   bash setup.sh fuzz [SECONDS]  libFuzzer targets for every file parser, SECONDS each (default 60);
+#                                 exits 1 on a finding and prints its reproducer (tests/fuzz/run.sh)
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -15,11 +18,14 @@ PACKAGES=(
   python3-glad glslang-tools python3 python3-matplotlib python3-numpy xvfb xauth
 )
 
+# Only for `sanitize` and `fuzz`: clang with its sanitizer and libFuzzer runtimes, llvm-symbolizer.
+CHECK_PACKAGES=(clang libclang-rt-14-dev llvm-14)
+
 as_root() { if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi; }
 
 deps() {
   local missing=()
-  for p in "${PACKAGES[@]}"; do
+  for p in "${PACKAGES[@]}" "$@"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
   if [ ${#missing[@]} -gt 0 ]; then
@@ -32,6 +38,26 @@ deps() {
 build() {
   cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
   cmake --build build -j "$(nproc)"
+}
+
+# One instrumented build serves both checks: every library is compiled once with ASan + UBSan and
+# libFuzzer's coverage hooks (-DBVHLAB_FUZZ=ON); `sanitize` links the CPU test executables, `fuzz` the
+# fuzz targets. -O1 with line tables keeps reports readable; NDEBUG as in the Release build (bvhlab has
+# no assert(); toml++'s debug-only assertions are not what ships).
+sanitize_build() {
+  local flags="-O1 -gline-tables-only -DNDEBUG"
+  cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+        -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+        "-DCMAKE_C_FLAGS_RELWITHDEBINFO=$flags" "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=$flags" \
+        -DBVHLAB_FUZZ=ON -DBVHLAB_BENCHMARKS=OFF >/dev/null
+  cmake --build build-sanitize -j "$(nproc)" --target "$@"
+}
+sanitizer_env() {  # for the CPU tests (tests/fuzz/run.sh sets its own, lighter options)
+  # Third-party leaks LeakSanitizer must not fail on are listed, with why, in tests/fuzz/lsan.supp.
+  export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1}
+  export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/tests/fuzz/lsan.supp:print_suppressions=0}
+  export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+  if [ -x /usr/lib/llvm-14/bin/llvm-symbolizer ]; then export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-14/bin/llvm-symbolizer; fi
 }
 
 case "${1:-}" in
@@ -51,5 +77,15 @@ case "${1:-}" in
       ./build/bvhlab render datasets/scenes/report.toml -o out/report.png --width 1280 --height 720
       echo "image: out/report.png"
     fi ;;
-  *) echo "usage: bash setup.sh main|test|deps|build" >&2; exit 2 ;;
+  sanitize)
+    deps "${CHECK_PACKAGES[@]}"; bash datasets/fetch.sh; sanitize_build cpu_tests
+    sanitizer_env
+    # Only the tests labelled "cpu" (tests/CMakeLists.txt): no GL (llvmpipe under ASan is not ours to
+    # check) and not the "cpu-slow" scale tests (run those with: ctest --test-dir build-sanitize -L cpu).
+    ctest --test-dir build-sanitize -L '^cpu$' --output-on-failure -j "$(nproc)" ;;
+  fuzz)
+    deps "${CHECK_PACKAGES[@]}"; bash datasets/fetch.sh; sanitize_build fuzz_targets
+    if [ -x /usr/lib/llvm-14/bin/llvm-symbolizer ]; then export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-14/bin/llvm-symbolizer; fi
+    bash tests/fuzz/run.sh build-sanitize "${2:-60}" ;;
+  *) echo "usage: bash setup.sh main|test|deps|build|sanitize|fuzz [SECONDS]" >&2; exit 2 ;;
 esac

@@ -12,6 +12,7 @@
 #include <toml++/toml.h>
 
 #include "experiments/config_reader.hpp"
+#include "experiments/config_toml_guard.hpp"
 
 #include "builders/builder.hpp"
 #include "datasets/scene.hpp"  // InputError
@@ -94,6 +95,9 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   cfg.name = file.stem().string();
   ConfigReader r(file, names);
 
+  if (const std::optional<TomlTextHazard> h = findTomlTextHazard(text))
+    throw InputError(file.string() + ':' + std::to_string(h->line) + ':' + std::to_string(h->column) + ": " +
+                     h->message);
   toml::table root;
   try {
     root = toml::parse(text, file.string());
@@ -379,8 +383,11 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
     const size_t sweepRuns = cfg.runs.size();
     for (size_t i = 0; i < sweepRuns; ++i) {
       RunSpec ref = cfg.runs[i];
-      for (const auto& [name, value] : overrides) {
-        auto it = std::find_if(ref.axes.begin(), ref.axes.end(), [&](const auto& a) { return a.first == name; });
+      for (const auto& override : overrides) {
+        const auto& [name, value] = override;
+        // Compare through `override`, not the binding: clang 14 cannot capture structured bindings.
+        auto it = std::find_if(ref.axes.begin(), ref.axes.end(),
+                               [&](const auto& a) { return a.first == override.first; });
         if (it != ref.axes.end()) it->second = value;
         else ref.axes.emplace_back(name, value);
       }

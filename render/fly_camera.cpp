@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 namespace bvhlab {
@@ -185,6 +186,9 @@ ViewerScript parseViewerScript(const std::string& text, const std::string& file)
       if (!(in >> e.key)) throw InputError(where + action + " needs a key name");
       if (e.kind == ScriptEvent::Kind::Hold && (!(in >> e.holdFrames) || e.holdFrames < 1))
         throw InputError(where + "hold needs a key name and a frame count >= 1");
+      // FRAME + COUNT is the script's last frame (ViewerScript::lastFrame): it must fit an int.
+      if (e.kind == ScriptEvent::Kind::Hold && e.holdFrames > std::numeric_limits<int>::max() - e.frame)
+        throw InputError(where + "hold ends after frame " + std::to_string(std::numeric_limits<int>::max()));
     } else if (action == "mouse") {
       e.kind = ScriptEvent::Kind::Mouse;
       number(e.delta.x, "mouse dx");
