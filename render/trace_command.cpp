@@ -1,6 +1,7 @@
 #include "render/trace_command.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -76,6 +77,9 @@ void addTraceOptions(CLI::App& app, TraceCommand& c, RenderCliText& text) {
   app.add_option("--ploc-radius", rc.plocRadius, "ploc: nearest-neighbour search radius");
   app.add_option("--storage", rc.storage, "tbo | tex2d");
   app.add_option("--robust", rc.robust, "triangle/box tests as render --robust (the offset is the generator's)");
+  app.add_option("--max-frames", c.maxFrames, "go on past --frames until --target-ci-pct is met, up to this many (0 = fixed)");
+  app.add_option("--target-ci-pct", c.targetCiPct, "stop when the GLSL time's 95% interval is within +-this % of its median");
+  app.add_option("--max-seconds", c.maxSeconds, "stop the rounds after this long (0 = no limit)");
   app.add_option("--embree-threads", c.embreeThreads, "Embree's threads (0 = every core)");
   app.add_option("--eye", text.eye, "camera position x,y,z");
   app.add_option("--target", text.target, "camera target x,y,z");
@@ -85,6 +89,9 @@ void addTraceOptions(CLI::App& app, TraceCommand& c, RenderCliText& text) {
 
 int runTrace(const TraceCommand& c) {
   const Workload workload = parseWorkload(c.rays);  // bad names fail before anything is loaded
+  if (c.render.frames < 1 || c.render.warmup < 0) throw std::invalid_argument("--frames must be >= 1 and --warmup >= 0");
+  if (c.maxFrames < 0 || !(c.targetCiPct >= 0.0) || !(c.maxSeconds >= 0.0))
+    throw std::invalid_argument("--max-frames, --target-ci-pct and --max-seconds must be >= 0");
   const RenderCommand& rc = c.render;
   RenderSetup setup = setupRender(rc);
   for (const std::string& w : setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';
@@ -126,7 +133,22 @@ int runTrace(const TraceCommand& c) {
   // round i's two times pair up.
   std::vector<double> glMs, embreeMs;
   std::mt19937_64 order(0x7261795f74726163ull);
-  for (int i = 0; i < rc.frames; ++i) {
+  const int maxFrames = std::max(rc.frames, c.maxFrames);
+  const auto started = std::chrono::steady_clock::now();
+  std::string stop = maxFrames > rc.frames ? "max_frames" : "fixed";
+  for (int i = 0; i < maxFrames; ++i) {
+    if (i >= rc.frames) {
+      const auto ci = medianInterval(glMs);
+      if (c.targetCiPct > 0.0 && ci && ci->estimate > 0.0 && 50.0 * (ci->high - ci->low) / ci->estimate <= c.targetCiPct) {
+        stop = "target";
+        break;
+      }
+      if (c.maxSeconds > 0.0 &&
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() >= c.maxSeconds) {
+        stop = "max_seconds";
+        break;
+      }
+    }
     if (order() & 1u) {
       glMs.push_back(gl.trace());
       embreeMs.push_back(embreeTrace());
@@ -168,11 +190,19 @@ int runTrace(const TraceCommand& c) {
   j["primary_hits"] = rays.primaryHits;
   if (workload == Workload::Ao) j["ao_distance"] = rays.aoDistance;
   j["frames"] = glMs.size();
+  j["measure_stop"] = stop;
+  j["ci_target_pct"] = c.targetCiPct > 0.0 ? nlohmann::json(c.targetCiPct) : nlohmann::json();
   j["warmup"] = rc.warmup;
   j["ms"] = ms;
   j["ms_ci_low"] = orNull(ci, false);
   j["ms_ci_high"] = orNull(ci, true);
   j["ms_all"] = glMs;
+  // The names the experiment tables share with render: one "frame" is one pass over the batch.
+  j["frame_ms"] = ms;
+  j["frame_ms_ci_low"] = j["ms_ci_low"];
+  j["frame_ms_ci_high"] = j["ms_ci_high"];
+  j["ci_pct"] = ci && ci->estimate > 0.0 ? nlohmann::json(50.0 * (ci->high - ci->low) / ci->estimate) : nlohmann::json();
+  j["frame_ms_all"] = glMs;
   j["mrays_per_s"] = ms > 0 ? n / (ms * 1e3) : 0.0;
   j["embree_ms"] = eMs;
   j["embree_ms_ci_low"] = orNull(eCi, false);
@@ -204,6 +234,14 @@ int runTrace(const TraceCommand& c) {
   j["sah_cost"] = b.sahCost;
   j["references"] = b.references;
   j["tree_hash"] = prepared->treeHash();
+  j["epo"] = prepared->endPointOverlap();
+  j["nodes"] = b.nodes;
+  j["leaves"] = b.leaves;
+  j["bvh_depth"] = b.depth;
+  j["bytes"] = b.bytes;
+  j["optimize"] = rc.optimize.empty() ? nlohmann::json() : nlohmann::json(rc.optimize);
+  j["sah_before_optimize"] = b.sahBeforeOptimize;
+  j["optimize_ms"] = b.optimizeMs;
   j["backend"] = backendName(setup.backend);
   j["renderer"] = ctx->renderer();
   j["gpu"] = !ctx->software();

@@ -18,7 +18,11 @@ struct TraceCommand {
   uint32_t count = 1u << 17;
   uint64_t seed = 1;
   float aoRadius = 0.1f;
-  unsigned embreeThreads = 0;  // 0 = hardware concurrency (llvmpipe uses every core too)
+  unsigned embreeThreads = 0;
+  // Adaptive rounds as `measure` has them: after --frames rounds, go on until the GLSL time's 95%
+  // interval is within +-targetCiPct % of its median, or maxFrames rounds, or maxSeconds.
+  int maxFrames = 0;  // 0 = --frames (a fixed count)
+  double targetCiPct = 0.0, maxSeconds = 0.0;  // 0 = hardware concurrency (llvmpipe uses every core too)
 };
 
 void addTraceOptions(CLI::App& app, TraceCommand& cmd, RenderCliText& text);
