@@ -2,6 +2,7 @@
 # Fetch bvhlab's external data from Debian packages without installing them:
 #   libcgal-demo  -> usr/share/doc/libcgal-dev/data.tar.gz -> data/meshes/*  -> datasets/cache/meshes/
 #   blender-data  -> usr/share/blender/datafiles/studiolights/world/*       -> datasets/cache/worlds/
+#   flightgear-data-models -> .../Maritime/Military/CG-57-high-detail/*     -> datasets/cache/meshes/
 # Every kept file is listed with its sha256 in datasets/checksums.sha256 (paths relative to the cache).
 # A complete, verified cache makes this a no-op; a checksum mismatch is an error (delete the file and rerun).
 # Needs only apt-get (after `apt-get update`), dpkg-deb, tar, gzip and sha256sum. Prints one line per action.
@@ -19,6 +20,12 @@ SUMS="$HERE/checksums.sha256"
 MESHES=(bunny00.off armadillo.off ChineseDragon-10kv.off refined_elephant.off cow.off knot1.off pig.stl sphere.ply
         colored_tetra.ply)
 WORLDS=(city.exr courtyard.exr forest.exr interior.exr night.exr studio.exr sunrise.exr sunset.exr license.txt)
+# A real model of >= 150k triangles for the bench suite (datasets/scenes/bench/ship.toml): the cruiser
+# CG-57 from FlightGear's models (GPL; AC3D text, 86,379 surfaces, ~180k triangles once its quads are
+# split) and the six textures it references (2.6 MB). The package is a 144 MB download (4 s on this
+# project's machine, plus ~17 s to extract the one folder).
+FG_MODEL=(CG-57.ac CG-57-texture.png RSD-rails.png deck-gray-large.png deck-gray.png deck-white.png nets.png)
+FG_DIR=usr/share/games/flightgear/Models/Maritime/Military/CG-57-high-detail
 CGAL_TARBALL=usr/share/doc/libcgal-dev/data.tar.gz
 BLENDER_WORLDS=usr/share/blender/datafiles/studiolights/world
 
@@ -32,7 +39,7 @@ done
 
 # Files in the checksum list, relative to the cache.
 mapfile -t LISTED < <(awk 'NF == 2 { print $2 }' "$SUMS")
-for f in "${MESHES[@]/#/meshes/}" "${WORLDS[@]/#/worlds/}"; do
+for f in "${MESHES[@]/#/meshes/}" "${FG_MODEL[@]/#/meshes/}" "${WORLDS[@]/#/worlds/}"; do
   grep -qxF "$f" < <(printf '%s\n' "${LISTED[@]}") || die "$f has no entry in $SUMS"
 done
 
@@ -68,10 +75,11 @@ if [ "${1:-}" = "--verify" ]; then
   die "${#missing[@]} file(s) missing from $CACHE (first: ${missing[0]}); run: bash datasets/fetch.sh"
 fi
 
-need_meshes=0 need_worlds=0
+is_fg_file() { local x; for x in "${FG_MODEL[@]}"; do [ "meshes/$x" = "$1" ] && return 0; done; return 1; }
+need_meshes=0 need_worlds=0 need_fg=0
 for f in "${missing[@]}"; do
   case "$f" in
-    meshes/*) need_meshes=1 ;;
+    meshes/*) if is_fg_file "$f"; then need_fg=1; else need_meshes=1; fi ;;
     worlds/*) need_worlds=1 ;;
     *) die "don't know which package provides $f" ;;
   esac
@@ -112,6 +120,15 @@ if [ "$need_worlds" -eq 1 ]; then
   dpkg-deb --fsys-tarfile "$DEB" | tar -x -C "$WORK" "${WORLDS[@]/#/./$BLENDER_WORLDS/}" ||
     die "$(basename "$DEB") lacks some of: ${WORLDS[*]}"
   for w in "${WORLDS[@]}"; do mv "$WORK/$BLENDER_WORLDS/$w" "$STAGE/worlds/$w"; done
+fi
+
+if [ "$need_fg" -eq 1 ]; then
+  download flightgear-data-models
+  say "extracting ${#FG_MODEL[@]} files of $FG_DIR from $(basename "$DEB")"
+  dpkg-deb --fsys-tarfile "$DEB" | tar -x -C "$WORK" "${FG_MODEL[@]/#/./$FG_DIR/}" ||
+    die "$(basename "$DEB") lacks some of: ${FG_MODEL[*]}"
+  for m in "${FG_MODEL[@]}"; do mv "$WORK/$FG_DIR/$m" "$STAGE/meshes/$m"; done
+  rm -f "$DEB"  # 144 MB: free the space before copying into the cache
 fi
 
 # Verify everything that was extracted before anything enters the cache.

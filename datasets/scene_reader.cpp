@@ -13,6 +13,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <toml++/toml.h>
 
+#include "datasets/bench_generators.hpp"
 #include "datasets/image_io.hpp"
 #include "datasets/mesh_io.hpp"
 #include "datasets/procedural.hpp"
@@ -278,6 +279,43 @@ class SceneReader {
     }
   }
 
+  // A procedural mesh (datasets/bench_generators.hpp) instead of a file: generate = "NAME",
+  // triangles = N (required), seed = S (default 1). Cached like files, by (name, triangles, seed).
+  const MeshData& generatedMeshFor(const toml::table& t, const std::string& w) {
+    const toml::node& gen = *t.get("generate");
+    if (t.get("mesh")) fail(gen, w + ": give either mesh = \"FILE\" or generate = \"NAME\", not both");
+    const std::string name = *getString(t, "generate", w);
+    bool known = false;
+    for (const BenchGenerator& g : benchGenerators()) known = known || g.name == name;
+    if (!known) fail(gen, w + ".generate: unknown generator \"" + name + "\" (known: " + benchGeneratorNames() + ")");
+    const toml::node* tri = t.get("triangles");
+    if (!tri) fail(gen, w + ": generate = \"" + name + "\" needs triangles = N");
+    if (!tri->is_integer()) fail(*tri, w + ".triangles must be an integer");
+    const int64_t count = tri->value<int64_t>().value_or(0);
+    uint64_t seed = 1;
+    if (const toml::node* sn = t.get("seed")) {
+      if (!sn->is_integer() || sn->value<int64_t>().value_or(-1) < 0)
+        fail(*sn, w + ".seed must be a non-negative integer");
+      seed = uint64_t(sn->value<int64_t>().value_or(1));
+    }
+    try {
+      checkBenchRequest(name, count);
+    } catch (const InputError& e) {
+      fail(*tri, w + ".triangles: " + e.what());
+    }
+    const std::string key = "generate:" + name + ":" + std::to_string(count) + ":" + std::to_string(seed);
+    if (auto it = meshCache_.find(key); it != meshCache_.end()) return it->second;
+    Mesh mesh = generateBenchMesh(name, count, seed);
+    MeshData data;
+    data.name = key;
+    data.positions.assign(mesh.positions.begin(), mesh.positions.end());  // float -> double is exact
+    mesh.positions = {};
+    data.normals = std::move(mesh.normals);
+    data.uvs = std::move(mesh.uvs);
+    data.triangles = std::move(mesh.triangles);
+    return meshCache_.emplace(key, std::move(data)).first->second;
+  }
+
   // ---- sections ----
   void readCamera(const toml::table& t) {
     const std::string w = "camera";
@@ -408,7 +446,7 @@ class SceneReader {
 
   void readObject(const toml::table& t) {
     checkKeys(t, {"kind", "name", "material", "translate", "rotate", "scale", "major_radius", "minor_radius",
-                  "infinite", "mesh", "fit"},
+                  "infinite", "mesh", "fit", "generate", "triangles", "seed"},
               "[[object]]");
     Object o;
     const std::string ordinal = "object " + std::to_string(scene_.objects.size() + 1);
@@ -425,7 +463,8 @@ class SceneReader {
     o.name = getString(t, "name", ordinal).value_or(kind + std::to_string(scene_.objects.size() + 1));
     const std::string w = ordinal + " (" + o.name + ")";
     rejectForeignKeys(t, w, kind, {{"major_radius", "torus"}, {"minor_radius", "torus"}, {"infinite", "plane"},
-                                   {"mesh", "mesh"}, {"fit", "mesh"}});
+                                   {"mesh", "mesh"}, {"fit", "mesh"}, {"generate", "mesh"}, {"triangles", "mesh"},
+                                   {"seed", "mesh"}});
 
     if (auto name = getString(t, "material", w)) {
       auto it = materialIndex_.find(*name);
@@ -479,8 +518,7 @@ class SceneReader {
     }
     if (o.kind == ObjectKind::Plane) o.infinite = getBool(t, "infinite", w, false);
     if (o.kind == ObjectKind::Mesh) {
-      const std::string spec = requireString(t, "mesh", w);
-      const MeshData& data = meshFor(*t.get("mesh"), spec);
+      const MeshData& data = t.get("generate") ? generatedMeshFor(t, w) : meshFor(*t.get("mesh"), requireString(t, "mesh", w));
       if (const toml::node* fit = t.get("fit")) {
         const float size = float(number(*fit, w + ".fit", kPositive));
         toWorldD = toWorldD * fitTransform(data, size);
@@ -489,7 +527,7 @@ class SceneReader {
       try {
         mesh = bakeMesh(data, toWorldD);
       } catch (const InputError& e) {
-        fail(*t.get("mesh"), std::string("mesh: ") + e.what());
+        fail(t.get("mesh") ? *t.get("mesh") : *t.get("generate"), std::string("mesh: ") + e.what());
       }
       mesh.material = o.material;
       o.transform = glm::mat4(toWorldD);  // informational for meshes (the renderer reads the baked vertices)

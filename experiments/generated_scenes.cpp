@@ -1,11 +1,14 @@
 #include "experiments/generated_scenes.hpp"
 
+#include <algorithm>
 #include <bit>
+#include <cstdint>
 #include <cstring>
 #include <iostream>
 #include <map>
 #include <sstream>
 
+#include "datasets/bench_generators.hpp"
 #include "datasets/procedural.hpp"
 #include "experiments/config.hpp"
 #include "experiments/sweep_dir.hpp"
@@ -15,7 +18,11 @@ namespace bvhlab {
 namespace fs = std::filesystem;
 
 const std::vector<std::string>& generatedMeshKinds() {
-  static const std::vector<std::string> kinds = {"large", "soup"};
+  static const std::vector<std::string> kinds = [] {
+    std::vector<std::string> k = {"large", "soup"};
+    for (const BenchGenerator& g : benchGenerators()) k.push_back(g.name);
+    return k;
+  }();
   return kinds;
 }
 
@@ -25,6 +32,8 @@ Mesh generateMesh(const nlohmann::json& spec) {
   const uint64_t seed = spec.value("seed", uint64_t(1));
   if (kind == "large") return makeLargeMesh(triangles, seed);
   if (kind == "soup") return makeTriangleSoup(triangles, seed);
+  for (const BenchGenerator& g : benchGenerators())
+    if (g.name == kind) return generateBenchMesh(kind, int64_t(std::min<size_t>(triangles, size_t(INT64_MAX))), seed);
   throw std::invalid_argument("unknown mesh generator '" + kind + "'");
 }
 

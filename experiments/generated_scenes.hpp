@@ -17,7 +17,8 @@ namespace bvhlab {
 struct ExperimentConfig;
 
 // Generator names accepted in `generate` ("large": procedural.hpp's makeLargeMesh, a BVH-hostile
-// bumpy sphere in a clustered cloud; "soup": makeTriangleSoup, random triangles in the unit cube).
+// bumpy sphere in a clustered cloud; "soup": makeTriangleSoup, random triangles in the unit cube;
+// then datasets/bench_generators.hpp's "stadium", "interior", "hairball", "terrain", "scaling").
 const std::vector<std::string>& generatedMeshKinds();
 
 // The mesh for a scene value {"generate", "triangles", "seed"} (deterministic in them).
