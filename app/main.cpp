@@ -15,6 +15,7 @@
 #include "experiments/provenance.hpp"
 #include "experiments/runner.hpp"
 #include "layout/layout.hpp"
+#include "layout/layouts.hpp"
 #include "layout/tree_hash.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/hard_cases_command.hpp"
@@ -31,7 +32,7 @@ using namespace bvhlab;
 namespace {
 
 struct BuildCommand {
-  std::string mesh, builder = "sah-binned", optimize;
+  std::string mesh, builder = "sah-binned", optimize, layout = kDefaultLayout;
   int leafSize = 4, bins = 0, plocRadius = 16;
   float sbvhAlpha = 1e-5f;
   bool json = false;
@@ -48,6 +49,7 @@ int buildCommand(const BuildCommand& c) {
   asRender.plocRadius = c.plocRadius;
   OptionReview review;
   const BuildOptions options = renderBuildOptions(asRender, &review);
+  const LayoutInfo& layout = findLayout(c.layout);
   for (const std::string& w : review.warnings) std::fprintf(stderr, "bvhlab: warning: %s\n", w.c_str());
   Scene scene = loadInput(c.mesh);
   TriangleSoup soup = gatherTriangles(scene);
@@ -56,7 +58,7 @@ int buildCommand(const BuildCommand& c) {
   std::vector<glm::vec3> centroids = triangleCentroids(soup);
   BuildStats stats;
   Bvh bvh = buildBvh(c.builder, BuildInput{boxes, centroids, soup.v0, soup.v1, soup.v2}, options, &stats);
-  PackedBvh packed = packBvh(bvh, soup);
+  PackedBvh packed = layout.pack(bvh, soup);
   stats.bytes = packed.bytes();
   const double epo = endPointOverlap(bvh, soup.v0, soup.v1, soup.v2, options.cost);
   if (c.json) {
@@ -76,6 +78,7 @@ int buildCommand(const BuildCommand& c) {
                         {"epo", epo},
                         {"build_ms", stats.buildMs},
                         {"optimize_ms", stats.optimizeMs},
+                        {"layout", layout.name},
                         {"bytes", stats.bytes},
                         {"bytes_per_triangle", double(stats.bytes) / double(stats.primitives)},
                         {"tree_hash", packedTreeHash(packed)},
@@ -84,10 +87,10 @@ int buildCommand(const BuildCommand& c) {
     std::cout << j.dump() << std::endl;
   } else {
     std::printf("%s%s on %s: %zu triangles (%zu references), %zu nodes, %zu leaves, depth %u, SAH %.3f, EPO %.3f, "
-                "%.2f ms, %zu bytes\n",
+                "%.2f ms, %zu bytes in layout %s\n",
                 c.builder.c_str(), c.optimize.empty() ? "" : ("+" + c.optimize).c_str(), c.mesh.c_str(),
                 stats.primitives, stats.references, stats.nodes, stats.leaves, stats.depth, stats.sahCost, epo,
-                stats.buildMs, stats.bytes);
+                stats.buildMs, stats.bytes, layout.name.c_str());
   }
   return 0;
 }
@@ -121,6 +124,7 @@ int main(int argc, char** argv) {
   build->option_defaults()->always_capture_default();
   build->add_option("--mesh", bc.mesh, "mesh or scene file")->required()->check(notADirectory("a mesh or scene file"));
   build->add_option("--builder", bc.builder, "BVH builder");
+  build->add_option("--layout", bc.layout, "texture layout to pack into (bytes, tree_hash; see `bvhlab layouts`)");
   build->add_option("--leaf-size", bc.leafSize, "max triangles per leaf");
   build->add_option("--bins", bc.bins, "bins for sah-binned and sbvh (0 = default)");
   build->add_option("--optimize", bc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
@@ -193,7 +197,8 @@ int main(int argc, char** argv) {
   hardCmd->add_option("--kernel", hc.kernel, "traversal kernel");
   hardCmd->add_option("--builder", hc.builder, "BVH builder");
   auto* listBuilders = app.add_subcommand("builders", "list the BVH builders");
-  auto* listKernels = app.add_subcommand("kernels", "list the traversal kernels");
+  auto* listKernels = app.add_subcommand("kernels", "list the traversal kernels (and the layout each walks)");
+  auto* listLayouts = app.add_subcommand("layouts", "list the texture layouts (and the kernels that walk each)");
 
   // --version: the release and the commit of the source tree it runs from (as the run records say).
   app.set_version_flag("--version", [] {
@@ -256,7 +261,17 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (listKernels->parsed()) {
-      for (const KernelInfo& k : kernels()) std::printf("%-16s %s\n", k.name.c_str(), k.description.c_str());
+      for (const KernelInfo* k : allKernels())
+        std::printf("%-20s %-8s %s\n", k->name.c_str(), k->layout.c_str(), k->description.c_str());
+      return 0;
+    }
+    if (listLayouts->parsed()) {
+      for (const LayoutInfo& l : layouts()) {
+        std::string names;
+        for (const KernelInfo& k : kernelsFor(l.name))
+          names += (names.empty() ? "" : ", ") + k.name + (k.name == l.defaultKernel ? " (default)" : "");
+        std::printf("%-8s %s\n         kernels: %s\n", l.name.c_str(), l.description.c_str(), names.c_str());
+      }
       return 0;
     }
   } catch (const ShaderError& e) {

@@ -1,5 +1,7 @@
-// THE texture layout (version 1). This comment is the one place it is described; the GLSL
-// accessors in traversal/layout.glsl and the packer in layout/pack.cpp implement it.
+// THE texture layout (version 1, registered as layout "v1", the default). This comment is the one
+// place it is described; the GLSL accessors in traversal/layout.glsl and the packer in
+// layout/pack.cpp implement it. Other layouts have one header each beside it (layout/layout_*.hpp),
+// listed in the registry layout/layouts.hpp.
 //
 // Every stream is an array of uvec4 texels (RGBA32UI: integer texels keep float bits exact;
 // floats are stored with floatBitsToUint). Any builder's Bvh packs into the same streams, so any
@@ -50,6 +52,9 @@ constexpr uint32_t kTex2DWidth = 4096;
 constexpr uint32_t kNodeTexels = 2, kTriangleTexels = 3, kAttributeTexels = 4;
 
 struct PackedBvh {
+  // The registered layout (layout/layouts.hpp) the NODE stream is written in: "v1" as described here,
+  // or another layout's name. Kernels and accessors check it; the streams alone do not say.
+  std::string layout = "v1";
   std::vector<glm::uvec4> nodes;
   std::vector<glm::uvec4> triangles;
   std::vector<glm::uvec4> attributes;

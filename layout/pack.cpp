@@ -136,6 +136,9 @@ PackedBvh packBvh(const Bvh& bvh, const TriangleSoup& soup) {
 }
 
 NodeRecord unpackNode(const PackedBvh& packed, uint32_t index) {
+  if (packed.layout != "v1")
+    throw std::invalid_argument("unpackNode decodes layout v1 nodes; this tree is packed in layout '" + packed.layout +
+                                "'");
   if (uint64_t(index) * kNodeTexels + 1 >= packed.nodes.size())
     throw std::out_of_range("unpackNode: node " + std::to_string(index) + " of " +
                             std::to_string(packed.nodes.size() / kNodeTexels));

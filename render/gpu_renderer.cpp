@@ -140,6 +140,10 @@ unsigned compileFullscreenProgram(const AssembledShader& shader) {
 
 void GpuRenderer::compile() {
   SceneFeatures features = analyzeScene(scene_.scene);
+  // The shader decodes the NODE stream with its layout's accessors: they must be the tree's.
+  if (options_.layout != scene_.packed.layout)
+    throw std::invalid_argument("the shader is assembled for layout " + options_.layout + " but the tree is packed in " +
+                                scene_.packed.layout + " (prepareScene's layout)");
   if (options_.bvhStackSize < 1) options_.bvhStackSize = 1;
   shader_ = assembleTracer(features, options_);
   program_ = compileFullscreenProgram(shader_);

@@ -96,7 +96,8 @@ json measureGroup(const json& spec) {
       const std::string tk = treeKey(e->cmd);
       auto tree = trees.find(tk);
       if (tree == trees.end())
-        tree = trees.emplace(tk, prepareScene(std::move(e->setup.scene), e->cmd.builder, e->setup.build)).first;
+        tree = trees.emplace(tk, prepareScene(std::move(e->setup.scene), e->cmd.builder, e->setup.build,
+                                                e->setup.shader.layout)).first;
       e->prepared = tree->second;
     } catch (const std::exception& ex) {
       e->error = ex.what();

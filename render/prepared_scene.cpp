@@ -1,11 +1,14 @@
 #include "render/prepared_scene.hpp"
 
 #include "builders/epo.hpp"
+#include "layout/layouts.hpp"
 #include "layout/tree_hash.hpp"
 
 namespace bvhlab {
 
-std::unique_ptr<PreparedScene> prepareScene(Scene scene, const std::string& builder, const BuildOptions& options) {
+std::unique_ptr<PreparedScene> prepareScene(Scene scene, const std::string& builder, const BuildOptions& options,
+                                            const std::string& layout) {
+  const LayoutInfo& packer = findLayout(layout);  // an unknown name fails before the build
   auto p = std::make_unique<PreparedScene>();
   p->scene = std::move(scene);
   p->cost = options.cost;
@@ -15,10 +18,11 @@ std::unique_ptr<PreparedScene> prepareScene(Scene scene, const std::string& buil
     std::vector<Aabb> boxes = triangleBoxes(p->soup);
     std::vector<glm::vec3> centroids = triangleCentroids(p->soup);
     p->bvh = buildBvh(builder, BuildInput{boxes, centroids, p->soup.v0, p->soup.v1, p->soup.v2}, options, &p->stats);
-    p->packed = packBvh(p->bvh, p->soup);
+    p->packed = packer.pack(p->bvh, p->soup);
     p->stats.bytes = p->packed.bytes();
   } else {
     findBuilder(builder);  // an unknown name is still an error without a mesh
+    p->packed.layout = packer.name;
   }
   return p;
 }

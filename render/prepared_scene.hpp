@@ -1,5 +1,6 @@
 // A scene made ready to render: its triangles built into a BVH by the chosen builder and packed
-// into the one texture layout, and its objects/materials/textures packed for the tracer.
+// into the chosen texture layout (layout/layouts.hpp), and its objects/materials/textures packed for
+// the tracer.
 #pragma once
 #include <memory>
 #include <string>
@@ -30,7 +31,10 @@ struct PreparedScene {
   mutable double epo_ = -1.0;  // < 0: not computed yet
 };
 
-// `scene` is moved in; SceneData points into it, so PreparedScene is not copyable.
-std::unique_ptr<PreparedScene> prepareScene(Scene scene, const std::string& builder, const BuildOptions& options);
+// `scene` is moved in; SceneData points into it, so PreparedScene is not copyable. `layout`: a
+// registered layout name (packed.layout is set to it, with or without triangles); stats.bytes is the
+// packed streams' size in it.
+std::unique_ptr<PreparedScene> prepareScene(Scene scene, const std::string& builder, const BuildOptions& options,
+                                            const std::string& layout = "v1");
 
 }  // namespace bvhlab

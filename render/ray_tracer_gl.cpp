@@ -33,10 +33,11 @@ std::vector<BatchHit> decode(const std::vector<glm::uvec4>& raw, bool anyHit, co
 
 GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& options) : options_(options) {
   const int stack = stackSizeFor(std::max<uint32_t>(1, packed.depth));
+  const std::string& layout = packed.layout;
   timed_ = compileComputeProgram(
-      assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, false));
+      assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, false, layout));
   counted_ = compileComputeProgram(
-      assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, true));
+      assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, true, layout));
   streams_[0] = uploadBvhStream(packed.nodes, options.storage, "node", &streamBuffers_[0]);
   streams_[1] = uploadBvhStream(packed.triangles, options.storage, "triangle", &streamBuffers_[1]);
   streams_[2] = uploadBvhStream(packed.attributes, options.storage, "attribute", &streamBuffers_[2]);

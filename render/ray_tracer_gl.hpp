@@ -14,7 +14,7 @@
 namespace bvhlab {
 
 struct RayTracerOptions {
-  std::string kernel = "stack-ordered";
+  std::string kernel = "stack-ordered";  // must walk the packed tree's layout ("" = that layout's default)
   Storage storage = Storage::Tbo;
   Robustness robust = Robustness::Watertight;
   bool anyHit = false;  // traceAny instead of traceClosest
@@ -22,7 +22,9 @@ struct RayTracerOptions {
 
 class GlRayTracer {
  public:
-  // Compiles the timed program (no counters) and the counting one; uploads the tree.
+  // Compiles the timed program (no counters) and the counting one over the accessors of the tree's
+  // layout (PackedBvh::layout); uploads the tree. A kernel of another layout is refused
+  // (std::invalid_argument naming the layout's kernels).
   GlRayTracer(const PackedBvh& packed, const RayTracerOptions& options);
   ~GlRayTracer();
   GlRayTracer(const GlRayTracer&) = delete;

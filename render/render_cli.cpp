@@ -44,7 +44,9 @@ void addRenderOptions(CLI::App& app, RenderCommand& rc, RenderCliText& text) {
   app.add_option("--visits-out", rc.visitsOutput, "also write the node-visit heatmap here");
   app.add_flag("--uber", rc.uber, "compile every module in (no specialisation)");
   app.add_option("--builder", rc.builder, "BVH builder (see `bvhlab builders`)");
-  app.add_option("--kernel", rc.kernel, "traversal kernel (see `bvhlab kernels`)");
+  app.add_option("--layout", rc.layout, "texture layout of the tree (see `bvhlab layouts`)");
+  app.add_option("--kernel", rc.kernel,
+                 "traversal kernel of that layout (see `bvhlab kernels`; default: the layout's, stack-ordered for v1)");
   app.add_option("--leaf-size", rc.leafSize, "max triangles per BVH leaf");
   app.add_option("--bins", rc.bins, "bins for sah-binned and sbvh (0 = default)");
   app.add_option("--optimize", rc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");

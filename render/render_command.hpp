@@ -18,7 +18,8 @@ struct RenderCommand {
   std::string view = "shaded";  // shaded|normal|depth|primid|visits
   bool uber = false;
   std::string builder = "sah-binned";
-  std::string kernel = "stack-ordered";
+  std::string layout = "v1";  // texture layout the tree is packed in (layout/layouts.hpp)
+  std::string kernel;         // traversal kernel; "" = the layout's default (stack-ordered for v1)
   int leafSize = 4;
   int bins = 0;
   std::string optimize;    // post-pass after the builder: "" | "reinsert"

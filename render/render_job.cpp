@@ -9,6 +9,7 @@
 #include "datasets/scene_io.hpp"
 #include "render/frame_stats.hpp"
 #include "render/heatmap.hpp"
+#include "layout/layouts.hpp"
 #include "traversal/kernels.hpp"
 
 namespace bvhlab {
@@ -76,7 +77,8 @@ RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
   so.maxDepth = rs.maxDepth;
   so.view = cmd.view == "visits" ? View::Shaded : parseView(cmd.view);
   so.branching = parseBranching(cmd.branching);
-  so.kernel = findKernel(cmd.kernel).name;
+  so.layout = findLayout(cmd.layout).name;
+  so.kernel = findKernel(so.layout, cmd.kernel).name;  // a kernel of another layout is refused here
   so.storage = parseStorage(cmd.storage);
   so.reinhard = rs.reinhard;
   so.uber = cmd.uber;
@@ -110,7 +112,7 @@ std::string treeKey(const RenderCommand& c) {
     if (!key.empty()) key += '|';
     key += text;
   };
-  for (const std::string& f : {c.input, c.builder, std::to_string(c.leafSize), std::to_string(c.bins), c.optimize,
+  for (const std::string& f : {c.input, c.layout, c.builder, std::to_string(c.leafSize), std::to_string(c.bins), c.optimize,
                                std::to_string(c.sbvhAlpha), std::to_string(c.plocRadius), c.cameraPath})
     field(f);
   for (const auto& v : {c.width, c.height, c.depth}) field(v ? std::to_string(*v) : "-");
@@ -238,6 +240,7 @@ nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, 
     out["aa_ms"] = medianOf(times.aaMs);
   }
   out["builder"] = cmd.builder;
+  out["layout"] = so.layout;
   out["kernel"] = so.kernel;
   out["leaf_size"] = setup.buildReview.leafSize;  // what the leaves were limited to (a builder may cap it)
   out["leaf_size_requested"] = cmd.leafSize;
@@ -249,6 +252,7 @@ nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, 
   out["leaves"] = b.leaves;
   out["bvh_depth"] = b.depth;
   out["bytes"] = b.bytes;
+  out["bytes_per_triangle"] = prepared.soup.size() ? double(b.bytes) / double(prepared.soup.size()) : 0.0;
   out["references"] = b.references;
   out["optimize"] = cmd.optimize.empty() ? nlohmann::json() : nlohmann::json(cmd.optimize);
   out["sah_before_optimize"] = b.sahBeforeOptimize;

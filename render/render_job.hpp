@@ -41,8 +41,8 @@ RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded = nullptr)
 // against the builder (builders/builder.hpp reviewBuildOptions); needs no input file.
 BuildOptions renderBuildOptions(const RenderCommand& cmd, OptionReview* review = nullptr);
 
-// Commands with the same key build the same PreparedScene (input, scene settings, camera, builder,
-// leaf size, bins): `measure` builds each tree once for all the kernels and knobs that use it.
+// Commands with the same key build the same PreparedScene (input, scene settings, camera, layout,
+// builder, leaf size, bins): `measure` builds each tree once for all the kernels and knobs that use it.
 std::string treeKey(const RenderCommand& cmd);
 
 // The GL side of one render. Keeps `prepared` alive; needs a current context for its whole life.

@@ -69,7 +69,9 @@ void addTraceOptions(CLI::App& app, TraceCommand& c, RenderCliText& text) {
   app.add_option("--warmup", rc.warmup, "untimed rounds first (llvmpipe compiles at the first dispatch)");
   app.add_option("--backend", rc.backend, "osmesa | egl");
   app.add_option("--builder", rc.builder, "BVH builder (see `bvhlab builders`)");
-  app.add_option("--kernel", rc.kernel, "traversal kernel (see `bvhlab kernels`)");
+  app.add_option("--layout", rc.layout, "texture layout of the tree (see `bvhlab layouts`)");
+  app.add_option("--kernel", rc.kernel,
+                 "traversal kernel of that layout (see `bvhlab kernels`; default: the layout's, stack-ordered for v1)");
   app.add_option("--leaf-size", rc.leafSize, "max triangles per BVH leaf");
   app.add_option("--bins", rc.bins, "bins for sah-binned and sbvh (0 = default)");
   app.add_option("--optimize", rc.optimize, "post-pass after the builder: reinsert");
@@ -95,7 +97,7 @@ int runTrace(const TraceCommand& c) {
   const RenderCommand& rc = c.render;
   RenderSetup setup = setupRender(rc);
   for (const std::string& w : setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';
-  std::shared_ptr<const PreparedScene> prepared = prepareScene(std::move(setup.scene), rc.builder, setup.build);
+  std::shared_ptr<const PreparedScene> prepared = prepareScene(std::move(setup.scene), rc.builder, setup.build, setup.shader.layout);
   const TriangleSoup& soup = prepared->soup;
   if (soup.size() == 0) throw InputError(rc.input + ": no triangles to trace rays against");
 
@@ -224,6 +226,7 @@ int runTrace(const TraceCommand& c) {
   j["hit_miss_mismatches"] = agree.hitMiss;
   j["hit_ties"] = agree.ties;
   j["builder"] = rc.builder;
+  j["layout"] = prepared->packed.layout;
   j["kernel"] = to.kernel;
   j["leaf_size"] = setup.buildReview.leafSize;
   j["warnings"] = setup.buildReview.warnings;
@@ -239,6 +242,7 @@ int runTrace(const TraceCommand& c) {
   j["leaves"] = b.leaves;
   j["bvh_depth"] = b.depth;
   j["bytes"] = b.bytes;
+  j["bytes_per_triangle"] = double(b.bytes) / double(soup.size());
   j["optimize"] = rc.optimize.empty() ? nlohmann::json() : nlohmann::json(rc.optimize);
   j["sah_before_optimize"] = b.sahBeforeOptimize;
   j["optimize_ms"] = b.optimizeMs;
@@ -248,9 +252,10 @@ int runTrace(const TraceCommand& c) {
   if (rc.json) {
     std::cout << j.dump() << std::endl;
   } else {
-    std::printf("%s: %zu %s rays, %s over %s (leaf %u): %.2f ms (%.1f Mrays/s), Embree %.2f ms (%.1f Mrays/s, %u threads): "
+    std::printf("%s: %zu %s rays, %s on %s over %s (leaf %u): %.2f ms (%.1f Mrays/s), Embree %.2f ms (%.1f Mrays/s, %u threads): "
                 "%.2fx Embree's time; %.1f node visits + %.1f triangle tests per ray; %llu hit mismatches, %llu ties\n",
-                rc.input.c_str(), rays.rays.size(), workloadName(workload), to.kernel.c_str(), rc.builder.c_str(),
+                rc.input.c_str(), rays.rays.size(), workloadName(workload), to.kernel.c_str(),
+                prepared->packed.layout.c_str(), rc.builder.c_str(),
                 setup.buildReview.leafSize, ms, j["mrays_per_s"].get<double>(), eMs, j["embree_mrays_per_s"].get<double>(),
                 embree.threads(), j["ratio_to_embree"].get<double>(), visitsPerRay, testsPerRay,
                 (unsigned long long)agree.mismatches, (unsigned long long)agree.ties);

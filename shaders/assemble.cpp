@@ -4,6 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "layout/layouts.hpp"
 #include "traversal/kernels.hpp"
 
 namespace bvhlab {
@@ -139,11 +140,11 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   if (mesh) {
     if (uber) a.raw("<uber>", "uniform int u_meshPresent;\n");
     a.module(o.storage == Storage::Tbo ? "storage_tbo.glsl" : "storage_tex2d.glsl");
-    a.module("layout.glsl");
+    for (const std::string& m : findLayout(o.layout).glslModules) a.module(m);
     // The robustness knobs (traversal/robustness.hpp): each test is a drop-in module.
     a.module(o.robust.box == BoxTest::Robust ? "ray_box_robust.glsl" : "ray_box.glsl");
     a.module(o.robust.triangle == TriangleTest::Watertight ? "ray_triangle_watertight.glsl" : "ray_triangle.glsl");
-    a.module(findKernel(o.kernel).glslFile);
+    a.module(findKernel(o.layout, o.kernel).glslFile);
   }
   for (int k = 0; k < 6; ++k)
     if (uber || f.kinds[k]) a.module(kKindModules[k]);
@@ -163,7 +164,8 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
 }
 
 AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
-                                  bool anyHit, bool countStats) {
+                                  bool anyHit, bool countStats, const std::string& layout) {
+  const std::string& kernelFile = findKernel(layout, kernel).glslFile;  // a mismatch fails before any GLSL
   std::ostringstream d;
   d << "#version 450 core\n#define BVH_STACK_SIZE " << bvhStackSize << "\n";
   if (anyHit) d << "#define ANY_HIT 1\n";
@@ -172,10 +174,10 @@ AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Ro
   a.raw("<defines>", d.str());
   a.module("common.glsl");
   a.module(storage == Storage::Tbo ? "storage_tbo.glsl" : "storage_tex2d.glsl");
-  a.module("layout.glsl");
+  for (const std::string& m : findLayout(layout).glslModules) a.module(m);
   a.module(robust.box == BoxTest::Robust ? "ray_box_robust.glsl" : "ray_box.glsl");
   a.module(robust.triangle == TriangleTest::Watertight ? "ray_triangle_watertight.glsl" : "ray_triangle.glsl");
-  a.module(findKernel(kernel).glslFile);
+  a.module(kernelFile);
   a.module("trace_rays.glsl");
   return a.take();
 }

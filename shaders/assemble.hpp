@@ -40,7 +40,8 @@ struct ShaderOptions {
   int maxDepth = 5;
   View view = View::Shaded;
   Branching branching = Branching::Full;
-  std::string kernel = "stack-ordered";
+  std::string kernel = "stack-ordered";  // must walk `layout` (traversal/kernels.hpp findKernel(layout, name))
+  std::string layout = "v1";             // the packed tree's layout (layout/layouts.hpp): its accessor modules
   Storage storage = Storage::Tbo;
   int bvhStackSize = 64;  // from the packed tree depth (see traversal/kernels.hpp)
   bool countStats = false;
@@ -83,10 +84,11 @@ struct AssembledShader {
 // Effective max depth: lowered to 1 when nothing reflects or refracts (uber keeps the request).
 int effectiveDepth(const SceneFeatures& features, int requested, bool uber);
 AssembledShader assembleTracer(const SceneFeatures& features, const ShaderOptions& options);
-// `bvhlab trace`'s compute shader: the kernel over its storage and robustness modules plus
-// trace_rays.glsl (closest hit, or any hit), with or without the traversal counters.
+// `bvhlab trace`'s compute shader: the kernel over its storage, layout and robustness modules plus
+// trace_rays.glsl (closest hit, or any hit), with or without the traversal counters. A kernel that
+// does not walk `layout` is refused (std::invalid_argument naming the layout's kernels).
 AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
-                                  bool anyHit, bool countStats);
+                                  bool anyHit, bool countStats, const std::string& layout = "v1");
 // A single-module full-screen pass (e.g. SMAA): `#version 450 core` + `defines` + the module.
 AssembledShader assembleModule(const std::string& defines, const std::string& module);
 std::string fullscreenVertexShader();

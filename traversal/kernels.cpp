@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "layout/layouts.hpp"
+#include "traversal/kernel_bvh2cb_stack.hpp"
 #include "traversal/kernel_stack_ordered.hpp"
 #include "traversal/kernel_stack_unordered.hpp"
 #include "traversal/kernel_stackless.hpp"
@@ -27,23 +29,69 @@ namespace bvhlab {
 const std::vector<KernelInfo>& kernels() {
   static const std::vector<KernelInfo> table = {
       {"stack-unordered", "explicit stack, both hit children pushed in fixed order (the report's Algorithm 2)",
-       "kernel_stack_unordered.glsl", BVHLAB_KERNEL_MIRRORS(glsl::stack_unordered)},
+       "kernel_stack_unordered.glsl", "v1", BVHLAB_KERNEL_MIRRORS(glsl::stack_unordered)},
       {"stack-ordered", "explicit stack, nearer child first, pending nodes beyond the closest hit skipped",
-       "kernel_stack_ordered.glsl", BVHLAB_KERNEL_MIRRORS(glsl::stack_ordered)},
-      {"stackless", "no stack: depth-first walk following escape links", "kernel_stackless.glsl",
+       "kernel_stack_ordered.glsl", "v1", BVHLAB_KERNEL_MIRRORS(glsl::stack_ordered)},
+      {"stackless", "no stack: depth-first walk following escape links", "kernel_stackless.glsl", "v1",
        BVHLAB_KERNEL_MIRRORS(glsl::stackless)},
   };
   return table;
 }
+
+namespace {
+
+const std::vector<KernelInfo>& bvh2cbKernels() {
+  static const std::vector<KernelInfo> table = {
+      {"bvh2cb-stack-ordered",
+       "explicit stack over both child boxes of one record, nearer child first, leaves walked from the parent's slot",
+       "kernel_bvh2cb_stack.glsl", "bvh2-cb", BVHLAB_KERNEL_MIRRORS(glsl::bvh2cb_stack)},
+  };
+  return table;
+}
+
+std::string kernelList(const std::vector<KernelInfo>& table) {
+  std::string list;
+  for (const KernelInfo& k : table) list += (list.empty() ? "" : " ") + k.name;
+  return list;
+}
+
+}  // namespace
 #undef BVHLAB_KERNEL_MIRRORS
 
+const std::vector<KernelInfo>& kernelsFor(const std::string& layout) {
+  const std::string& name = findLayout(layout).name;  // an unknown layout names the valid ones
+  if (name == "bvh2-cb") return bvh2cbKernels();
+  return kernels();
+}
+
+std::vector<const KernelInfo*> allKernels() {
+  std::vector<const KernelInfo*> all;
+  for (const LayoutInfo& l : layouts())
+    for (const KernelInfo& k : kernelsFor(l.name)) all.push_back(&k);
+  return all;
+}
+
 const KernelInfo& findKernel(const std::string& name) {
-  for (const KernelInfo& k : kernels())
-    if (k.name == name) return k;
+  for (const KernelInfo* k : allKernels())
+    if (k->name == name) return *k;
   std::ostringstream msg;
   msg << "unknown traversal kernel '" << name << "'; valid kernels:";
-  for (const KernelInfo& k : kernels()) msg << ' ' << k.name;
+  for (const KernelInfo* k : allKernels()) msg << ' ' << k->name;
   throw std::invalid_argument(msg.str());
+}
+
+const KernelInfo& findKernel(const std::string& layout, const std::string& name) {
+  const LayoutInfo& l = findLayout(layout);
+  const std::vector<KernelInfo>& table = kernelsFor(l.name);
+  const std::string& wanted = name.empty() ? l.defaultKernel : name;
+  for (const KernelInfo& k : table)
+    if (k.name == wanted) return k;
+  for (const KernelInfo* k : allKernels())
+    if (k->name == wanted)
+      throw std::invalid_argument("kernel '" + wanted + "' walks layout " + k->layout + ", not " + l.name +
+                                  "; kernels for layout " + l.name + ": " + kernelList(table));
+  throw std::invalid_argument("unknown traversal kernel '" + wanted + "'; kernels for layout " + l.name + ": " +
+                              kernelList(table) + " (every layout's: bvhlab kernels)");
 }
 
 int stackSizeFor(uint32_t treeDepth) {

@@ -1,7 +1,8 @@
 // The traversal kernel registry. A kernel is one GLSL file (traversal/kernel_*.glsl, defining
-// traceClosest and traceAny over the modules storage_*.glsl, layout.glsl, ray_box.glsl,
-// ray_triangle.glsl) plus its C++ mirror (kernel_*.hpp). Adding a kernel = those two files and one
-// line in kernels.cpp.
+// traceClosest and traceAny over the modules storage_*.glsl, its layout's accessor modules
+// (layout/layouts.hpp: layout.glsl for v1), ray_box.glsl, ray_triangle.glsl) plus its C++ mirror
+// (kernel_*.hpp). Each kernel walks one layout (KernelInfo::layout). Adding a kernel = those two
+// files and one line in kernels.cpp, in its layout's table.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -24,6 +25,7 @@ struct KernelInfo {
   std::string name;         // e.g. "stack-ordered"
   std::string description;  // one line for `bvhlab kernels`
   std::string glslFile;     // e.g. "kernel_stack_ordered.glsl"
+  std::string layout;       // the layout whose NODE stream it walks (layout/layouts.hpp), e.g. "v1"
   TraceClosestFn traceClosest;  // mirror with the fast tests (Moller-Trumbore, slab)
   TraceAnyFn traceAny;
   // The mirror instantiated with each (triangle test, box test) pair (traversal/robustness.hpp), by
@@ -34,9 +36,17 @@ struct KernelInfo {
   TraceAnyFn any(Robustness r) const { return anyByTests[size_t(r.testsIndex())]; }
 };
 
+// The kernels of layout v1, the default layout (what every v1 test and sweep iterates over).
 const std::vector<KernelInfo>& kernels();
-// Throws std::invalid_argument naming the valid kernels when `name` is unknown.
+// The kernels that walk `layout`; throws std::invalid_argument naming the valid layouts.
+const std::vector<KernelInfo>& kernelsFor(const std::string& layout);
+// Every registered kernel, layout by layout in layouts() order.
+std::vector<const KernelInfo*> allKernels();
+// Any layout's kernel. Throws std::invalid_argument naming the valid kernels when `name` is unknown.
 const KernelInfo& findKernel(const std::string& name);
+// `name` if it walks `layout` ("" = the layout's default kernel). Throws std::invalid_argument for an
+// unknown layout or kernel, or a kernel of another layout, naming the kernels valid for `layout`.
+const KernelInfo& findKernel(const std::string& layout, const std::string& name);
 
 // BVH_STACK_SIZE for a packed tree of this depth (root alone = 1): enough for every registered
 // kernel, so a stack kernel never overflows on that tree. Each kernel derives its own bound in its

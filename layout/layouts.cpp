@@ -1,0 +1,29 @@
+#include "layout/layouts.hpp"
+
+#include <stdexcept>
+
+#include "layout/layout_bvh2cb.hpp"
+
+namespace bvhlab {
+
+const std::vector<LayoutInfo>& layouts() {
+  static const std::vector<LayoutInfo> table = {
+      {"v1", "binary, 32-byte node (own box + child/escape links), depth-first; raw triangles (the reference)",
+       packBvh, {"layout.glsl"}, "stack-ordered"},
+      // bvh2-cb shares v1's TRIANGLE and ATTRIBUTE streams, so it takes their accessors from layout.glsl
+      // (whose v1 loadNode the bvh2-cb kernel never calls) and adds its node decoder.
+      {"bvh2-cb", "binary, 64-byte node holding both child boxes (Aila-Laine 2009), leaves in the parent; raw triangles",
+       packBvh2cb, {"layout.glsl", "layout_bvh2cb.glsl"}, "bvh2cb-stack-ordered"},
+  };
+  return table;
+}
+
+const LayoutInfo& findLayout(const std::string& name) {
+  for (const LayoutInfo& l : layouts())
+    if (l.name == name) return l;
+  std::string msg = "unknown layout '" + name + "'; valid layouts:";
+  for (const LayoutInfo& l : layouts()) msg += " " + l.name;
+  throw std::invalid_argument(msg);
+}
+
+}  // namespace bvhlab

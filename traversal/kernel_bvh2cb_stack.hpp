@@ -1,0 +1,83 @@
+// kernel_bvh2cb_stack.hpp — C++ mirror of kernel_bvh2cb_stack.glsl (ordered stack over layout
+// bvh2-cb; stack bound, NaN handling and counter definitions are documented there).
+#pragma once
+#include "traversal/intersectors.hpp"
+#include "traversal/layout_bvh2cb.hpp"
+
+namespace bvhlab::glsl::bvh2cb_stack {
+
+template <class Tests>
+inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
+                           Counters& c) {
+  hit = MeshHit{tMax, -1, vec2(0.0f)};
+  vec3 invDir = Tests::rayInverseDirection(ray.dir);
+  StackArray<uint> stackLink(s.stackSize);
+  StackArray<uint> stackCount(s.stackSize);
+  StackArray<float> stackEnter(s.stackSize);
+  int sp = 0;
+
+  uint link = 0u;
+  uint count = kBvh2cbInner;
+  while (true) {
+    if (count == kBvh2cbInner) {
+      vec3 aMin, aMax, bMin, bMax;
+      uint aLink, aCount, bLink, bCount;
+      float aEnter, bEnter;
+      c.nodeVisits++;
+      loadRecord(s, int(link), aMin, aMax, aLink, aCount, bMin, bMax, bLink, bCount);
+      bool hitA = Tests::intersectAabb(ray.origin, invDir, aMin, aMax, tMin, hit.t, aEnter);
+      bool hitB = Tests::intersectAabb(ray.origin, invDir, bMin, bMax, tMin, hit.t, bEnter);
+      if (hitA && hitB) {
+        if (sp == s.stackSize) {
+          c.stackOverflow = true;
+          return hit.tri >= 0;
+        }
+        bool bFirst = bEnter < aEnter;
+        stackLink[sp] = bFirst ? aLink : bLink;
+        stackCount[sp] = bFirst ? aCount : bCount;
+        stackEnter[sp] = bFirst ? aEnter : bEnter;
+        sp++;
+        link = bFirst ? bLink : aLink;
+        count = bFirst ? bCount : aCount;
+        continue;
+      }
+      if (hitA || hitB) {
+        link = hitA ? aLink : bLink;
+        count = hitA ? aCount : bCount;
+        continue;
+      }
+    } else {
+      for (uint i = 0u; i < count; ++i) {
+        int tri = int(link + i);
+        vec3 v0, v1, v2;
+        loadTriangle(s, tri, v0, v1, v2);
+        float t;
+        vec2 bary;
+        c.triTests++;
+        if (Tests::intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+          hit = MeshHit{t, tri, bary};
+          if (anyHit) return true;
+        }
+      }
+    }
+    while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+    if (sp == 0) break;
+    sp--;
+    link = stackLink[sp];
+    count = stackCount[sp];
+  }
+  return hit.tri >= 0;
+}
+
+template <class Tests = FastTests>
+inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
+  return traverseBvh2cb<Tests>(s, ray, tMin, tMax, false, hit, c);
+}
+
+template <class Tests = FastTests>
+inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
+  MeshHit hit;
+  return traverseBvh2cb<Tests>(s, ray, tMin, tMax, true, hit, c);
+}
+
+}  // namespace bvhlab::glsl::bvh2cb_stack
