@@ -13,7 +13,7 @@ cd "$(dirname "$0")"
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git ca-certificates
   libglm-dev libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri
-  libopenmesh-dev libcgal-dev libbenchmark-dev libgtest-dev libopenimageio-dev libembree-dev
+  libopenmesh-dev libcgal-dev libbenchmark-dev libgtest-dev libopenimageio-dev libembree-dev libassimp-dev
   libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libglfw3-dev libimgui-dev
   python3-glad glslang-tools python3 python3-matplotlib python3-numpy xvfb xauth
 )
