@@ -1,6 +1,7 @@
 // Mesh loading (mesh_io.hpp): the file is read once, scanned by our per-format pass (double
 // positions, counts, indices), parsed by OpenMesh for faces and attributes (OBJ, OFF, PLY) or by our
-// own STL reader, and validated again. Also the OBJ writer.
+// own STL reader, and validated again; glTF/COLLADA/FBX/3DS/AC3D go to assimp (mesh_io_assimp.cpp).
+// Also the OBJ writer.
 #include "datasets/mesh_io.hpp"
 
 #include <unistd.h>
@@ -29,13 +30,19 @@ std::string lowerExtension(const fs::path& path) {
   return ext;
 }
 
-std::string readWholeFile(const fs::path& path) {
+// The file's size, after the checks every format shares (exists, regular, at most kMaxFileBytes).
+uintmax_t checkedFileSize(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) fail("mesh file not found");
   if (!fs::is_regular_file(path, ec)) fail("not a regular file");
   const uintmax_t size = fs::file_size(path, ec);
   if (ec) fail("cannot stat file (" + ec.message() + ")");
   if (size > kMaxFileBytes) fail("file too large (" + std::to_string(size) + " bytes)");
+  return size;
+}
+
+std::string readWholeFile(const fs::path& path) {
+  const uintmax_t size = checkedFileSize(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) fail("cannot open file");
   std::string data(size, '\0');
@@ -114,12 +121,20 @@ MeshData fromSoup(Soup& soup, std::vector<glm::dvec3> positions) {
 
 MeshData loadMeshImpl(const fs::path& path) {
   const std::string ext = lowerExtension(path);
-  if (!isMeshFile(path)) fail("unsupported mesh format '" + ext + "' (supported: .obj .off .ply .stl)");
-  const std::string text = readWholeFile(path);
-  if (text.empty()) fail("empty file");
+  if (!isMeshFile(path))
+    fail("unsupported mesh format '" + ext + "' (supported: .obj .off .ply .stl .gltf .glb .dae .fbx .3ds .ac)");
+  const auto& viaAssimp = assimpExtensions();
+  const bool assimp = std::find(viaAssimp.begin(), viaAssimp.end(), ext) != viaAssimp.end();
+  // assimp reads the file itself (and what it references: a glTF's .bin buffers); AC3D's counts are
+  // checked by our own pass first.
+  const std::string text = assimp && ext != ".ac" ? std::string() : readWholeFile(path);
+  if (assimp && ext != ".ac" ? checkedFileSize(path) == 0 : text.empty()) fail("empty file");
 
   MeshData mesh;
-  if (ext == ".stl") {
+  if (assimp) {
+    if (ext == ".ac") checkAc3dCounts(text);
+    mesh = readWithAssimp(path.string());
+  } else if (ext == ".stl") {
     mesh = readStl(text);
   } else {
     Scanned scanned = ext == ".off" ? scanOff(text) : ext == ".obj" ? scanObj(text) : scanPly(text);
@@ -155,7 +170,11 @@ std::string uniqueSuffix() {
 }  // namespace
 
 const std::vector<std::string>& meshExtensions() {
-  static const std::vector<std::string> exts{".obj", ".off", ".ply", ".stl"};
+  static const std::vector<std::string> exts = [] {
+    std::vector<std::string> e{".obj", ".off", ".ply", ".stl"};
+    e.insert(e.end(), assimpExtensions().begin(), assimpExtensions().end());
+    return e;
+  }();
   return exts;
 }
 

@@ -1,4 +1,6 @@
-// Triangle meshes from files: OBJ, OFF (ASCII), PLY (ASCII and binary), STL (ASCII and binary).
+// Triangle meshes from files: OBJ, OFF (ASCII), PLY (ASCII and binary), STL (ASCII and binary), and
+// through the Open Asset Import Library (assimp, mesh_io_assimp.cpp): glTF 2.0 (.gltf, .glb), COLLADA
+// (.dae), FBX (.fbx), 3DS (.3ds), AC3D (.ac) -- scene graphs flattened, with their materials.
 //
 // OpenMesh's readers do the parsing into a plain indexed triangle soup (no half-edge topology, so
 // non-manifold scans lose nothing). OpenMesh accepts many broken files silently or loops on absurd
@@ -12,6 +14,7 @@
 // mesh_io_{off,obj,ply,stl}.cpp (our own scanners, which also collect the double positions),
 // mesh_io_openmesh.cpp (OpenMesh for faces, normals, UVs of OBJ/OFF/PLY), mesh_io_text.cpp.
 #pragma once
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -20,6 +23,17 @@
 
 namespace bvhlab {
 
+// A material a mesh file defines (the assimp formats; OBJ/OFF/PLY/STL define none), already mapped to
+// the scene's material model (docs/scene-format.md, "Models with materials"). The base-colour texture
+// is not loaded by the mesh reader (a TOML mesh object ignores the file's materials): it is named by
+// a file path or carried as an embedded image file's bytes, and loadMeshScene loads it.
+struct MeshMaterial {
+  Material material;         // material.texture is -1 here
+  std::string texturePath;   // base-colour image file, resolved against the mesh file's folder; or ""
+  std::string textureBytes;  // an embedded (compressed) image file: its bytes; or ""
+  std::string textureFormat; // the embedded image's format hint ("png", "jpg"), without a dot
+};
+
 // A mesh as its file states it: positions in double, in the file's own coordinates.
 struct MeshData {
   std::string name;  // source path
@@ -27,10 +41,17 @@ struct MeshData {
   std::vector<glm::vec3> normals;  // per vertex or empty
   std::vector<glm::vec2> uvs;      // per vertex or empty
   std::vector<glm::uvec3> triangles;
+  // The file's materials, and per triangle an index into them (both empty for formats without
+  // materials; then every triangle uses the caller's material).
+  std::vector<MeshMaterial> materials;
+  std::vector<uint32_t> triangleMaterials;
 };
 
 // Loads a mesh with double positions (every format below; binary STL stores float, which converts
-// exactly). Same checks and errors as loadMesh.
+// exactly). Same checks and errors as loadMesh. The assimp formats are parsed by assimp in float
+// (Debian's libassimp is built without ASSIMP_DOUBLE_PRECISION): their positions are exact float
+// values widened to double, and only the node transforms are applied in double -- a model whose own
+// vertices lie far from its origin has lost detail inside assimp already.
 MeshData loadMeshData(const std::filesystem::path& path);
 
 // Centre of the bounding box of the vertices that triangles use (double; (0,0,0) without triangles).
@@ -48,7 +69,8 @@ Mesh rebasedMesh(const MeshData& mesh, glm::dvec3 origin = glm::dvec3(0.0));
 // far from the origin.
 Mesh loadMesh(const std::filesystem::path& path);
 
-// Lower-case extensions (with the dot) that loadMesh reads: .obj .off .ply .stl
+// Lower-case extensions (with the dot) that loadMesh reads: .obj .off .ply .stl .gltf .glb .dae .fbx
+// .3ds .ac
 const std::vector<std::string>& meshExtensions();
 bool isMeshFile(const std::filesystem::path& path);  // by extension only
 

@@ -69,4 +69,20 @@ struct Soup {
 };
 Soup readWithOpenMesh(const std::string& path);
 
+// Most triangles a mesh file may produce (after triangulation and, for the assimp formats, after
+// instancing: a small file can place one mesh many times). 2^26 as kMaxProceduralTriangles: about
+// 16-24 GB with the BVH, beyond what this testbed renders.
+constexpr size_t kMaxMeshTriangles = size_t(1) << 26;
+
+// The formats read through assimp (mesh_io_assimp.cpp): .gltf .glb .dae .fbx .3ds .ac
+const std::vector<std::string>& assimpExtensions();
+// The whole file through assimp: scene graph flattened (node transforms in double), triangles only
+// (points and lines skipped), materials mapped (MeshData::materials). Errors are MeshFileError with
+// assimp's message.
+MeshData readWithAssimp(const std::string& path);
+// AC3D's counts (numvert, numsurf, refs, kids) against the lines left in the file, before assimp
+// sees it: assimp's AC3D reader loops and allocates per claimed surface (measured: 'numsurf 1e8' in a
+// 1 KB file held 3.1 GB for 5.8 s). Every counted item takes at least one line.
+void checkAc3dCounts(std::string_view text);
+
 }  // namespace bvhlab::meshio

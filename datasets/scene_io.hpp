@@ -19,16 +19,20 @@ struct MeshSceneOptions {
   bool groundPlane = true;  // a finite grey plane under the mesh, 4x its bounding radius
 };
 
-// A bare mesh file (.obj .off .ply .stl, see mesh_io.hpp) as a scene: camera framing the mesh's
-// bounding sphere from a 3/4 view (front-right, above), a key light and a fill light, the procedural
-// sky, a default material, optionally a ground plane touching the mesh's lowest point. The file is
-// read in double; a mesh kRebaseDistance or more from the origin is stored relative to its bounding
-// box centre (Scene::origin), so a far copy renders like the same mesh near the origin.
+// A bare mesh file (.obj .off .ply .stl .gltf .glb .dae .fbx .3ds .ac, see mesh_io.hpp) as a scene:
+// camera framing the mesh's bounding sphere from a 3/4 view (front-right, above), a key light and a
+// fill light, the procedural sky, a default material, optionally a ground plane touching the mesh's
+// lowest point. The file is read in double; a mesh kRebaseDistance or more from the origin is stored
+// relative to its bounding box centre (Scene::origin), so a far copy renders like the same mesh near
+// the origin. A file with materials (MeshData::materials: the assimp formats) becomes one mesh object
+// per material its triangles use, each with the mapped material and its base-colour texture (loaded
+// here through OpenImageIO; a texture file that does not exist is a warning on stderr, an unreadable
+// one an InputError).
 Scene loadMeshScene(const std::filesystem::path& path, const MeshSceneOptions& options = {});
 
 // The same framing for a mesh already in memory (e.g. procedural.hpp's makeLargeMesh).
 Scene makeMeshScene(Mesh mesh, const MeshSceneOptions& options = {});
-// The same for a mesh with double positions, rebased as loadMeshScene does.
+// The same for a mesh with double positions, rebased as loadMeshScene does (with its materials).
 Scene makeMeshScene(const MeshData& mesh, const MeshSceneOptions& options = {});
 
 // .toml -> loadScene, a mesh extension -> loadMeshScene, anything else -> InputError.
