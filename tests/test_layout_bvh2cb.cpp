@@ -1,0 +1,394 @@
+// Layouts as an axis (issue 14): the registry, the bvh2-cb packer's invariants, every builder x layout
+// x kernel of that layout against brute force, the bvh2-cb GLSL kernel against its C++ mirror per ray
+// (answer and counters), and the refusal of a kernel that walks another layout.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "builders/builder.hpp"
+#include "datasets/procedural.hpp"
+#include "datasets/scene_io.hpp"
+#include "layout/layout_bvh2cb.hpp"
+#include "layout/layouts.hpp"
+#include "render/gl_context.hpp"
+#include "render/prepared_scene.hpp"
+#include "render/ray_tracer_gl.hpp"
+#include "shaders/assemble.hpp"
+#include "traversal/intersectors.hpp"
+#include "traversal/kernels.hpp"
+
+namespace bvhlab {
+namespace {
+
+// A 3 x 3 x 3 grid of separate cubes, each face a 2 x 2 grid: axis-aligned faces and empty space.
+Mesh cubeGrid() {
+  Mesh out;
+  const Mesh cube = makeCube(2);
+  for (int i = 0; i < 27; ++i) {
+    const glm::vec3 offset(float(i % 3) * 3.0f, float(i / 3 % 3) * 3.0f, float(i / 9) * 3.0f);
+    const uint32_t base = uint32_t(out.positions.size());
+    for (const glm::vec3& p : cube.positions) out.positions.push_back(0.5f * p + offset);
+    for (const glm::uvec3& t : cube.triangles) out.triangles.push_back(t + glm::uvec3(base));
+  }
+  return out;
+}
+
+struct TestMesh {
+  std::string name;
+  TriangleSoup soup;
+};
+
+const std::vector<TestMesh>& testMeshes() {
+  static const std::vector<TestMesh> meshes = [] {
+    MeshSceneOptions mo;
+    mo.groundPlane = false;
+    std::vector<TestMesh> m;
+    m.push_back({"sphere", gatherTriangles(makeMeshScene(makeUvSphere(24, 12), mo))});
+    m.push_back({"soup", gatherTriangles(makeMeshScene(makeTriangleSoup(700, 9, 0.01f, 0.15f), mo))});
+    m.push_back({"cube-grid", gatherTriangles(makeMeshScene(cubeGrid(), mo))});
+    return m;
+  }();
+  return meshes;
+}
+
+Bvh build(const std::string& builder, const TriangleSoup& soup) {
+  const std::vector<Aabb> boxes = triangleBoxes(soup);
+  const std::vector<glm::vec3> centroids = triangleCentroids(soup);
+  return buildBvh(builder, BuildInput{boxes, centroids, soup.v0, soup.v1, soup.v2}, BuildOptions{});
+}
+
+// One leaf holding every triangle (at most kMaxLeafSize): the tree whose root is a leaf.
+Bvh singleLeaf(const TriangleSoup& soup) {
+  Bvh bvh;
+  BvhNode leaf;
+  for (const Aabb& b : triangleBoxes(soup)) leaf.bounds.grow(b);
+  leaf.count = uint32_t(soup.size());
+  bvh.nodes.push_back(leaf);
+  for (uint32_t i = 0; i < soup.size(); ++i) bvh.primIndices.push_back(i);
+  return bvh;
+}
+
+TriangleSoup firstTriangles(const TriangleSoup& s, size_t n) {
+  TriangleSoup out = s;
+  for (auto* v : {&out.v0, &out.v1, &out.v2, &out.n0, &out.n1, &out.n2}) v->resize(n);
+  for (auto* v : {&out.uv0, &out.uv1, &out.uv2}) v->resize(n);
+  out.material.resize(n);
+  out.mesh.resize(n);
+  return out;
+}
+
+// Rays at the soup's box from outside (to random points inside it), from inside, axis-parallel
+// ones (direction components exactly 0: the slab test's parallel branch), and some with a finite tMax.
+std::vector<BatchRay> testRays(const TriangleSoup& soup, size_t count, uint32_t seed) {
+  Aabb box;
+  for (const Aabb& b : triangleBoxes(soup)) box.grow(b);
+  const glm::vec3 c = box.center(), e = box.extent();
+  const float radius = glm::length(e);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const auto inside = [&] { return box.min + glm::vec3(u(rng), u(rng), u(rng)) * e; };
+  // A few scattered triangles leave most of their box empty: aim the outside rays at them instead.
+  const bool sparse = soup.size() < 50;
+  const auto target = [&] {
+    const size_t t = rng() % soup.size();
+    return sparse ? (soup.v0[t] + soup.v1[t] + soup.v2[t]) / 3.0f : inside();
+  };
+  std::vector<BatchRay> rays;
+  for (size_t i = 0; i < count; ++i) {
+    BatchRay r{glm::vec3(0.0f), 0.0f, glm::vec3(0.0f, 0.0f, 1.0f), INFINITY};
+    const size_t kind = i % 4;
+    if (kind == 0 || kind == 3) {
+      const glm::vec3 dir = glm::normalize(glm::vec3(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f) + 1e-3f);
+      r.origin = c + dir * 1.5f * radius;
+      r.dir = glm::normalize(target() - r.origin);
+      if (kind == 3) r.tMax = 1.5f * radius * u(rng) + 0.5f * radius;
+    } else if (kind == 1) {
+      r.origin = inside();
+      r.dir = glm::normalize(glm::vec3(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f) + 1e-3f);
+    } else {
+      const int axis = int(rng() % 3);
+      r.origin = inside();
+      r.origin[axis] = (rng() & 1u) ? box.min[axis] - radius : box.max[axis] + radius;
+      r.dir = glm::vec3(0.0f);
+      r.dir[axis] = r.origin[axis] < c[axis] ? 1.0f : -1.0f;
+    }
+    rays.push_back(r);
+  }
+  return rays;
+}
+
+// Brute force with the same watertight triangle test: the closest t over all triangles.
+BatchHit bruteForce(const TriangleSoup& s, const BatchRay& r) {
+  BatchHit best;
+  best.t = r.tMax;
+  for (uint32_t i = 0; i < s.size(); ++i) {
+    float t;
+    glsl::vec2 bary;
+    if (glsl::watertight::intersectTriangle(glsl::Ray{r.origin, r.dir}, s.v0[i], s.v1[i], s.v2[i], r.tMin, best.t, t,
+                                            bary)) {
+      best = BatchHit{true, i, t};
+    }
+  }
+  return best;
+}
+
+TEST(Layouts, RegistryNamesV1FirstAndEveryKernelWalksItsLayout) {
+  ASSERT_GE(layouts().size(), 2u);
+  EXPECT_EQ(layouts().front().name, kDefaultLayout);
+  for (const LayoutInfo& l : layouts()) {
+    EXPECT_EQ(&findLayout(l.name), &l);
+    EXPECT_FALSE(kernelsFor(l.name).empty()) << l.name;
+    EXPECT_EQ(findKernel(l.name, "").name, l.defaultKernel);
+    for (const KernelInfo& k : kernelsFor(l.name)) EXPECT_EQ(k.layout, l.name) << k.name;
+  }
+  EXPECT_EQ(&kernelsFor("v1"), &kernels());  // v1's table is the one every v1 test iterates
+  EXPECT_EQ(allKernels().size(), kernelsFor("v1").size() + kernelsFor("bvh2-cb").size());
+}
+
+TEST(Layouts, MismatchedLayoutAndKernelAreRefusedNamingTheValidKernels) {
+  const auto message = [](const std::function<void()>& f) {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no exception");
+  };
+  std::string m = message([] { findKernel("bvh2-cb", "stack-ordered"); });
+  EXPECT_NE(m.find("bvh2cb-stack-ordered"), std::string::npos) << m;
+  EXPECT_NE(m.find("walks layout v1"), std::string::npos) << m;
+  m = message([] { findKernel("v1", "bvh2cb-stack-ordered"); });
+  for (const KernelInfo& k : kernels()) EXPECT_NE(m.find(k.name), std::string::npos) << m;
+  m = message([] { findKernel("bvh2-cb", "nope"); });
+  EXPECT_NE(m.find("bvh2cb-stack-ordered"), std::string::npos) << m;
+  m = message([] { findLayout("bvh9"); });
+  for (const LayoutInfo& l : layouts()) EXPECT_NE(m.find(l.name), std::string::npos) << m;
+  m = message([] { assembleRayTracer("stackless", Storage::Tbo, Robustness::Watertight, 8, false, false, "bvh2-cb"); });
+  EXPECT_NE(m.find("bvh2cb-stack-ordered"), std::string::npos) << m;
+  ShaderOptions so;
+  so.layout = "bvh2-cb";  // kernel stays stack-ordered (v1's)
+  SceneFeatures f;
+  f.mesh = true;
+  m = message([&] { assembleTracer(f, so); });
+  EXPECT_NE(m.find("bvh2cb-stack-ordered"), std::string::npos) << m;
+}
+
+// Boxes contain their children, every record is reached once, leaf ranges lie in the triangle stream
+// and cover it exactly once, every input triangle is referenced, and the triangle streams are v1's.
+void checkBvh2cb(const PackedBvh& p, const PackedBvh& v1, const TriangleSoup& soup) {
+  ASSERT_EQ(p.layout, "bvh2-cb");
+  EXPECT_EQ(p.triangles, v1.triangles);
+  EXPECT_EQ(p.attributes, v1.attributes);
+  EXPECT_EQ(p.depth, v1.depth);
+  const uint32_t records = bvh2cbRecordCount(p), triangles = uint32_t(p.triangles.size() / kTriangleTexels);
+  ASSERT_GE(records, 1u);
+  std::vector<int> reached(records, 0), covered(triangles, 0);
+  std::set<uint32_t> prims;
+  // A reference-splitting builder (sbvh) gives a straddling triangle several leaves, each box bounding
+  // only the triangle's part on its side: there the bounds of all its leaves must contain it.
+  std::vector<Aabb> leafUnion(soup.size());
+  uint32_t maxDepth = 0;
+  std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 1u}};  // (record, depth of its node)
+  reached[0] = 1;
+  while (!stack.empty()) {
+    const auto [index, depth] = stack.back();
+    stack.pop_back();
+    const Bvh2cbRecord r = unpackBvh2cbRecord(p, index);
+    for (int c = 0; c < 2; ++c) {
+      const Bvh2cbSlot& s = r.child[c];
+      const Aabb box{s.bmin, s.bmax};
+      if (s.isInner()) {
+        ASSERT_LT(s.link, records);
+        if (c == 0) EXPECT_EQ(s.link, index + 1) << "child A's record follows its parent's";
+        ASSERT_EQ(reached[s.link]++, 0) << "record " << s.link << " reached twice";
+        const Bvh2cbRecord child = unpackBvh2cbRecord(p, s.link);
+        for (const Bvh2cbSlot& g : child.child) EXPECT_TRUE(box.contains(Aabb{g.bmin, g.bmax})) << "record " << s.link;
+        stack.push_back({s.link, depth + 1});
+        continue;
+      }
+      maxDepth = std::max(maxDepth, depth + 1);
+      ASSERT_LE(s.count, kMaxLeafSize);
+      ASSERT_LE(uint64_t(s.link) + s.count, triangles);
+      if (s.count == 0) {
+        EXPECT_TRUE(index == 0 && c == 1 && records == 1) << "an empty slot only in a single-leaf tree";
+        continue;
+      }
+      for (uint32_t k = 0; k < s.count; ++k) {
+        const uint32_t tri = s.link + k;
+        covered[tri]++;
+        const uint32_t prim = p.triangles[3 * tri].w;
+        ASSERT_LT(prim, soup.size());
+        prims.insert(prim);
+        leafUnion[prim].grow(box);
+      }
+    }
+  }
+  EXPECT_EQ(std::count(reached.begin(), reached.end(), 1), long(records)) << "unreachable records";
+  EXPECT_EQ(std::count(covered.begin(), covered.end(), 1), long(triangles)) << "leaf ranges must cover the stream once";
+  EXPECT_EQ(prims.size(), soup.size()) << "every input triangle reachable";
+  const std::vector<Aabb> triBoxes = triangleBoxes(soup);
+  for (uint32_t t = 0; t < soup.size(); ++t)
+    EXPECT_TRUE(leafUnion[t].contains(triBoxes[t])) << "triangle " << t << " outside its leaves' boxes";
+  if (records > 1) EXPECT_EQ(maxDepth, p.depth);
+  EXPECT_EQ(p.nodes.size(), size_t(kBvh2cbRecordTexels) * records);
+}
+
+TEST(Bvh2cbPacker, EveryBuildersTreeKeepsTheInvariants) {
+  for (const TestMesh& m : testMeshes())
+    for (const BuilderInfo& b : builders()) {
+      SCOPED_TRACE(m.name + " / " + b.name);
+      const Bvh bvh = build(b.name, m.soup);
+      const PackedBvh v1 = packBvh(bvh, m.soup);
+      const PackedBvh cb = packBvh2cb(bvh, m.soup);
+      checkBvh2cb(cb, v1, m.soup);
+      // Same bytes of nodes less one v1 node: 64 (L - 1) against 32 (2L - 1).
+      EXPECT_EQ(cb.nodes.size() * 16 + 32, v1.nodes.size() * 16);
+    }
+  const TriangleSoup few = firstTriangles(testMeshes()[1].soup, 5);
+  const PackedBvh cb = packBvh2cb(singleLeaf(few), few);
+  checkBvh2cb(cb, packBvh(singleLeaf(few), few), few);
+  EXPECT_EQ(bvh2cbRecordCount(cb), 1u);
+  EXPECT_THROW(unpackNode(cb, 0), std::invalid_argument);
+  EXPECT_THROW(unpackBvh2cbRecord(cb, 1), std::out_of_range);
+}
+
+// Every builder x layout x kernel of that layout (watertight tests) finds brute force's closest hit
+// (the same t; another triangle only at the same t) and its any-hit answer, on every ray.
+TEST(LayoutKernels, EveryBuilderLayoutAndKernelFindTheBruteForceHits) {
+  for (const TestMesh& m : testMeshes()) {
+    const std::vector<BatchRay> rays = testRays(m.soup, 600, 5);
+    std::vector<BatchHit> expected;
+    for (const BatchRay& r : rays) expected.push_back(bruteForce(m.soup, r));
+    size_t hits = 0;
+    for (const BatchHit& h : expected) hits += h.hit;
+    EXPECT_GT(hits, rays.size() / 5) << m.name;
+    std::vector<std::pair<std::string, Bvh>> trees;
+    for (const BuilderInfo& b : builders()) trees.emplace_back(b.name, build(b.name, m.soup));
+    for (const auto& [builder, bvh] : trees)
+      for (const LayoutInfo& l : layouts()) {
+        const PackedBvh packed = l.pack(bvh, m.soup);
+        for (const KernelInfo& k : kernelsFor(l.name)) {
+          SCOPED_TRACE(m.name + " / " + builder + " / " + l.name + " / " + k.name);
+          const glsl::Storage s(packed);
+          int failures = 0;
+          for (size_t i = 0; i < rays.size() && failures < 3; ++i) {
+            const BatchRay& r = rays[i];
+            glsl::Counters c;
+            glsl::MeshHit hit{};
+            const glsl::Ray ray{r.origin, r.dir};
+            const bool found = k.closest(Robustness::Watertight)(s, ray, r.tMin, r.tMax, hit, c);
+            const bool any = k.any(Robustness::Watertight)(s, ray, r.tMin, r.tMax, c);
+            uint32_t prim = BatchHit::kNoPrim, material, mesh;
+            if (found) glsl::loadTriangleIds(s, hit.tri, prim, material, mesh);
+            const bool same = found == expected[i].hit && any == expected[i].hit && !c.stackOverflow &&
+                              (!found || hit.t == expected[i].t);
+            if (!same) {
+              ++failures;
+              ADD_FAILURE() << "ray " << i << ": kernel " << found << "/" << any << " prim " << prim << " t " << hit.t
+                            << "; brute force " << expected[i].hit << " prim " << expected[i].prim << " t "
+                            << expected[i].t;
+            }
+          }
+        }
+      }
+  }
+}
+
+// GLSL's t against the mirror's: llvmpipe may contract the triangle test's products into fused
+// multiply-adds (the mirror never does), which moves t by a few ulps; 2^-16 relative is far above that
+// and far below any distance between the test meshes' surfaces. The triangle, the visits and the tests
+// must agree exactly.
+bool nearlyEqual(float a, float b) { return std::abs(a - b) <= 0x1.0p-16f * std::max(std::abs(a), std::abs(b)); }
+
+std::unique_ptr<GlContext> contextOrNull() {
+  try {
+    const char* backend = std::getenv("BVHLAB_GL_BACKEND");
+    return createContext(backend && *backend ? parseBackend(backend) : Backend::OSMesa);
+  } catch (const std::exception&) {
+    return nullptr;
+  }
+}
+
+// The bvh2-cb GLSL kernel gives its C++ mirror's answer and counters per ray, closest and any hit,
+// on a builder's tree and on a tree whose root is a leaf; v1's stack-ordered alongside as a control.
+TEST(LayoutKernelsGlsl, EqualTheMirrorPerRay) {
+  auto ctx = contextOrNull();
+  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  const TestMesh& m = testMeshes()[1];
+  const TriangleSoup few = firstTriangles(m.soup, 7);
+  struct Case {
+    std::string name;
+    PackedBvh packed;
+    std::vector<BatchRay> rays;
+  };
+  std::vector<Case> cases;
+  const Bvh tree = build("sah-binned", m.soup);
+  cases.push_back({"soup/bvh2-cb", packBvh2cb(tree, m.soup), testRays(m.soup, 1200, 11)});
+  cases.push_back({"soup/v1", packBvh(tree, m.soup), testRays(m.soup, 1200, 11)});
+  cases.push_back({"single-leaf/bvh2-cb", packBvh2cb(singleLeaf(few), few), testRays(few, 400, 12)});
+  for (const Case& cs : cases)
+    for (bool anyHit : {false, true})
+      for (Robustness robust : {Robustness::Watertight, Robustness::Fast}) {
+        if (cs.packed.layout == "v1" && robust == Robustness::Fast) continue;  // test_trace covers v1
+        SCOPED_TRACE(cs.name + (anyHit ? " any" : " closest") + " / " + robustnessName(robust));
+        const KernelInfo& k = findKernel(cs.packed.layout, "");
+        RayTracerOptions o;
+        o.kernel = k.name;
+        o.robust = robust;
+        o.anyHit = anyHit;
+        GlRayTracer gl(cs.packed, o);
+        gl.setRays(cs.rays);
+        std::vector<BatchHit> hits;
+        const std::vector<glm::uvec4> counts = gl.traceCounted(&hits);
+        const glsl::Storage s(cs.packed);
+        int failures = 0;
+        size_t found = 0;
+        for (size_t i = 0; i < cs.rays.size() && failures < 3; ++i) {
+          const BatchRay& r = cs.rays[i];
+          glsl::Counters c;
+          glsl::MeshHit mh{};
+          bool hit;
+          uint32_t prim = BatchHit::kNoPrim, material, mesh;
+          if (anyHit) {
+            hit = k.any(robust)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, c);
+          } else {
+            hit = k.closest(robust)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, mh, c);
+            if (hit) glsl::loadTriangleIds(s, mh.tri, prim, material, mesh);
+          }
+          found += hit;
+          const bool same = hits[i].hit == hit && counts[i].x == c.nodeVisits && counts[i].y == c.triTests &&
+                            counts[i].z == 0u && (anyHit || !hit || (hits[i].prim == prim && nearlyEqual(hits[i].t, mh.t)));
+          if (!same) {
+            ++failures;
+            ADD_FAILURE() << "ray " << i << ": GLSL " << hits[i].hit << " prim " << hits[i].prim << " visits "
+                          << counts[i].x << " tests " << counts[i].y << "; mirror " << hit << " prim " << prim
+                          << " visits " << c.nodeVisits << " tests " << c.triTests;
+          }
+        }
+        EXPECT_GT(found, cs.rays.size() / 10) << "too few hits for the comparison to mean much";
+      }
+}
+
+// The renderer refuses a shader assembled for another layout than the tree's, and renders a bvh2-cb
+// tree through prepareScene's layout.
+TEST(LayoutKernelsGlsl, PreparedSceneCarriesTheLayout) {
+  MeshSceneOptions mo;
+  mo.groundPlane = false;
+  auto p = prepareScene(makeMeshScene(makeUvSphere(16, 8), mo), "sah-binned", BuildOptions{}, "bvh2-cb");
+  EXPECT_EQ(p->packed.layout, "bvh2-cb");
+  EXPECT_EQ(p->stats.bytes, p->packed.bytes());
+  EXPECT_THROW(prepareScene(makeMeshScene(makeUvSphere(8, 4), mo), "sah-binned", BuildOptions{}, "v9"),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace bvhlab
