@@ -33,6 +33,8 @@ bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hi
   uint link = 0u;  // the current entry: the root record
   uint count = kBvh2cbInner;
   while (true) {
+    // Inner step: fetch the record, test both children, go on with the nearer one that the ray meets
+    // (pushing the other when both are met); when it meets neither, go on with an empty leaf.
     if (count == kBvh2cbInner) {
       vec3 aMin, aMax, bMin, bMax;
       uint aLink, aCount, bLink, bCount;
@@ -53,14 +55,15 @@ bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hi
         sp++;
         link = bFirst ? bLink : aLink;
         count = bFirst ? bCount : aCount;
-        continue;
-      }
-      if (hitA || hitB) {
+      } else {
         link = hitA ? aLink : bLink;
-        count = hitA ? aCount : bCount;
-        continue;
+        count = hitA ? aCount : hitB ? bCount : 0u;
       }
-    } else {
+    }
+    // Leaf step, in the same iteration (the "if-if" loop of Aila & Laine 2009): the child reached just
+    // above, or the current leaf; then the next pending entry. Entries entered beyond the closest hit
+    // would fail their box test now and are dropped.
+    if (count != kBvh2cbInner) {
       for (uint i = 0u; i < count; ++i) {
         int tri = int(link + i);
         vec3 v0, v1, v2;
@@ -73,13 +76,12 @@ bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hi
           if (anyHit) return true;
         }
       }
+      while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+      if (sp == 0) break;
+      sp--;
+      link = stackLink[sp];
+      count = stackCount[sp];
     }
-    // Next pending entry; those entered beyond the closest hit would fail their box test now.
-    while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
-    if (sp == 0) break;
-    sp--;
-    link = stackLink[sp];
-    count = stackCount[sp];
   }
   return hit.tri >= 0;
 }

@@ -39,14 +39,12 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
         sp++;
         link = bFirst ? bLink : aLink;
         count = bFirst ? bCount : aCount;
-        continue;
-      }
-      if (hitA || hitB) {
+      } else {
         link = hitA ? aLink : bLink;
-        count = hitA ? aCount : bCount;
-        continue;
+        count = hitA ? aCount : hitB ? bCount : 0u;
       }
-    } else {
+    }
+    if (count != kBvh2cbInner) {
       for (uint i = 0u; i < count; ++i) {
         int tri = int(link + i);
         vec3 v0, v1, v2;
@@ -59,12 +57,12 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
           if (anyHit) return true;
         }
       }
+      while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+      if (sp == 0) break;
+      sp--;
+      link = stackLink[sp];
+      count = stackCount[sp];
     }
-    while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
-    if (sp == 0) break;
-    sp--;
-    link = stackLink[sp];
-    count = stackCount[sp];
   }
   return hit.tri >= 0;
 }
