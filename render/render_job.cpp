@@ -50,6 +50,9 @@ BuildOptions renderBuildOptions(const RenderCommand& cmd, OptionReview* review) 
 RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
   RenderSetup s;
   s.build = renderBuildOptions(cmd, &s.buildReview);
+  // Layout and kernel names fail before the input is read; a kernel of another layout is refused here.
+  s.shader.layout = findLayout(cmd.layout).name;
+  s.shader.kernel = findKernel(s.shader.layout, cmd.kernel).name;
   if (!cmd.cameraPath.empty()) {
     if (cmd.eye || cmd.target || cmd.up || cmd.fov)
       throw std::invalid_argument("--camera-path sets the camera; drop --eye/--target/--up/--fov");
@@ -77,8 +80,6 @@ RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
   so.maxDepth = rs.maxDepth;
   so.view = cmd.view == "visits" ? View::Shaded : parseView(cmd.view);
   so.branching = parseBranching(cmd.branching);
-  so.layout = findLayout(cmd.layout).name;
-  so.kernel = findKernel(so.layout, cmd.kernel).name;  // a kernel of another layout is refused here
   so.storage = parseStorage(cmd.storage);
   so.reinhard = rs.reinhard;
   so.uber = cmd.uber;

@@ -14,7 +14,10 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include "builders/builder.hpp"
+#include "cli_run.hpp"
 #include "datasets/procedural.hpp"
 #include "datasets/scene_io.hpp"
 #include "layout/layout_bvh2cb.hpp"
@@ -28,6 +31,9 @@
 
 namespace bvhlab {
 namespace {
+
+[[maybe_unused]] ::testing::Environment* const kRemoveTestDir =
+    ::testing::AddGlobalTestEnvironment(new clitest::RemoveTestDir);
 
 // A 3 x 3 x 3 grid of separate cubes, each face a 2 x 2 grid: axis-aligned faces and empty space.
 Mesh cubeGrid() {
@@ -388,6 +394,44 @@ TEST(LayoutKernelsGlsl, PreparedSceneCarriesTheLayout) {
   EXPECT_EQ(p->stats.bytes, p->packed.bytes());
   EXPECT_THROW(prepareScene(makeMeshScene(makeUvSphere(8, 4), mo), "sah-binned", BuildOptions{}, "v9"),
                std::invalid_argument);
+}
+
+// The command line: `layouts` lists each layout with its kernels; a kernel of another layout is refused
+// before the input is read; build and render report the layout and bytes per triangle.
+TEST(LayoutCli, ListsRefusesAndReports) {
+  using clitest::run;
+  clitest::Result r = run("layouts");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("bvh2-cb"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("bvh2cb-stack-ordered (default)"), std::string::npos) << r.out;
+  r = run("render /no/such/mesh.off --layout bvh2-cb --kernel stackless");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("kernels for layout bvh2-cb: bvh2cb-stack-ordered"), std::string::npos) << r.err;
+  r = run("trace /no/such/mesh.off --layout nope");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("valid layouts: v1 bvh2-cb"), std::string::npos) << r.err;
+
+  const std::filesystem::path mesh = clitest::writeTemp("tetra.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                                        "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  nlohmann::json v1, cb;
+  for (auto [layout, out] : {std::pair{"v1", &v1}, std::pair{"bvh2-cb", &cb}}) {
+    r = run("build --mesh " + mesh.string() + " --layout " + layout + " --leaf-size 1 --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    *out = nlohmann::json::parse(r.out);
+    EXPECT_EQ((*out)["layout"], layout);
+    EXPECT_DOUBLE_EQ((*out)["bytes_per_triangle"].get<double>(), (*out)["bytes"].get<double>() / 4.0);
+  }
+  // 4 leaves: v1 stores 7 nodes of 32 bytes, bvh2-cb 3 records of 64; the triangle streams are equal.
+  EXPECT_EQ(v1["bytes"].get<int>() - cb["bytes"].get<int>(), 7 * 32 - 3 * 64);
+  EXPECT_NE(v1["tree_hash"], cb["tree_hash"]);
+  r = run("render " + mesh.string() + " --layout bvh2-cb --leaf-size 1 --width 32 --height 18 --frames 1 --warmup 0 --json");
+  if (r.code == 0) {  // needs a GL context
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["layout"], "bvh2-cb");
+    EXPECT_EQ(j["kernel"], "bvh2cb-stack-ordered");
+    EXPECT_EQ(j["bytes"], cb["bytes"]);
+    EXPECT_GT(j["node_visits_per_ray"].get<double>(), 0.0);
+  }
 }
 
 }  // namespace
