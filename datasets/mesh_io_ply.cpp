@@ -82,10 +82,15 @@ Scanned scanPly(std::string_view text) {
   std::vector<Element> elements;
   bool ended = false;
   while (sc.next(line)) {
+    // The header is text: a control character (a NUL, say) means a damaged file, and OpenMesh's PLY
+    // probe loops forever on some (a NUL in the format line: tests/fuzz/regressions/ply/).
+    for (char c : line)
+      if ((unsigned char)c < 0x20 && c != '\t' && c != '\r') failAt(sc.lineNo, "control character in the PLY header");
     auto t = tokens(line);
     if (t.empty() || t[0] == "comment" || t[0] == "obj_info") continue;
     if (t[0] == "format") {
-      if (t.size() < 2) failAt(sc.lineNo, "bad format line");
+      if (t.size() != 3 || t[2] != "1.0")
+        failAt(sc.lineNo, "bad format line (expected 'format ascii|binary_little_endian|binary_big_endian 1.0')");
       format = printable(t[1]);
       if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
         failAt(sc.lineNo, "unknown PLY format '" + format + "'");

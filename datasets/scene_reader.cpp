@@ -3,6 +3,7 @@
 // Scene::origin; mesh files are read in double (loadMeshData) and baked to world space in double.
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <initializer_list>
 #include <map>
 #include <optional>
@@ -18,6 +19,7 @@
 #include "datasets/mesh_io.hpp"
 #include "datasets/procedural.hpp"
 #include "datasets/scene_io.hpp"
+#include "datasets/toml_guard.hpp"
 
 namespace bvhlab {
 namespace fs = std::filesystem;
@@ -65,9 +67,18 @@ class SceneReader {
   Scene read() {
     std::error_code ec;
     if (!fs::exists(file_, ec)) throw InputError(file_.string() + ": scene file not found");
+    std::ifstream in(file_, std::ios::binary);
+    if (!in) throw InputError(file_.string() + ": cannot open the scene file");
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    const std::string text = bytes.str();
+    // Code points toml++ 3.3.0 cannot parse without undefined behaviour (datasets/toml_guard.hpp).
+    if (const std::optional<TomlTextHazard> h = findTomlTextHazard(text))
+      throw InputError(file_.string() + ':' + std::to_string(h->line) + ':' + std::to_string(h->column) + ": " +
+                       h->message);
     toml::table root;
     try {
-      root = toml::parse_file(file_.string());
+      root = toml::parse(text, file_.string());
     } catch (const toml::parse_error& e) {
       failAt(e.source().begin.line, "TOML syntax error: " + std::string(e.description()));
     }
@@ -170,6 +181,12 @@ class SceneReader {
     auto s = getString(t, key, where);
     if (!s) failAt(t.source().begin.line, where + ": missing required key '" + std::string(key) + "'");
     return *s;
+  }
+  // The `mesh` node of a mesh object (a missing one is reported, never dereferenced).
+  const toml::node& requireMeshNode(const toml::table& t, const std::string& where) const {
+    const toml::node* n = t.get("mesh");
+    if (!n) failAt(t.source().begin.line, where + ": missing required key 'mesh' (or 'generate')");
+    return *n;
   }
   // An array of exactly N numbers, each in `range`.
   template <int N>
@@ -518,7 +535,7 @@ class SceneReader {
     }
     if (o.kind == ObjectKind::Plane) o.infinite = getBool(t, "infinite", w, false);
     if (o.kind == ObjectKind::Mesh) {
-      const MeshData& data = t.get("generate") ? generatedMeshFor(t, w) : meshFor(*t.get("mesh"), requireString(t, "mesh", w));
+      const MeshData& data = t.get("generate") ? generatedMeshFor(t, w) : meshFor(requireMeshNode(t, w), requireString(t, "mesh", w));
       if (const toml::node* fit = t.get("fit")) {
         const float size = float(number(*fit, w + ".fit", kPositive));
         toWorldD = toWorldD * fitTransform(data, size);

@@ -12,7 +12,7 @@
 #include <toml++/toml.h>
 
 #include "experiments/config_reader.hpp"
-#include "experiments/config_toml_guard.hpp"
+#include "datasets/toml_guard.hpp"
 
 #include "builders/builder.hpp"
 #include "datasets/scene.hpp"  // InputError
@@ -222,6 +222,20 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
                  "aa_control, interleave");
         }
       }
+    } else if (section == "trace") {
+      for (auto&& [tk, tv] : r.table(v, section)) {
+        const std::string key = "trace." + std::string(tk.str());
+        RunRender& out = cfg.render;
+        // Bounds: render/workloads.hpp's kMaxTraceRays (2^24) and its (0, 1] ao radius.
+        if (tk == "count") out.traceCount = int(r.integer(tv, key, 1, int64_t(1) << 24));
+        else if (tk == "seed") out.traceSeed = uint64_t(r.integer(tv, key, 0, std::numeric_limits<int64_t>::max()));
+        else if (tk == "ao_radius") {
+          out.aoRadius = r.number(tv, key);
+          if (!(out.aoRadius > 0.0 && out.aoRadius <= 1.0)) r.fail(tv.source(), key, "must be in (0, 1]");
+        } else {
+          r.fail(tk.source(), key, "unknown key; [trace] has count, seed, ao_radius");
+        }
+      }
     } else if (section == "axes") {
       readAxes(r.table(v, section), "axes", topAxes, {});
     } else if (section == "sweep") {
@@ -265,7 +279,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         exclusions.push_back(std::move(ex));
       }
     } else {
-      r.fail(k.source(), section, "unknown section; a config has [experiment], [render], [measure], [axes], [[sweep]], [[exclude]]");
+      r.fail(k.source(), section, "unknown section; a config has [experiment], [render], [measure], [trace], [axes], [[sweep]], [[exclude]]");
     }
   }
 
@@ -289,6 +303,20 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
     if (!s.axes.count("scene"))
       r.fail(root.source(), s.name == "main" ? "axes.scenes" : "sweep '" + s.name + "'.scenes",
              "missing: every run needs a scene (or mesh) file");
+  }
+
+  // A run on the `rays` axis traces rays (no shading, no image): axes that only change frames have
+  // nothing to act on there, and a camera path has no frames to move through.
+  for (const Sweep& s : sweeps) {
+    if (!s.axes.count("workload")) continue;
+    const std::string where = s.name == "main" ? "axes.rays" : "sweep '" + s.name + "'.rays";
+    for (const char* a : {"depth", "aa", "view", "uber", "branching", "smaa_edges"})
+      if (s.axes.count(a))
+        r.fail(root.source(), where,
+               std::string("rays traces workloads without shading; it cannot be swept together with '") + a +
+                   "' (put them in separate [[sweep]]s)");
+    if (cameraPathNode)
+      r.fail(cameraPathNode->source(), "render.camera_path", "a camera path times frames; the rays axis traces a workload");
   }
 
   // A camera path sets the camera of every frame: a scene's own camera override would be ignored.

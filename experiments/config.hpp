@@ -2,6 +2,7 @@
 // validated up front and expanded into a deterministic list of runs, each with a stable key.
 #pragma once
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -49,6 +50,11 @@ struct RunRender {
   std::string cameraPath;                     // as written in the config ("" = the scene's camera)
   std::filesystem::path cameraPathFile;       // resolved against the config's folder (not in the key)
   std::string cameraPathHash;                 // FNV-1a 64 of the file: a re-recorded path is a new run
+  // [trace]: runs on the `rays` axis run `bvhlab trace` (render/workloads.hpp) with these; part of
+  // the key of those runs only.
+  int traceCount = 65536;  // rays per workload
+  uint64_t traceSeed = 1;
+  double aoRadius = 0.1;   // ao ray length, fraction of the scene's diagonal
 
   nlohmann::json keyJson() const;
   // Runs with the same scene and equal groupJson() are timed together, frames interleaved.

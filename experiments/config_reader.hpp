@@ -15,6 +15,7 @@
 #include "datasets/scene.hpp"  // InputError
 #include "experiments/config.hpp"
 #include "experiments/generated_scenes.hpp"
+#include "render/workloads.hpp"
 #if __has_include("traversal/kernels.hpp")
 #include "traversal/kernels.hpp"
 #define BVHLAB_HAVE_KERNEL_REGISTRY 1
@@ -38,6 +39,7 @@ const std::vector<std::string> kBranching = {"full", "report"};
 const std::vector<std::string> kSmaaEdges = {"luma", "color"};
 const std::vector<std::string> kViews = {"shaded", "normal", "depth", "primid", "visits"};
 const std::vector<std::string> kBackends = {"osmesa", "egl"};
+inline const std::vector<std::string>& kWorkloads = workloadNames();  // render/workloads.hpp
 
 inline std::string joined(const std::vector<std::string>& names) {
   std::string out;
@@ -136,6 +138,7 @@ class ConfigReader {
                                             : a == "robust" ? kRobustness
                                             : a == "branching" ? kBranching
                                             : a == "smaa_edges" ? kSmaaEdges
+                                            : a == "workload" ? kWorkloads
                                                                : kViews;
     std::string v = oneOf(node, key, valid, std::string(a).c_str());
     return {v, v, {}};

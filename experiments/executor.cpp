@@ -49,33 +49,48 @@ std::string summaryLine(const std::string& text) {
 
 }  // namespace
 
+namespace {
+
+// `BINARY trace SCENE --json --rays W ...` for a run on the rays axis: its builder/kernel/leaf
+// size/storage/robust axes as for render, rounds from [render]/[measure], the batch from [trace].
+std::vector<std::string> traceCommandLine(const fs::path& binary, const RunSpec& spec, const AxisValue& scene) {
+  const RunRender& r = spec.render;
+  std::vector<std::string> argv = {binary.string(), "trace", scene.file.string(), "--json",
+                                   "--count", std::to_string(r.traceCount), "--seed", std::to_string(r.traceSeed),
+                                   "--ao-radius", number(r.aoRadius),
+                                   "--frames", std::to_string(r.frames), "--warmup", std::to_string(r.warmup),
+                                   "--max-frames", std::to_string(r.maxFrames),
+                                   "--target-ci-pct", number(r.targetCiPct), "--backend", r.backend};
+  if (r.maxSeconds > 0.0) argv.insert(argv.end(), {"--max-seconds", number(r.maxSeconds)});
+  for (const char* key : {"eye", "target", "up"})
+    if (scene.value.contains(key)) argv.insert(argv.end(), {std::string("--") + key, vec3Flag(scene.value[key])});
+  if (scene.value.contains("fov")) argv.insert(argv.end(), {"--fov", number(scene.value["fov"].get<double>())});
+  return argv;
+}
+
+}  // namespace
+
 std::vector<std::string> renderCommandLine(const fs::path& binary, const RunRequest& request) {
   const RunSpec& spec = request.spec;
   const AxisValue* scene = spec.axis("scene");
   if (!scene || scene->file.empty())
     throw std::invalid_argument("run " + spec.key + " has no scene file (a generated scene not written yet?)");
   const RunRender& r = spec.render;
-  std::vector<std::string> argv = {binary.string(),
-                                   "render",
-                                   scene->file.string(),
-                                   "--json",
-                                   "-o",
-                                   request.image.string(),
-                                   "--width",
-                                   std::to_string(r.width),
-                                   "--height",
-                                   std::to_string(r.height),
-                                   "--frames",
-                                   std::to_string(r.frames),
-                                   "--warmup",
-                                   std::to_string(r.warmup),
-                                   "--backend",
-                                   r.backend};
-  if (!request.visitsImage.empty()) argv.insert(argv.end(), {"--visits-out", request.visitsImage.string()});
-  for (const char* key : {"eye", "target", "up"})
-    if (scene->value.contains(key)) argv.insert(argv.end(), {std::string("--") + key, vec3Flag(scene->value[key])});
-  if (scene->value.contains("fov")) argv.insert(argv.end(), {"--fov", number(scene->value["fov"].get<double>())});
-  if (!r.cameraPathFile.empty()) argv.insert(argv.end(), {"--camera-path", r.cameraPathFile.string()});
+  // A run on the rays axis traces its workload; every other run renders frames.
+  const bool trace = spec.axis("workload") != nullptr;
+  std::vector<std::string> argv;
+  if (trace) {
+    argv = traceCommandLine(binary, spec, *scene);
+  } else {
+    argv = {binary.string(), "render", scene->file.string(), "--json", "-o", request.image.string(),
+            "--width", std::to_string(r.width), "--height", std::to_string(r.height),
+            "--frames", std::to_string(r.frames), "--warmup", std::to_string(r.warmup), "--backend", r.backend};
+    if (!request.visitsImage.empty()) argv.insert(argv.end(), {"--visits-out", request.visitsImage.string()});
+    for (const char* key : {"eye", "target", "up"})
+      if (scene->value.contains(key)) argv.insert(argv.end(), {std::string("--") + key, vec3Flag(scene->value[key])});
+    if (scene->value.contains("fov")) argv.insert(argv.end(), {"--fov", number(scene->value["fov"].get<double>())});
+    if (!r.cameraPathFile.empty()) argv.insert(argv.end(), {"--camera-path", r.cameraPathFile.string()});
+  }
 
   for (const auto& [name, value] : spec.axes) {
     const AxisInfo* axis = findAxis(name);

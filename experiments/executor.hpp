@@ -33,7 +33,8 @@ struct RunFailure : std::runtime_error {
   nlohmann::json partialResult;
 };
 
-// `BINARY render SCENE --json -o IMAGE ...` for the request (flags: experiments/README.md).
+// `BINARY render SCENE --json -o IMAGE ...` for the request (flags: experiments/README.md), or for a
+// run on the rays axis `BINARY trace SCENE --json --rays WORKLOAD ...` (no image).
 std::vector<std::string> renderCommandLine(const std::filesystem::path& binary, const RunRequest& request);
 
 // Runs renderCommandLine() as a child process with the run's env and timeout. A non-zero exit, a

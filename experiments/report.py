@@ -28,6 +28,7 @@ from report_findings import section_findings  # noqa: E402
 from report_html import CSS, Page, section_plot  # noqa: E402
 from report_plots import (Styles, builder_costs, deep_rows, line_plot, pareto_plot, scatter_visits_vs_sah,  # noqa: E402
                           time_vs_costs)
+from report_rays import section_rays  # noqa: E402
 from report_robust import section_robustness  # noqa: E402
 from report_seed import section_antialiasing, seed_sections  # noqa: E402
 from report_tables import (pareto_table, section_all_rows, section_builder_table, section_failed,  # noqa: E402
@@ -76,6 +77,7 @@ def build(root):
                  "setting. Bars = 95% intervals of the frame time.",
                  notes=pareto_notes)
     pareto_table(body, data, fronts)
+    section_rays(body, data)
     section_antialiasing(body, data)
     section_images(body, data)
     section_builder_table(body, data)

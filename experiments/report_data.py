@@ -27,7 +27,7 @@ except ImportError as e:  # pragma: no cover - depends on the machine
     sys.exit(3)
 
 AXES = ["scene", "builder", "kernel", "leaf_size", "depth", "storage", "aa", "robust", "branching", "view", "uber",
-        "smaa_edges"]
+        "smaa_edges", "workload"]
 NUMERIC_AXES = {"leaf_size", "depth"}
 # The axes that choose a tree and how it is walked: a builder's "best configuration" ranges over these,
 # the others (depth, aa, robust, ...) are held at one setting shared by every builder.
@@ -172,6 +172,10 @@ class Data:
         self.controls = [r for r in every if r.get("control_of")]
         self.rows = [r for r in every if not r.get("control_of")]
         self.ok = [r for r in self.rows if r.get("status") == "ok" and num(r.get("frame_ms")) is not None]
+        # Runs on the rays axis (`bvhlab trace`) have their own sections (report_rays.py); the frame-time
+        # sections are about rendered frames.
+        self.traced = [r for r in self.ok if r.get("workload")]
+        self.ok = [r for r in self.ok if not r.get("workload")]
         self.sweep = [r for r in self.ok if not r.get("reference_only")]
         self.failed = [r for r in every if r.get("status") != "ok"]
         self.order = self.experiment.get("axes", {})

@@ -27,6 +27,8 @@ const std::vector<AxisInfo>& experimentAxes() {
       {"views", "view", "--view"},
       {"uber", "uber", "--uber"},
       {"smaa_edges", "smaa_edges", "--smaa-edges"},
+      // A ray workload: the run traces it (`bvhlab trace --rays`) instead of rendering frames.
+      {"rays", "workload", "--rays"},
   };
   return axes;
 }
@@ -68,6 +70,9 @@ json RunRender::groupJson() const {
   g["aa_control"] = aaControl;
   g["interleave"] = interleave;
   g["timeout_s"] = timeoutSeconds;
+  g["trace_count"] = traceCount;
+  g["trace_seed"] = traceSeed;
+  g["ao_radius"] = aoRadius;
   return g;
 }
 
@@ -92,7 +97,10 @@ std::string RunSpec::describe() const {
 json RunSpec::keyJson() const {
   json a = json::object();
   for (const auto& [name, value] : axes) a[name] = value.value;
-  return json{{"axes", a}, {"render", render.keyJson()}};
+  json key{{"axes", a}, {"render", render.keyJson()}};
+  if (axis("workload"))  // only trace runs: the keys of render runs stay as they were
+    key["trace"] = {{"count", render.traceCount}, {"seed", render.traceSeed}, {"ao_radius", render.aoRadius}};
+  return key;
 }
 
 json RunSpec::toJson() const {
@@ -134,6 +142,9 @@ RunSpec RunSpec::fromJson(const json& j) {
   s.render.groupSize = r.value("group_size", s.render.groupSize);
   s.render.aaControl = r.value("aa_control", s.render.aaControl);
   s.render.interleave = r.value("interleave", s.render.interleave);
+  s.render.traceCount = r.value("trace_count", s.render.traceCount);
+  s.render.traceSeed = r.value("trace_seed", s.render.traceSeed);
+  s.render.aoRadius = r.value("ao_radius", s.render.aoRadius);
   s.render.cameraPath = r.value("camera_path", "");
   s.render.cameraPathHash = r.value("camera_path_hash", "");
   s.render.cameraPathFile = r.value("camera_path_file", "");

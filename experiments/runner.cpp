@@ -229,8 +229,9 @@ SweepOutcome runSweep(const RunOptions& options) {
   const GroupExecutor interleaved = options.groupExecutor ? options.groupExecutor : subprocessGroupExecutor(options.binary);
   const GroupExecutor oneByOne =
       sequentialGroupExecutor(options.executor ? options.executor : subprocessExecutor(options.binary));
+  // A trace run interleaves its own rounds with Embree's in one process (`bvhlab trace`): alone.
   const auto alone = [&](const RunSpec& run) {
-    return (options.executor && !options.groupExecutor) || !run.render.interleave;
+    return (options.executor && !options.groupExecutor) || !run.render.interleave || run.axis("workload");
   };
 
   // Pending runs, grouped: runs with the same scene and render settings are timed by one process,

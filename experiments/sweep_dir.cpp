@@ -117,7 +117,7 @@ const std::vector<std::string>& resultColumns() {
       "key", "index", "status", "sweeps", "reference_only", "reference_key",
       // axes (the config's value, else what the renderer reports it used)
       "scene", "scene_file", "builder", "bins", "kernel", "leaf_size", "depth", "storage", "aa", "robust",
-      "branching", "view", "uber",
+      "branching", "view", "uber", "workload",
       // render settings
       "width", "height", "frames", "warmup", "backend",
       // measurements
@@ -128,6 +128,9 @@ const std::vector<std::string>& resultColumns() {
       "bytes", "triangles", "node_visits_per_ray", "node_visits_p95", "triangle_tests_per_ray",
       "triangle_tests_p95", "ray_cost", "mesh_rays", "effective_depth", "image_mae", "image_psnr", "image_error_note",
       "image", "visits_image",
+      // trace runs (rays axis): the batch, Embree on the same rays, agreement
+      "rays", "mrays_per_s", "embree_ms", "embree_mrays_per_s", "ratio_to_embree", "ratio_ci_low", "ratio_ci_high",
+      "embree_threads", "hit_mismatches", "hit_ties",
       // provenance
       "gl_renderer", "config_name", "config_hash", "git_commit", "hostname", "cpu", "cores", "started_at",
       "wall_s", "error"};
@@ -138,7 +141,7 @@ namespace {
 
 // The axes the renderer reports back (render JSON key = row column).
 const char* const kReportedAxes[] = {"builder", "kernel", "leaf_size", "depth", "storage", "aa",
-                                     "robust",  "branching", "view", "uber"};
+                                     "robust",  "branching", "view", "uber", "workload"};
 
 json flattenRecord(const json& record) {
   json row = json::object();

@@ -163,9 +163,12 @@ int runTrace(const TraceCommand& c) {
   const Agreement agree = compare(glHits, embreeHits, anyHit);
   const std::vector<glm::uvec4> counts = gl.traceCounted();
   uint64_t visits = 0, tests = 0, overflows = 0, glFound = 0, embreeFound = 0;
+  double visitsSq = 0.0, testsSq = 0.0;
   for (const glm::uvec4& k : counts) {
     visits += k.x;
     tests += k.y;
+    visitsSq += double(k.x) * double(k.x);
+    testsSq += double(k.y) * double(k.y);
     overflows += k.z != 0u;
   }
   for (size_t i = 0; i < glHits.size(); ++i) {
@@ -218,6 +221,23 @@ int runTrace(const TraceCommand& c) {
   j["ratio_ci_high"] = orNull(ratio, true);
   j["node_visits_per_ray"] = visitsPerRay;
   j["triangle_tests_per_ray"] = testsPerRay;
+  // 95% intervals of the per-ray means over this batch (normal approximation: the batch has
+  // thousands of rays; the counts are bounded, so the central limit theorem applies). Another builder
+  // traced with the same seed gets the same rays: comparing two such means with these intervals as if
+  // independent is conservative (the per-ray counts are positively correlated).
+  const auto meanInterval = [n](double sum, double sumSq, const char* key, nlohmann::json& out) {
+    if (n < 2) {
+      out[std::string(key) + "_ci_low"] = nullptr;
+      out[std::string(key) + "_ci_high"] = nullptr;
+      return;
+    }
+    const double mean = sum / n, var = std::max(0.0, (sumSq - n * mean * mean) / (n - 1.0));
+    const double half = 1.959964 * std::sqrt(var / n);  // the normal distribution's 97.5% quantile
+    out[std::string(key) + "_ci_low"] = mean - half;
+    out[std::string(key) + "_ci_high"] = mean + half;
+  };
+  meanInterval(double(visits), visitsSq, "node_visits_per_ray", j);
+  meanInterval(double(tests), testsSq, "triangle_tests_per_ray", j);
   j["ray_cost"] = prepared->cost.traversalCost * visitsPerRay + prepared->cost.intersectionCost * testsPerRay;
   j["stack_overflow_rays"] = overflows;
   j["hits"] = glFound;

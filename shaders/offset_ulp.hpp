@@ -13,7 +13,9 @@ constexpr float kOffsetUlpIntScale = 256.0f;
 inline vec3 offsetRayOriginUlp(vec3 p, vec3 n, float magnitude) {
   ivec3 ulps = ivec3(kOffsetUlpIntScale * n);
   ivec3 bitsOffset = mix(ulps, -ulps, lessThan(p, vec3(0.0f)));
-  vec3 pUlp = intBitsToFloat(floatBitsToInt(p) + bitsOffset);
+  // GLSL's int addition wraps; C++'s signed overflow is undefined, so add as unsigned (C++20 defines
+  // the conversion back as the same bits).
+  vec3 pUlp = intBitsToFloat(ivec3(uvec3(floatBitsToInt(p)) + uvec3(bitsOffset)));
   vec3 pAbsolute = p + (kOffsetUlpFloatScale * magnitude) * n;
   return mix(pUlp, pAbsolute, lessThan(abs(p), vec3(kOffsetUlpOrigin * magnitude)));
 }

@@ -185,7 +185,7 @@ TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
   const fs::path dir = fs::path(BVHLAB_SOURCE_DIR) / "experiments" / "configs";
   const std::map<std::string, size_t> expectedRuns = {
       {"quick.toml", 56},      {"seed-figures.toml", 18}, {"builders.toml", 1810}, {"accuracy-vs-time.toml", 30},
-      {"antialiasing.toml", 16}, {"flythrough.toml", 15}, {"large.toml", 2}};
+      {"antialiasing.toml", 16}, {"flythrough.toml", 15}, {"large.toml", 2}, {"bench.toml", 400}};
   std::set<std::string> seen;
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (entry.path().extension() != ".toml") continue;

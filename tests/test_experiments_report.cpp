@@ -29,7 +29,8 @@ TEST_F(Experiments, ReportHasEveryPlotTableAndFinding) {
   EXPECT_EQ(html.find("https://"), std::string::npos) << "the report must work offline";
   EXPECT_EQ(html.find("id=\"seed-fig8\""), std::string::npos) << "not a seed-figures config";
   // Every run appears in the full table.
-  for (const json& row : readJsonFile(out / "results.json")["rows"])
+  const json rowsOf1 = readJsonFile(out / "results.json")["rows"];  // named: a range-for over a temporary's member dangles
+  for (const json& row : rowsOf1)
     EXPECT_NE(html.find(row["key"].get<std::string>()), std::string::npos);
 }
 

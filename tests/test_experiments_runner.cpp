@@ -171,7 +171,8 @@ TEST_F(Experiments, ShardsMergedEqualTheUnshardedSweep) {
   const json summary = mergeSweeps({root / "s0", root / "s1"}, root / "merged");
   EXPECT_EQ(summary["ok"], fakeAll.calls.size());
   EXPECT_EQ(comparableRows(root / "merged"), comparableRows(root / "all"));
-  for (const json& row : readJsonFile(root / "merged" / "results.json")["rows"])
+  const json rowsOf1 = readJsonFile(root / "merged" / "results.json")["rows"];  // named: a range-for over a temporary's member dangles
+  for (const json& row : rowsOf1)
     EXPECT_TRUE(fs::exists(root / "merged" / row["image"].get<std::string>()));
 
   // Merging again, with a shard given twice, changes nothing.

@@ -128,7 +128,8 @@ TEST(MeshIo, BadFilesGiveOneLineInputErrorsWithPathAndLine) {
   };
   const std::vector<Case> cases = {
       {"missing.obj", "", ": mesh file not found"},
-      {"mesh.dae", "<collada/>", ": unsupported mesh format '.dae'"},
+      {"mesh.xyz", "1 2 3\n", ": unsupported mesh format '.xyz'"},
+      {"mesh.dae", "<collada/>", "mesh.dae: cannot read the file (assimp: "},
       {"empty.off", "", ": empty file"},
       {"nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", ": mesh has no faces"},
       {"nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", ":2: vertex: value 'nan' is NaN or infinite"},

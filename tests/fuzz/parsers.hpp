@@ -18,7 +18,7 @@
 #include "datasets/scene.hpp"
 #include "datasets/scene_io.hpp"
 #include "experiments/config.hpp"
-#include "experiments/config_toml_guard.hpp"
+#include "datasets/toml_guard.hpp"
 #include "render/fly_camera.hpp"
 
 namespace bvhlab::fuzz {
@@ -64,11 +64,6 @@ inline void parseAs(const std::string& parser, std::string_view data, const std:
     writeFile(file, data);
     checkMesh(parser, loadMesh(file));
   } else if (parser == "scene") {
-    // Known open bug (tests/fuzz/regressions/scene/*.pending): datasets/scene_reader.cpp hands text with
-    // U+00A1-U+0499 (etc.) straight to toml++ 3.3.0, which then reaches __builtin_unreachable(). Skipped
-    // here, so fuzzing explores the rest of the scene reader, until the reader applies the same
-    // pre-check as experiments/config.cpp (findTomlTextHazard); then delete these two lines.
-    if (findTomlTextHazard(data)) throw InputError("known open bug: toml++ 3.3.0 whitespace hazard");
     const std::filesystem::path file = dir / "input.toml";
     writeFile(file, data);
     const Scene s = loadScene(file);
