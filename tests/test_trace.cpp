@@ -273,6 +273,60 @@ TEST(TraceGlsl, AgreesWithEmbree) {
   for (const std::string& w : workloadNames()) EXPECT_GT(hitsPerWorkload[w], 0u) << w << ": no ray hit anything";
 }
 
+// Every bench scene (datasets/scenes/bench/, but the 1M and 10M scaling scenes: too large for a unit
+// test), a small batch per workload: the watertight GLSL kernel over a SAH tree and Embree give the same
+// answers (closest-hit ties at equal distance aside).
+class BenchSceneTrace : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(BenchSceneTrace, GlslAgreesWithEmbree) {
+  auto ctx = contextOrSkip();
+  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  const fs::path file = fs::path(BVHLAB_SOURCE_DIR) / "datasets/scenes/bench" / GetParam();
+  Scene scene;
+  try {
+    scene = loadScene(file);
+  } catch (const InputError& e) {
+    // Fetched data missing: datasets/fetch.sh (CI fetches it; test_bench_scenes fails then).
+    GTEST_SKIP() << e.what();
+  }
+  auto p = prepareScene(std::move(scene), "sah-binned", BuildOptions{});
+  EmbreeTracer embree(p->soup, 2);
+  for (Workload w : {Workload::Primary, Workload::Shadow, Workload::Diffuse, Workload::Ao}) {
+    SCOPED_TRACE(workloadName(w));
+    const RayWorkload rays = workload(*p, w, 2000, 4, embree);
+    RayTracerOptions o;
+    o.anyHit = isAnyHit(w);
+    GlRayTracer gl(p->packed, o);
+    gl.setRays(rays.rays);
+    gl.trace();
+    const std::vector<BatchHit> ours = gl.results();
+    std::vector<BatchHit> theirs;
+    o.anyHit ? embree.occluded(rays.rays, theirs) : embree.closest(rays.rays, theirs);
+    size_t mismatches = 0;
+    for (size_t i = 0; i < ours.size(); ++i) {
+      if (ours[i].hit != theirs[i].hit) ++mismatches;
+      else if (!o.anyHit && ours[i].hit && ours[i].prim != theirs[i].prim)
+        mismatches += std::abs(ours[i].t - theirs[i].t) > 1e-5f * std::max(ours[i].t, theirs[i].t);
+    }
+    EXPECT_EQ(mismatches, 0u);
+  }
+}
+
+std::vector<std::string> benchScenes() {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(fs::path(BVHLAB_SOURCE_DIR) / "datasets/scenes/bench"))
+    if (e.path().extension() == ".toml" && e.path().filename() != "scaling_1M.toml" &&
+        e.path().filename() != "scaling_10M.toml")
+      out.push_back(e.path().filename().string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(Bench, BenchSceneTrace, ::testing::ValuesIn(benchScenes()),
+                         [](const ::testing::TestParamInfo<std::string>& i) {
+                           return i.param.substr(0, i.param.size() - 5);
+                         });
+
 TEST(TraceCli, JsonHasTheIssueKeys) {
   const fs::path bunny = fs::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes/bunny00.off";
   const std::string input = fs::exists(bunny) ? bunny.string() : clitest::scene("mesh.toml").string();
