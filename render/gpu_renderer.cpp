@@ -1,6 +1,7 @@
 #include "render/gpu_renderer.hpp"
 
 #include <chrono>
+#include <initializer_list>
 #include <stdexcept>
 
 #include <glad/gl.h>
@@ -30,6 +31,25 @@ GLuint compileStage(GLenum stage, const std::string& source, const AssembledShad
                       " shader failed to compile:\n" + (map ? map->mapLog(log) : log));
   }
   return s;
+}
+
+// Links compiled stages (and deletes them); ShaderError with the mapped log on failure.
+GLuint linkProgram(std::initializer_list<GLuint> stages, const AssembledShader& shader, const char* what) {
+  GLuint program = glCreateProgram();
+  for (GLuint st : stages) glAttachShader(program, st);
+  glLinkProgram(program);
+  for (GLuint st : stages) glDeleteShader(st);
+  GLint ok = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &len);
+    std::string log(std::max(len, 1), '\0');
+    glGetProgramInfoLog(program, len, nullptr, log.data());
+    glDeleteProgram(program);
+    throw ShaderError(std::string(what) + " program failed to link:\n" + shader.mapLog(log));
+  }
+  return program;
 }
 
 }  // namespace
@@ -73,21 +93,7 @@ unsigned uploadBvhStream(const std::vector<glm::uvec4>& texels, Storage storage,
 
 unsigned compileComputeProgram(const AssembledShader& shader) {
   GLuint cs = compileStage(GL_COMPUTE_SHADER, shader.source, &shader);
-  GLuint program = glCreateProgram();
-  glAttachShader(program, cs);
-  glLinkProgram(program);
-  glDeleteShader(cs);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &len);
-    std::string log(std::max(len, 1), '\0');
-    glGetProgramInfoLog(program, len, nullptr, log.data());
-    glDeleteProgram(program);
-    throw ShaderError("compute program failed to link:\n" + shader.mapLog(log));
-  }
-  return program;
+  return linkProgram({cs}, shader, "compute");
 }
 
 GpuRenderer::GpuRenderer(const PreparedScene& scene, const ShaderOptions& shader, const FrameOptions& frame)
@@ -119,23 +125,7 @@ unsigned compileFullscreenProgram(const AssembledShader& shader) {
     glDeleteShader(vs);
     throw;
   }
-  GLuint program = glCreateProgram();
-  glAttachShader(program, vs);
-  glAttachShader(program, fs);
-  glLinkProgram(program);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &len);
-    std::string log(std::max(len, 1), '\0');
-    glGetProgramInfoLog(program, len, nullptr, log.data());
-    glDeleteProgram(program);
-    throw ShaderError("tracer program failed to link:\n" + shader.mapLog(log));
-  }
-  return program;
+  return linkProgram({vs, fs}, shader, "tracer");
 }
 
 void GpuRenderer::compile() {

@@ -27,6 +27,19 @@ CLI::Validator notADirectory(const std::string& expected) {
       "", "not-a-directory");
 }
 
+void addTreeOptions(CLI::App& app, RenderCommand& rc) {
+  app.add_option("--builder", rc.builder, "BVH builder (see `bvhlab builders`)");
+  app.add_option("--layout", rc.layout, "texture layout of the tree (see `bvhlab layouts`)");
+  app.add_option("--kernel", rc.kernel,
+                 "traversal kernel of that layout (see `bvhlab kernels`; default: the layout's, stack-ordered for v1)");
+  app.add_option("--leaf-size", rc.leafSize, "max triangles per BVH leaf");
+  app.add_option("--bins", rc.bins, "bins for sah-binned and sbvh (0 = default)");
+  app.add_option("--optimize", rc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
+  app.add_option("--sbvh-alpha", rc.sbvhAlpha, "sbvh: overlap threshold for spatial splits (fraction of the root area)");
+  app.add_option("--ploc-radius", rc.plocRadius, "ploc: nearest-neighbour search radius");
+  app.add_option("--storage", rc.storage, "tbo | tex2d");
+}
+
 void addRenderOptions(CLI::App& app, RenderCommand& rc, RenderCliText& text) {
   app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_option("input", rc.input, "scene .toml or mesh file")
@@ -43,17 +56,7 @@ void addRenderOptions(CLI::App& app, RenderCommand& rc, RenderCliText& text) {
   app.add_option("--view", rc.view, "shaded | normal | depth | primid | visits");
   app.add_option("--visits-out", rc.visitsOutput, "also write the node-visit heatmap here");
   app.add_flag("--uber", rc.uber, "compile every module in (no specialisation)");
-  app.add_option("--builder", rc.builder, "BVH builder (see `bvhlab builders`)");
-  app.add_option("--layout", rc.layout, "texture layout of the tree (see `bvhlab layouts`)");
-  app.add_option("--kernel", rc.kernel,
-                 "traversal kernel of that layout (see `bvhlab kernels`; default: the layout's, stack-ordered for v1)");
-  app.add_option("--leaf-size", rc.leafSize, "max triangles per BVH leaf");
-  app.add_option("--bins", rc.bins, "bins for sah-binned and sbvh (0 = default)");
-  app.add_option("--optimize", rc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
-  app.add_option("--sbvh-alpha", rc.sbvhAlpha, "sbvh: overlap threshold for spatial splits (fraction of the root area)")
-      ->capture_default_str();
-  app.add_option("--ploc-radius", rc.plocRadius, "ploc: nearest-neighbour search radius")->capture_default_str();
-  app.add_option("--storage", rc.storage, "tbo | tex2d");
+  addTreeOptions(app, rc);
   app.add_option("--branching", rc.branching, "full (both Fresnel branches) | report (Algorithm 1)");
   app.add_option("--eye", text.eye, "camera position x,y,z");
   app.add_option("--target", text.target, "camera target x,y,z");

@@ -21,6 +21,10 @@ struct RenderCliText {
 // file is left to the loader, whose message names the file and what it expected).
 CLI::Validator notADirectory(const std::string& expected);
 
+// The options that choose and walk the tree (builder and its knobs, layout, kernel, leaf size, storage),
+// shared by `render` and `trace`.
+void addTreeOptions(CLI::App& app, RenderCommand& cmd);
+
 // Adds every `render` option to `app`, writing into `cmd` and `text`.
 void addRenderOptions(CLI::App& app, RenderCommand& cmd, RenderCliText& text);
 // Parses --eye/--target/--up into `cmd`; throws std::invalid_argument naming the flag.

@@ -68,16 +68,7 @@ void addTraceOptions(CLI::App& app, TraceCommand& c, RenderCliText& text) {
   app.add_option("--frames", rc.frames, "timed rounds (one GLSL and one Embree trace each, in a shuffled order)");
   app.add_option("--warmup", rc.warmup, "untimed rounds first (llvmpipe compiles at the first dispatch)");
   app.add_option("--backend", rc.backend, "osmesa | egl");
-  app.add_option("--builder", rc.builder, "BVH builder (see `bvhlab builders`)");
-  app.add_option("--layout", rc.layout, "texture layout of the tree (see `bvhlab layouts`)");
-  app.add_option("--kernel", rc.kernel,
-                 "traversal kernel of that layout (see `bvhlab kernels`; default: the layout's, stack-ordered for v1)");
-  app.add_option("--leaf-size", rc.leafSize, "max triangles per BVH leaf");
-  app.add_option("--bins", rc.bins, "bins for sah-binned and sbvh (0 = default)");
-  app.add_option("--optimize", rc.optimize, "post-pass after the builder: reinsert");
-  app.add_option("--sbvh-alpha", rc.sbvhAlpha, "sbvh: overlap threshold for spatial splits");
-  app.add_option("--ploc-radius", rc.plocRadius, "ploc: nearest-neighbour search radius");
-  app.add_option("--storage", rc.storage, "tbo | tex2d");
+  addTreeOptions(app, rc);
   app.add_option("--robust", rc.robust, "triangle/box tests as render --robust (the offset is the generator's)");
   app.add_option("--max-frames", c.maxFrames, "go on past --frames until --target-ci-pct is met, up to this many (0 = fixed)");
   app.add_option("--target-ci-pct", c.targetCiPct, "stop when the GLSL time's 95% interval is within +-this % of its median");
