@@ -55,7 +55,7 @@ int runRender(const RenderCommand& cmd) {
   std::ostream& say = cmd.json ? std::cerr : std::cout;
   if (!cmd.json)
     say << "bvhlab: " << out["width"].get<int>() << "x" << out["height"].get<int>() << ", " << out["frames"].get<int>()
-        << (cmd.cpu ? " frame (C++ mirror)" : " frames") << ", median " << out["frame_ms"].get<double>() << " ms on "
+        << (out["frames"].get<int>() == 1 ? " frame" : " frames") << ", median " << out["frame_ms"].get<double>() << " ms on "
         << renderer << '\n';
   if (!cmd.output.empty()) say << "bvhlab: wrote " << cmd.output << '\n';
   if (!cmd.visitsOutput.empty()) say << "bvhlab: wrote " << cmd.visitsOutput << " (node visits per pixel)\n";
