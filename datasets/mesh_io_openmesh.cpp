@@ -121,6 +121,22 @@ std::mutex& openMeshMutex() {
   return m;
 }
 
+// OpenMesh's error stream, taken off std::cerr and into one capture stream, once per process (call
+// with openMeshMutex() held). OpenMesh 9's multiplex_streambuf::disconnect() drops the target that
+// connect() allocated without deleting it, so connecting a stream per file leaked two per read. The
+// stream is never destroyed: omerr() still points at it during static destruction. OpenMesh is only
+// used by readWithOpenMesh, so nothing else printed to omerr() is lost from the terminal.
+std::ostringstream& openMeshErrors() {
+  static std::ostringstream* const captured = [] {
+    auto* s = new std::ostringstream;
+    OpenMesh::mostream& err = ::omerr();
+    err.disconnect(std::cerr);
+    err.connect(*s);
+    return s;
+  }();
+  return *captured;
+}
+
 }  // namespace
 
 // Runs OpenMesh on the file with its error stream captured; a failure becomes a MeshFileError with
@@ -131,11 +147,11 @@ Soup readWithOpenMesh(const std::string& path) {
   bool ok = false;
   {
     std::lock_guard<std::mutex> lock(openMeshMutex());
-    std::ostringstream captured;
+    std::ostringstream& captured = openMeshErrors();
+    captured.str("");
+    captured.clear();
     OpenMesh::mostream& err = ::omerr();
     OpenMesh::mostream& log = ::omlog();
-    const bool errWasOnCerr = err.disconnect(std::cerr);
-    err.connect(captured);
     const bool logWasEnabled = log.is_enabled();
     log.disable();
     OpenMesh::IO::Options opt(OpenMesh::IO::Options::VertexNormal | OpenMesh::IO::Options::VertexTexCoord);
@@ -145,8 +161,6 @@ Soup readWithOpenMesh(const std::string& path) {
       ok = false;
     }
     err.flush();
-    err.disconnect(captured);
-    if (errWasOnCerr) err.connect(std::cerr);
     if (logWasEnabled) log.enable();
     message = captured.str();
     const size_t nl = message.find('\n');
