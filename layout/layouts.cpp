@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "layout/layout_bvh2cb.hpp"
+#include "layout/layout_wide.hpp"
 
 namespace bvhlab {
 
@@ -14,6 +15,11 @@ const std::vector<LayoutInfo>& layouts() {
       // (whose v1 loadNode the bvh2-cb kernel never calls) and adds its node decoder.
       {"bvh2-cb", "binary, 64-byte node holding both child boxes (Aila-Laine 2009), leaves in the parent; raw triangles",
        packBvh2cb, {"layout.glsl", "layout_bvh2cb.glsl"}, "bvh2cb-stack-ordered"},
+      // bvh4 / bvh8 (layout/layout_wide.hpp) keep v1's triangle streams too, as bvh2-cb does.
+      {"bvh4", "4-wide, SAH-optimal collapse (Ylitie et al. 2017), 32-byte child slots, leaves in the parent; raw triangles",
+       packBvh4, {"layout.glsl", "layout_wide.glsl"}, "bvh4-stack-ordered"},
+      {"bvh8", "8-wide, SAH-optimal collapse (Ylitie et al. 2017), 32-byte child slots, leaves in the parent; raw triangles",
+       packBvh8, {"layout.glsl", "layout_wide.glsl"}, "bvh8-stack-ordered"},
   };
   return table;
 }

@@ -227,7 +227,7 @@ std::vector<HardCaseCounts> HardCaseSuite::evaluate(Robustness variant) const {
   for (size_t i = 0; i < s.cases.size(); ++i) {
     const hard::HardCase& c = s.cases[i];
     const PackedBvh& packed = s.packed[i];
-    const glsl::Storage storage(packed, stackSizeFor(packed.depth));
+    const glsl::Storage storage(packed, stackSizeFor(packed));
     HardCaseCounts n;
     n.name = c.name;
     n.boxTests = c.rays.size() * (packed.nodes.size() / kNodeTexels);
@@ -327,7 +327,7 @@ GpuLeakCounts gpuLeaks(const PreparedScene& p, const std::string& name, Robustne
   o.countStats = true;
   o.kernel = findKernel(kernel).name;
   o.robust = variant;
-  o.bvhStackSize = stackSizeFor(std::max<uint32_t>(1, p.packed.depth));
+  o.bvhStackSize = stackSizeFor(p.packed);
   FrameOptions f;
   f.width = f.height = kInsideViewSize;
   f.camera = p.scene.camera;

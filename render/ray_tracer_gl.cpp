@@ -32,7 +32,7 @@ std::vector<BatchHit> decode(const std::vector<glm::uvec4>& raw, bool anyHit, co
 }  // namespace
 
 GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& options) : options_(options) {
-  const int stack = stackSizeFor(std::max<uint32_t>(1, packed.depth));
+  const int stack = stackSizeFor(packed);
   const std::string& layout = packed.layout;
   timed_ = compileComputeProgram(
       assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, false, layout));

@@ -36,7 +36,7 @@ class GlRayTracer {
   // The last trace()'s answers (prim = original triangle id).
   std::vector<BatchHit> results() const;
   // Traces once more with the counters compiled in: per ray (node visits, triangle tests, stack
-  // overflow, 0); `hits` gets that run's answers.
+  // overflow, box tests); `hits` gets that run's answers.
   std::vector<glm::uvec4> traceCounted(std::vector<BatchHit>* hits = nullptr);
 
  private:

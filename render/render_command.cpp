@@ -23,7 +23,7 @@ int runRender(const RenderCommand& cmd) {
   if (cmd.cpu) {
     ShaderOptions so = setup.shader;
     so.countStats = true;
-    so.bvhStackSize = stackSizeFor(std::max<uint32_t>(1, prepared->packed.depth));
+    so.bvhStackSize = stackSizeFor(prepared->packed);
     fo.width = prepared->scene.settings.width;
     fo.height = prepared->scene.settings.height;
     fo.camera = prepared->scene.camera;

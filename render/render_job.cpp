@@ -127,7 +127,7 @@ std::string treeKey(const RenderCommand& c) {
 GpuJob::GpuJob(const RenderCommand& cmd, const RenderSetup& setup, std::shared_ptr<const PreparedScene> prepared)
     : prepared_(std::move(prepared)), shader_(setup.shader), path_(setup.path) {
   const Scene& sc = prepared_->scene;
-  shader_.bvhStackSize = stackSizeFor(std::max<uint32_t>(1, prepared_->packed.depth));
+  shader_.bvhStackSize = stackSizeFor(prepared_->packed);
   frame_.width = sc.settings.width;
   frame_.height = sc.settings.height;
   frame_.camera = sc.camera;

@@ -153,13 +153,15 @@ int runTrace(const TraceCommand& c) {
   const std::vector<BatchHit> glHits = gl.results();
   const Agreement agree = compare(glHits, embreeHits, anyHit);
   const std::vector<glm::uvec4> counts = gl.traceCounted();
-  uint64_t visits = 0, tests = 0, overflows = 0, glFound = 0, embreeFound = 0;
-  double visitsSq = 0.0, testsSq = 0.0;
+  uint64_t visits = 0, tests = 0, boxTests = 0, overflows = 0, glFound = 0, embreeFound = 0;
+  double visitsSq = 0.0, testsSq = 0.0, boxTestsSq = 0.0;
   for (const glm::uvec4& k : counts) {
     visits += k.x;
     tests += k.y;
+    boxTests += k.w;
     visitsSq += double(k.x) * double(k.x);
     testsSq += double(k.y) * double(k.y);
+    boxTestsSq += double(k.w) * double(k.w);
     overflows += k.z != 0u;
   }
   for (size_t i = 0; i < glHits.size(); ++i) {
@@ -212,6 +214,7 @@ int runTrace(const TraceCommand& c) {
   j["ratio_ci_high"] = orNull(ratio, true);
   j["node_visits_per_ray"] = visitsPerRay;
   j["triangle_tests_per_ray"] = testsPerRay;
+  j["box_tests_per_ray"] = n > 0 ? double(boxTests) / n : 0.0;  // a wide node visit tests several boxes
   // 95% intervals of the per-ray means over this batch (normal approximation: the batch has
   // thousands of rays; the counts are bounded, so the central limit theorem applies). Another builder
   // traced with the same seed gets the same rays: comparing two such means with these intervals as if
@@ -229,6 +232,7 @@ int runTrace(const TraceCommand& c) {
   };
   meanInterval(double(visits), visitsSq, "node_visits_per_ray", j);
   meanInterval(double(tests), testsSq, "triangle_tests_per_ray", j);
+  meanInterval(double(boxTests), boxTestsSq, "box_tests_per_ray", j);
   j["ray_cost"] = prepared->cost.traversalCost * visitsPerRay + prepared->cost.intersectionCost * testsPerRay;
   j["stack_overflow_rays"] = overflows;
   j["hits"] = glFound;

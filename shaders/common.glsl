@@ -14,6 +14,7 @@ struct MeshHit {
 // Per-pixel traversal statistics, written to the stats render target.
 uint g_nodeVisits = 0u;
 uint g_triTests = 0u;
+uint g_boxTests = 0u;  // ray-box tests (intersectAabb calls): a wide node visit tests several boxes
 uint g_meshRays = 0u;  // rays traced into the mesh BVH (closest + any)
 bool g_stackOverflow = false;  // a kernel sets this instead of overflowing silently
 

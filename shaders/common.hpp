@@ -24,6 +24,7 @@ struct MeshHit {
 struct Counters {
   uint32_t nodeVisits = 0;
   uint32_t triTests = 0;
+  uint32_t boxTests = 0;
   uint32_t meshRays = 0;
   bool stackOverflow = false;
 };

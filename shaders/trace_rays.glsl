@@ -2,7 +2,7 @@
 // traversal kernel (closest hit, or any hit with ANY_HIT), no shading. Rays and results live in shader
 // storage buffers (layouts: traversal/ray_batch.hpp). C++ side: render/ray_tracer_gl.hpp.
 //   result i = (found, original triangle id, floatBits(t), 0)   [any hit: (found, 0, 0, 0)]
-//   counts i = (node visits, triangle tests, stack overflow, 0)  [COUNT_STATS only]
+//   counts i = (node visits, triangle tests, stack overflow, box tests)  [COUNT_STATS only]
 
 layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer RayBuffer { vec4 rays[]; };
@@ -28,6 +28,6 @@ void main() {
   results[i] = uvec4(found ? 1u : 0u, primitive, floatBitsToUint(found ? hit.t : tMax), 0u);
 #endif
 #ifdef COUNT_STATS
-  counts[i] = uvec4(g_nodeVisits, g_triTests, g_stackOverflow ? 1u : 0u, 0u);
+  counts[i] = uvec4(g_nodeVisits, g_triTests, g_stackOverflow ? 1u : 0u, g_boxTests);
 #endif
 }

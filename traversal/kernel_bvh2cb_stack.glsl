@@ -21,6 +21,7 @@
 // costs no visit (its slot came with its parent's record), only its triangle tests. So a bvh2-cb visit
 // is a 64-byte fetch where a v1 visit (kernel_stack_ordered.glsl) is a 32-byte one, and the visit
 // counts of the two layouts are not comparable one to one. g_triTests += 1 per intersectTriangle call.
+// g_boxTests += 1 per intersectAabb call (two per record).
 
 bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
@@ -41,7 +42,9 @@ bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hi
       float aEnter, bEnter;
       g_nodeVisits++;
       loadRecord(int(link), aMin, aMax, aLink, aCount, bMin, bMax, bLink, bCount);
+      g_boxTests++;
       bool hitA = intersectAabb(ray.origin, invDir, aMin, aMax, tMin, hit.t, aEnter);
+      g_boxTests++;
       bool hitB = intersectAabb(ray.origin, invDir, bMin, bMax, tMin, hit.t, bEnter);
       if (hitA && hitB) {
         if (sp == BVH_STACK_SIZE) {

@@ -25,7 +25,9 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
       float aEnter, bEnter;
       c.nodeVisits++;
       loadRecord(s, int(link), aMin, aMax, aLink, aCount, bMin, bMax, bLink, bCount);
+      c.boxTests++;
       bool hitA = Tests::intersectAabb(ray.origin, invDir, aMin, aMax, tMin, hit.t, aEnter);
+      c.boxTests++;
       bool hitB = Tests::intersectAabb(ray.origin, invDir, bMin, bMax, tMin, hit.t, bEnter);
       if (hitA && hitB) {
         if (sp == s.stackSize) {

@@ -11,7 +11,7 @@
 //
 // Counters: g_nodeVisits += 1 per node record fetched (loadNode): the root, each child whose box
 // is tested, and each node popped (its record is fetched again; its box is not re-tested).
-// g_triTests += 1 per intersectTriangle call.
+// g_triTests += 1 per intersectTriangle call; g_boxTests += 1 per intersectAabb call.
 
 bool traverseOrdered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
@@ -26,6 +26,7 @@ bool traverseOrdered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit h
   float tEnter;
   g_nodeVisits++;
   loadNode(node, bmin, bmax, a, escape, count);
+  g_boxTests++;
   if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
   while (true) {
     if (count > 0u) {
@@ -48,9 +49,11 @@ bool traverseOrdered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit h
       float leftEnter, rightEnter;
       g_nodeVisits++;
       loadNode(left, bmin, bmax, leftA, escape, leftCount);
+      g_boxTests++;
       bool hitLeft = intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, leftEnter);
       g_nodeVisits++;
       loadNode(right, bmin, bmax, rightA, escape, rightCount);
+      g_boxTests++;
       bool hitRight = intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, rightEnter);
       if (hitLeft && hitRight) {
         if (sp == BVH_STACK_SIZE) {

@@ -21,6 +21,7 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
   float tEnter;
   c.nodeVisits++;
   loadNode(s, node, bmin, bmax, a, escape, count);
+  c.boxTests++;
   if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
   while (true) {
     if (count > 0u) {
@@ -43,9 +44,11 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
       float leftEnter, rightEnter;
       c.nodeVisits++;
       loadNode(s, left, bmin, bmax, leftA, escape, leftCount);
+      c.boxTests++;
       bool hitLeft = Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, leftEnter);
       c.nodeVisits++;
       loadNode(s, right, bmin, bmax, rightA, escape, rightCount);
+      c.boxTests++;
       bool hitRight = Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, rightEnter);
       if (hitLeft && hitRight) {
         if (sp == s.stackSize) {

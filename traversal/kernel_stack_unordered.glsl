@@ -13,7 +13,7 @@
 //
 // Counters: g_nodeVisits += 1 per node record fetched (loadNode): each pop and each child whose
 // box is tested, so a node pushed and later popped counts twice. g_triTests += 1 per
-// intersectTriangle call.
+// intersectTriangle call; g_boxTests += 1 per intersectAabb call.
 
 bool traverseUnordered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
@@ -48,6 +48,7 @@ bool traverseUnordered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit
       float tEnter;
       g_nodeVisits++;
       loadNode(children[k], bmin, bmax, childA, childEscape, childCount);
+      g_boxTests++;
       if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) continue;
       if (sp == BVH_STACK_SIZE) {
         g_stackOverflow = true;  // stop: the result so far is incomplete, the flag says so

@@ -41,6 +41,7 @@ inline bool traverseUnordered(const Storage& s, Ray ray, float tMin, float tMax,
       float tEnter;
       c.nodeVisits++;
       loadNode(s, children[k], bmin, bmax, childA, childEscape, childCount);
+      c.boxTests++;
       if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) continue;
       if (sp == s.stackSize) {
         c.stackOverflow = true;

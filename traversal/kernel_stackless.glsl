@@ -5,7 +5,8 @@
 // C++ mirror: kernel_stackless.hpp.
 //
 // Counters: g_nodeVisits += 1 per node record fetched (loadNode), i.e. per node the walk reaches;
-// each has its box tested once. g_triTests += 1 per intersectTriangle call.
+// each has its box tested once. g_triTests += 1 per intersectTriangle call;
+// g_boxTests += 1 per intersectAabb call.
 
 bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
@@ -17,6 +18,7 @@ bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit
     float tEnter;
     g_nodeVisits++;
     loadNode(int(node), bmin, bmax, a, escape, count);
+    g_boxTests++;
     if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
       node = escape;
       continue;

@@ -18,6 +18,7 @@ inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax,
     float tEnter;
     c.nodeVisits++;
     loadNode(s, int(node), bmin, bmax, a, escape, count);
+    c.boxTests++;
     if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
       node = escape;
       continue;

@@ -10,6 +10,8 @@
 #include "traversal/kernel_stack_ordered.hpp"
 #include "traversal/kernel_stack_unordered.hpp"
 #include "traversal/kernel_stackless.hpp"
+#include "traversal/kernel_wide_stack.hpp"
+#include "layout/layout_wide.hpp"
 
 namespace bvhlab {
 
@@ -49,6 +51,19 @@ const std::vector<KernelInfo>& bvh2cbKernels() {
   return table;
 }
 
+// bvh4 and bvh8 share one kernel file and mirror (the child count comes with each slot).
+const std::vector<KernelInfo>& wideKernels(uint32_t width) {
+  static const std::vector<KernelInfo> bvh4 = {
+      {"bvh4-stack-ordered", "explicit stack: every child box of a 4-wide node tested, hits pushed nearest on top",
+       "kernel_wide_stack.glsl", "bvh4", BVHLAB_KERNEL_MIRRORS(glsl::wide_stack)},
+  };
+  static const std::vector<KernelInfo> bvh8 = {
+      {"bvh8-stack-ordered", "explicit stack: every child box of an 8-wide node tested, hits pushed nearest on top",
+       "kernel_wide_stack.glsl", "bvh8", BVHLAB_KERNEL_MIRRORS(glsl::wide_stack)},
+  };
+  return width == 4 ? bvh4 : bvh8;
+}
+
 std::string kernelList(const std::vector<KernelInfo>& table) {
   std::string list;
   for (const KernelInfo& k : table) list += (list.empty() ? "" : " ") + k.name;
@@ -61,6 +76,7 @@ std::string kernelList(const std::vector<KernelInfo>& table) {
 const std::vector<KernelInfo>& kernelsFor(const std::string& layout) {
   const std::string& name = findLayout(layout).name;  // an unknown layout names the valid ones
   if (name == "bvh2-cb") return bvh2cbKernels();
+  if (wideWidth(name) != 0) return wideKernels(wideWidth(name));
   return kernels();
 }
 
@@ -98,6 +114,17 @@ int stackSizeFor(uint32_t treeDepth) {
   if (treeDepth > uint32_t(std::numeric_limits<int>::max()))
     throw std::invalid_argument("stackSizeFor: tree depth " + std::to_string(treeDepth) + " is too large");
   return std::max(1, int(treeDepth));
+}
+
+int stackSizeFor(const PackedBvh& packed) {
+  const uint32_t depth = std::max<uint32_t>(1, packed.depth);
+  const uint32_t width = wideWidth(packed.layout);
+  if (width == 0) return stackSizeFor(depth);
+  // The wide kernels' bound (kernel_wide_stack.glsl): (W - 1)(D - 1) + 1 for the wide tree's depth D.
+  const uint64_t bound = uint64_t(width - 1) * (depth - 1) + 1;
+  if (bound > uint64_t(std::numeric_limits<int>::max()))
+    throw std::invalid_argument("stackSizeFor: wide tree depth " + std::to_string(depth) + " is too large");
+  return int(bound);
 }
 
 }  // namespace bvhlab

@@ -14,6 +14,7 @@
 
 namespace bvhlab {
 int stackSizeFor(uint32_t treeDepth);  // traversal/kernels.hpp
+int stackSizeFor(const PackedBvh& packed);
 }
 
 namespace bvhlab::glsl {
@@ -26,7 +27,7 @@ struct Storage {
 
   // Implicit on purpose: a PackedBvh passes for a Storage, with the stack size the shader
   // assembler defines for it.
-  Storage(const PackedBvh& packed) : Storage(packed, stackSizeFor(packed.depth)) {}
+  Storage(const PackedBvh& packed) : Storage(packed, stackSizeFor(packed)) {}
   Storage(const PackedBvh& packed, int stackSize_) : bvh(&packed), stackSize(stackSize_) {
     // GLSL refuses an array of size 0; the stack kernels push the root unconditionally.
     if (stackSize < 1) throw std::invalid_argument("BVH_STACK_SIZE must be >= 1, got " + std::to_string(stackSize));

@@ -1,0 +1,89 @@
+// kernel_wide_stack.hpp — C++ mirror of kernel_wide_stack.glsl (ordered stack over layouts bvh4 and
+// bvh8; stack bound, NaN handling and counter definitions are documented there).
+#pragma once
+#include "traversal/intersectors.hpp"
+#include "traversal/layout_wide.hpp"
+
+namespace bvhlab::glsl::wide_stack {
+
+template <class Tests>
+inline bool traverseWide(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
+                         Counters& c) {
+  hit = MeshHit{tMax, -1, vec2(0.0f)};
+  vec3 invDir = Tests::rayInverseDirection(ray.dir);
+  StackArray<uint> stackLink(s.stackSize);
+  StackArray<uint> stackCount(s.stackSize);
+  StackArray<float> stackEnter(s.stackSize);
+  int sp = 0;
+
+  vec3 bmin, bmax;
+  uint link, count;
+  float tEnter;
+  loadSlot(s, 0u, bmin, bmax, link, count);
+  c.boxTests++;
+  if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
+  while (true) {
+    if (count >= kWideInner) {
+      c.nodeVisits++;
+      int first = sp;
+      uint children = count - kWideInner;
+      for (uint i = 0u; i < children; ++i) {
+        uint childLink, childCount;
+        float enter;
+        loadSlot(s, link + 2u * i, bmin, bmax, childLink, childCount);
+        c.boxTests++;
+        if (Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, enter)) {
+          if (sp == s.stackSize) {
+            c.stackOverflow = true;
+            return hit.tri >= 0;
+          }
+          int j = sp;
+          while (j > first && stackEnter[j - 1] <= enter) {
+            stackLink[j] = stackLink[j - 1];
+            stackCount[j] = stackCount[j - 1];
+            stackEnter[j] = stackEnter[j - 1];
+            j--;
+          }
+          stackLink[j] = childLink;
+          stackCount[j] = childCount;
+          stackEnter[j] = enter;
+          sp++;
+        }
+      }
+      count = 0u;
+    }
+    if (count < kWideInner) {
+      for (uint i = 0u; i < count; ++i) {
+        int tri = int(link + i);
+        vec3 v0, v1, v2;
+        loadTriangle(s, tri, v0, v1, v2);
+        float t;
+        vec2 bary;
+        c.triTests++;
+        if (Tests::intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+          hit = MeshHit{t, tri, bary};
+          if (anyHit) return true;
+        }
+      }
+      while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+      if (sp == 0) break;
+      sp--;
+      link = stackLink[sp];
+      count = stackCount[sp];
+    }
+  }
+  return hit.tri >= 0;
+}
+
+template <class Tests = FastTests>
+inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
+  return traverseWide<Tests>(s, ray, tMin, tMax, false, hit, c);
+}
+
+template <class Tests = FastTests>
+inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
+  MeshHit hit;
+  return traverseWide<Tests>(s, ray, tMin, tMax, true, hit, c);
+}
+
+}  // namespace bvhlab::glsl::wide_stack
