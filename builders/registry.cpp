@@ -150,7 +150,7 @@ Bvh buildBvh(const std::string& builder, const BuildInput& input, const BuildOpt
   if (!options.optimize.empty()) {
     sahBefore = sahCost(bvh, options.cost);
     const auto t0 = std::chrono::steady_clock::now();
-    optimizeReinsert(bvh, options);
+    optimizeReinsert(bvh, input, options);  // leaves re-formed where the input allows
     optimizeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
   const auto stop = std::chrono::steady_clock::now();

@@ -32,7 +32,7 @@
 // all nodes in parallel too, but resolve conflicting moves by timing-dependent locks.)
 //
 // Depth: reinsertion may deepen a tree (moving it towards the SAH optimum). The pass never makes it
-// deeper than max(input depth, kMinDepthLimit): a position that would is not taken. The GLSL stack
+// deeper than max(input depth, kReinsertMinDepthLimit): a position that would is not taken. The GLSL stack
 // kernels size their stacks from the tree's depth (stackSizeFor), so they get at most 64 entries
 // unless the builder's own tree needed more. Measured depths after the pass: 20-27 on the scanned
 // meshes, 44-46 on a 1M-triangle generated mesh.
@@ -55,8 +55,7 @@ namespace bvhlab {
 namespace {
 
 constexpr uint32_t kNone = 0xffffffffu;
-// See the header comment: the depth bound when the input tree is shallower.
-constexpr uint32_t kMinDepthLimit = 64;
+using detail::kReinsertMinDepthLimit;
 // Highest dissolve level (2^4 = 16 subtrees reinserted per operation).
 constexpr int kMaxLevel = 4;
 // A sweep that lowers the SAH by less than this fraction ends the current level. Measured gains per
@@ -328,7 +327,9 @@ double score(const Tree& tree, uint32_t i, double tiny) {
 
 }  // namespace
 
-void optimizeReinsert(Bvh& bvh, const BuildOptions& options) {
+void optimizeReinsert(Bvh& bvh, const BuildOptions& options) { detail::optimizeInnerStructure(bvh, options, 0); }
+
+void detail::optimizeInnerStructure(Bvh& bvh, const BuildOptions& options, uint32_t depthLimit) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   const double budgetMs = options.optimizeBudgetMs;
@@ -405,7 +406,7 @@ void optimizeReinsert(Bvh& bvh, const BuildOptions& options) {
   }
 
   tree.nodes = std::move(bvh.nodes);
-  tree.depthLimit = std::max(tree.height[0], kMinDepthLimit);
+  tree.depthLimit = depthLimit ? std::max(tree.height[0], depthLimit) : std::max(tree.height[0], kReinsertMinDepthLimit);
   // Gains below this are rounding, not structure (areas are floats, sums doubles).
   tree.eps = 1e-10 * rootArea;
 
