@@ -33,7 +33,7 @@
 // Size: 32 bytes per wide child + 32 for the root slot, i.e. 32 (N + 1) for N nodes of the wide tree
 // other than the root: fewer than v1's 32 (2L - 1) whenever the collapse merged anything.
 // PackedBvh::depth is the WIDE tree's depth (root alone = 1; a leaf child of the root = 2); the
-// kernels' stack bound (W - 1)(depth - 1) + 1 is derived in traversal/kernel_wide_stack.glsl and
+// kernels' stack bound max(1, (W - 1)(depth - 1)) is derived in traversal/kernel_wide_stack.glsl and
 // returned by stackSizeFor(const PackedBvh&) (traversal/kernels.hpp).
 #pragma once
 #include <cstdint>

@@ -27,40 +27,56 @@ inline bool traverseWide(const Storage& s, Ray ray, float tMin, float tMax, bool
       c.nodeVisits++;
       int first = sp;
       uint children = count - kWideInner;
+      uint nearLink = 0u, nearCount = 0u;
+      float nearEnter = 0.0f;
+      bool met = false;
       for (uint i = 0u; i < children; ++i) {
         uint childLink, childCount;
         float enter;
         loadSlot(s, link + 2u * i, bmin, bmax, childLink, childCount);
         c.boxTests++;
         if (Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, enter)) {
+          if (!met) {
+            nearLink = childLink;
+            nearCount = childCount;
+            nearEnter = enter;
+            met = true;
+            continue;
+          }
           if (sp == s.stackSize) {
             c.stackOverflow = true;
             return hit.tri >= 0;
           }
+          bool childNearer = enter < nearEnter;
+          uint pushLink = childNearer ? nearLink : childLink;
+          uint pushCount = childNearer ? nearCount : childCount;
+          float pushEnter = childNearer ? nearEnter : enter;
+          nearLink = childNearer ? childLink : nearLink;
+          nearCount = childNearer ? childCount : nearCount;
+          nearEnter = childNearer ? enter : nearEnter;
           int j = sp;
-          while (j > first && stackEnter[j - 1] <= enter) {
+          while (j > first && stackEnter[j - 1] <= pushEnter) {
             stackLink[j] = stackLink[j - 1];
             stackCount[j] = stackCount[j - 1];
             stackEnter[j] = stackEnter[j - 1];
             j--;
           }
-          stackLink[j] = childLink;
-          stackCount[j] = childCount;
-          stackEnter[j] = enter;
+          stackLink[j] = pushLink;
+          stackCount[j] = pushCount;
+          stackEnter[j] = pushEnter;
           sp++;
         }
       }
-      count = 0u;
+      link = nearLink;
+      count = met ? nearCount : 0u;
     }
     if (count < kWideInner) {
       for (uint i = 0u; i < count; ++i) {
         int tri = int(link + i);
-        vec3 v0, v1, v2;
-        loadTriangle(s, tri, v0, v1, v2);
         float t;
         vec2 bary;
         c.triTests++;
-        if (Tests::intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+        if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
           hit = MeshHit{t, tri, bary};
           if (anyHit) return true;
         }

@@ -120,8 +120,8 @@ int stackSizeFor(const PackedBvh& packed) {
   const uint32_t depth = std::max<uint32_t>(1, packed.depth);
   const uint32_t width = wideWidth(packed.layout);
   if (width == 0) return stackSizeFor(depth);
-  // The wide kernels' bound (kernel_wide_stack.glsl): (W - 1)(D - 1) + 1 for the wide tree's depth D.
-  const uint64_t bound = uint64_t(width - 1) * (depth - 1) + 1;
+  // The wide kernels' bound (kernel_wide_stack.glsl): (W - 1)(D - 1) for the wide tree's depth D.
+  const uint64_t bound = std::max<uint64_t>(1, uint64_t(width - 1) * (depth - 1));
   if (bound > uint64_t(std::numeric_limits<int>::max()))
     throw std::invalid_argument("stackSizeFor: wide tree depth " + std::to_string(depth) + " is too large");
   return int(bound);

@@ -53,7 +53,7 @@ const KernelInfo& findKernel(const std::string& layout, const std::string& name)
 // GLSL file (stack-unordered needs D, stack-ordered D - 1); this is the largest, and at least 1.
 int stackSizeFor(uint32_t treeDepth);
 // BVH_STACK_SIZE for this packed tree in its own layout: stackSizeFor(depth) for the binary layouts,
-// the wide kernels' bound (W - 1)(D - 1) + 1 for bvh4/bvh8 (D: the wide tree's depth;
+// the wide kernels' bound max(1, (W - 1)(D - 1)) for bvh4/bvh8 (D: the wide tree's depth;
 // traversal/kernel_wide_stack.glsl derives it). What every caller with a PackedBvh should use.
 int stackSizeFor(const PackedBvh& packed);
 
