@@ -16,6 +16,7 @@
 #include "experiments/runner.hpp"
 #include "layout/layout.hpp"
 #include "layout/layouts.hpp"
+#include "layout/triangle_formats.hpp"
 #include "layout/tree_hash.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/hard_cases_command.hpp"
@@ -32,7 +33,7 @@ using namespace bvhlab;
 namespace {
 
 struct BuildCommand {
-  std::string mesh, builder = "sah-binned", optimize, layout = kDefaultLayout;
+  std::string mesh, builder = "sah-binned", optimize, layout = kDefaultLayout, triangles = kDefaultTriangleFormat;
   int leafSize = 4, bins = 0, plocRadius = 16;
   float sbvhAlpha = 1e-5f;
   bool json = false;
@@ -50,6 +51,7 @@ int buildCommand(const BuildCommand& c) {
   OptionReview review;
   const BuildOptions options = renderBuildOptions(asRender, &review);
   const LayoutInfo& layout = findLayout(c.layout);
+  const std::string& triangleFormat = findTriangleFormat(c.triangles).name;
   for (const std::string& w : review.warnings) std::fprintf(stderr, "bvhlab: warning: %s\n", w.c_str());
   Scene scene = loadInput(c.mesh);
   TriangleSoup soup = gatherTriangles(scene);
@@ -59,6 +61,7 @@ int buildCommand(const BuildCommand& c) {
   BuildStats stats;
   Bvh bvh = buildBvh(c.builder, BuildInput{boxes, centroids, soup.v0, soup.v1, soup.v2}, options, &stats);
   PackedBvh packed = layout.pack(bvh, soup);
+  packTriangles(packed, soup, triangleFormat);
   stats.bytes = packed.bytes();
   const double epo = endPointOverlap(bvh, soup.v0, soup.v1, soup.v2, options.cost);
   if (c.json) {
@@ -79,6 +82,8 @@ int buildCommand(const BuildCommand& c) {
                         {"build_ms", stats.buildMs},
                         {"optimize_ms", stats.optimizeMs},
                         {"layout", layout.name},
+                        {"triangle_format", triangleFormat},
+                        {"vertices", packed.vertices.size()},
                         {"bytes", stats.bytes},
                         {"bytes_per_triangle", double(stats.bytes) / double(stats.primitives)},
                         {"tree_hash", packedTreeHash(packed)},
@@ -87,10 +92,10 @@ int buildCommand(const BuildCommand& c) {
     std::cout << j.dump() << std::endl;
   } else {
     std::printf("%s%s on %s: %zu triangles (%zu references), %zu nodes, %zu leaves, depth %u, SAH %.3f, EPO %.3f, "
-                "%.2f ms, %zu bytes in layout %s\n",
+                "%.2f ms, %zu bytes in layout %s with %s triangles\n",
                 c.builder.c_str(), c.optimize.empty() ? "" : ("+" + c.optimize).c_str(), c.mesh.c_str(),
                 stats.primitives, stats.references, stats.nodes, stats.leaves, stats.depth, stats.sahCost, epo,
-                stats.buildMs, stats.bytes, layout.name.c_str());
+                stats.buildMs, stats.bytes, layout.name.c_str(), triangleFormat.c_str());
   }
   return 0;
 }
@@ -125,6 +130,7 @@ int main(int argc, char** argv) {
   build->add_option("--mesh", bc.mesh, "mesh or scene file")->required()->check(notADirectory("a mesh or scene file"));
   build->add_option("--builder", bc.builder, "BVH builder");
   build->add_option("--layout", bc.layout, "texture layout to pack into (bytes, tree_hash; see `bvhlab layouts`)");
+  build->add_option("--triangles", bc.triangles, "triangle format: raw | precomputed | indexed (see `bvhlab layouts`)");
   build->add_option("--leaf-size", bc.leafSize, "max triangles per leaf");
   build->add_option("--bins", bc.bins, "bins for sah-binned and sbvh (0 = default)");
   build->add_option("--optimize", bc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
@@ -198,7 +204,7 @@ int main(int argc, char** argv) {
   hardCmd->add_option("--builder", hc.builder, "BVH builder");
   auto* listBuilders = app.add_subcommand("builders", "list the BVH builders");
   auto* listKernels = app.add_subcommand("kernels", "list the traversal kernels (and the layout each walks)");
-  auto* listLayouts = app.add_subcommand("layouts", "list the texture layouts (and the kernels that walk each)");
+  auto* listLayouts = app.add_subcommand("layouts", "list the texture layouts, the kernels that walk each, and the triangle formats");
 
   // --version: the release and the commit of the source tree it runs from (as the run records say).
   app.set_version_flag("--version", [] {
@@ -272,6 +278,10 @@ int main(int argc, char** argv) {
           names += (names.empty() ? "" : ", ") + k.name + (k.name == l.defaultKernel ? " (default)" : "");
         std::printf("%-8s %s\n         kernels: %s\n", l.name.c_str(), l.description.c_str(), names.c_str());
       }
+      std::printf("\ntriangle formats (--triangles; any layout with any format):\n");
+      for (const TriangleFormatInfo& f : triangleFormats())
+        std::printf("%-12s %s%s\n", f.name.c_str(), f.description.c_str(),
+                    f.name == kDefaultTriangleFormat ? " (default)" : "");
       return 0;
     }
   } catch (const ShaderError& e) {

@@ -17,6 +17,10 @@
 //   count = (A >> 28) | ((B >> 28) << 4)   8 bits; 0 marks an inner node, 1..255 a leaf.
 //   So at most 2^28 - 1 nodes and triangles, and leaves of at most 255 triangles.
 //
+// TRIANGLE and ATTRIBUTE streams below are the `raw` triangle format, what every node packer writes;
+// the other triangle formats (precomputed, indexed: a second axis, any node layout with any format)
+// are described in layout/triangle_formats.hpp.
+//
 // TRIANGLE stream: 3 texels per triangle, in leaf order (a leaf's triangles are contiguous).
 //   texel 3j+0 = (v0.x, v0.y, v0.z, original triangle id)   vertices as float bits, unmodified,
 //   texel 3j+1 = (v1.x, v1.y, v1.z, material index)         so a watertight intersector can use them
@@ -55,11 +59,14 @@ struct PackedBvh {
   // The registered layout (layout/layouts.hpp) the NODE stream is written in: "v1" as described here,
   // or another layout's name. Kernels and accessors check it; the streams alone do not say.
   std::string layout = "v1";
+  // The triangle format (layout/triangle_formats.hpp) the TRIANGLE/ATTRIBUTE/VERTEX streams are in.
+  std::string triangleFormat = "raw";
   std::vector<glm::uvec4> nodes;
   std::vector<glm::uvec4> triangles;
   std::vector<glm::uvec4> attributes;
+  std::vector<glm::uvec4> vertices;  // VERTEX stream: indexed format only, empty otherwise
   uint32_t depth = 0;  // tree depth (root alone = 1): kernels size their stacks from it
-  size_t bytes() const { return 16 * (nodes.size() + triangles.size() + attributes.size()); }
+  size_t bytes() const { return 16 * (nodes.size() + triangles.size() + attributes.size() + vertices.size()); }
 };
 
 // The triangles of all of a scene's meshes, in one array, with the per-triangle data the packer needs.
@@ -74,6 +81,9 @@ TriangleSoup gatherTriangles(const Scene& scene);
 // Boxes and centroids for the builders.
 std::vector<Aabb> triangleBoxes(const TriangleSoup& soup);
 std::vector<glm::vec3> triangleCentroids(const TriangleSoup& soup);
+// Unit normal of the triangle's plane, counter-clockwise front (+Z for a zero-area triangle): the
+// normal gatherTriangles gives every corner of a mesh without normals.
+glm::vec3 geometricNormal(const glm::vec3& v0, const glm::vec3& v1, const glm::vec3& v2);
 
 // Depth-first re-order + escape links + triangle/attribute streams. Throws std::runtime_error if the
 // tree exceeds the layout's limits.

@@ -9,16 +9,16 @@ namespace bvhlab {
 
 const std::vector<LayoutInfo>& layouts() {
   static const std::vector<LayoutInfo> table = {
-      {"v1", "binary, 32-byte node (own box + child/escape links), depth-first; raw triangles (the reference)",
+      {"v1", "binary, 32-byte node (own box + child/escape links), depth-first (the reference)",
        packBvh, {"layout.glsl"}, "stack-ordered"},
-      // bvh2-cb shares v1's TRIANGLE and ATTRIBUTE streams, so it takes their accessors from layout.glsl
-      // (whose v1 loadNode the bvh2-cb kernel never calls) and adds its node decoder.
-      {"bvh2-cb", "binary, 64-byte node holding both child boxes (Aila-Laine 2009), leaves in the parent; raw triangles",
+      // Every layout leaves the triangle streams to the triangle format (layout/triangle_formats.hpp),
+      // whose module the assembler adds; the others take layout.glsl's constants (whose v1 loadNode
+      // their kernels never call) and add their node decoder.
+      {"bvh2-cb", "binary, 64-byte node holding both child boxes (Aila-Laine 2009), leaves in the parent",
        packBvh2cb, {"layout.glsl", "layout_bvh2cb.glsl"}, "bvh2cb-stack-ordered"},
-      // bvh4 / bvh8 (layout/layout_wide.hpp) keep v1's triangle streams too, as bvh2-cb does.
-      {"bvh4", "4-wide, SAH-optimal collapse (Ylitie et al. 2017), 32-byte child slots, leaves in the parent; raw triangles",
+      {"bvh4", "4-wide, SAH-optimal collapse (Ylitie et al. 2017), 32-byte child slots, leaves in the parent",
        packBvh4, {"layout.glsl", "layout_wide.glsl"}, "bvh4-stack-ordered"},
-      {"bvh8", "8-wide, SAH-optimal collapse (Ylitie et al. 2017), 32-byte child slots, leaves in the parent; raw triangles",
+      {"bvh8", "8-wide, SAH-optimal collapse (Ylitie et al. 2017), 32-byte child slots, leaves in the parent",
        packBvh8, {"layout.glsl", "layout_wide.glsl"}, "bvh8-stack-ordered"},
   };
   return table;

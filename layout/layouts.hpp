@@ -17,9 +17,10 @@ struct LayoutInfo {
   std::string name;         // "v1", "bvh2-cb"
   std::string description;  // one line for `bvhlab layouts`
   PackFn pack;              // sets PackedBvh::layout to `name`
-  // The GLSL accessor modules, in assembly order after the storage module (they need its
-  // fetchNode/fetchTriangle/fetchAttribute); together they define loadTriangle, loadTriangleIds and
-  // loadAttributes, plus the node decoder(s) this layout's kernels call.
+  // The GLSL accessor modules, in assembly order after the storage module (they need its fetchNode):
+  // the node decoder(s) this layout's kernels call. The triangle accessors (testTriangle,
+  // loadTriangle, loadTriangleIds, loadAttributes) come from the triangle format's module
+  // (layout/triangle_formats.hpp), whatever the layout.
   std::vector<std::string> glslModules;
   std::string defaultKernel;  // what `--kernel` means when not given
 };

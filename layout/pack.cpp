@@ -155,7 +155,8 @@ NodeRecord unpackNode(const PackedBvh& packed, uint32_t index) {
 
 void checkStreamLimits(const PackedBvh& packed, const std::string& storage, uint64_t maxTexels) {
   const std::pair<const char*, size_t> streams[] = {
-      {"node", packed.nodes.size()}, {"triangle", packed.triangles.size()}, {"attribute", packed.attributes.size()}};
+      {"node", packed.nodes.size()}, {"triangle", packed.triangles.size()}, {"attribute", packed.attributes.size()},
+      {"vertex", packed.vertices.size()}};
   for (const auto& [name, texels] : streams)
     if (texels > maxTexels)
       throw std::runtime_error(std::string(name) + " stream: " + std::to_string(texels) + " texels exceed the " +

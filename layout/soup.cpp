@@ -15,15 +15,6 @@ std::string meshLabel(const Mesh& mesh, size_t index) {
   return "mesh " + std::to_string(index) + (mesh.name.empty() ? std::string() : " (" + mesh.name + ")");
 }
 
-// Unit normal of the triangle's plane, counter-clockwise front. A zero-area triangle has no plane;
-// it gets +Z so that nothing downstream divides by zero (the intersector never reports a hit on it
-// anyway, its determinant is 0 up to rounding).
-glm::vec3 geometricNormal(const glm::vec3& v0, const glm::vec3& v1, const glm::vec3& v2) {
-  glm::vec3 n = glm::cross(v1 - v0, v2 - v0);
-  float len = glm::length(n);
-  return len > 0.0f && std::isfinite(len) ? n / len : glm::vec3(0.0f, 0.0f, 1.0f);
-}
-
 // A stored vertex normal, normalised; the geometric normal where it has no direction.
 glm::vec3 shadingNormal(const glm::vec3& n, const glm::vec3& geometric) {
   float len = glm::length(n);
@@ -31,6 +22,14 @@ glm::vec3 shadingNormal(const glm::vec3& n, const glm::vec3& geometric) {
 }
 
 }  // namespace
+
+// A zero-area triangle has no plane; it gets +Z so that nothing downstream divides by zero (the
+// intersector never reports a hit on it anyway, its determinant is 0 up to rounding).
+glm::vec3 geometricNormal(const glm::vec3& v0, const glm::vec3& v1, const glm::vec3& v2) {
+  glm::vec3 n = glm::cross(v1 - v0, v2 - v0);
+  float len = glm::length(n);
+  return len > 0.0f && std::isfinite(len) ? n / len : glm::vec3(0.0f, 0.0f, 1.0f);
+}
 
 TriangleSoup gatherTriangles(const Scene& scene) {
   TriangleSoup soup;

@@ -12,7 +12,7 @@ namespace bvhlab {
 
 namespace {
 
-enum Unit { kUnitNodes = 0, kUnitTriangles = 1, kUnitAttributes = 2, kUnitTextures = 3, kUnitWorld = 4 };
+enum Unit { kUnitNodes = 0, kUnitTriangles = 1, kUnitAttributes = 2, kUnitTextures = 3, kUnitWorld = 4, kUnitVertices = 5 };
 
 GLuint compileStage(GLenum stage, const std::string& source, const AssembledShader* map) {
   GLuint s = glCreateShader(stage);
@@ -110,9 +110,9 @@ GpuRenderer::~GpuRenderer() {
   glDeleteProgram(program_);
   glDeleteVertexArrays(1, &vao_);
   glDeleteFramebuffers(1, &fbo_);
-  GLuint textures[] = {colorTex_, statsTex_, streams_[0], streams_[1], streams_[2], texArray_, worldTex_};
-  glDeleteTextures(7, textures);
-  glDeleteBuffers(3, streamBuffers_);
+  GLuint textures[] = {colorTex_, statsTex_, streams_[0], streams_[1], streams_[2], streams_[3], texArray_, worldTex_};
+  glDeleteTextures(8, textures);
+  glDeleteBuffers(4, streamBuffers_);
   glDeleteBuffers(1, &ubo_);
 }
 
@@ -134,6 +134,9 @@ void GpuRenderer::compile() {
   if (options_.layout != scene_.packed.layout)
     throw std::invalid_argument("the shader is assembled for layout " + options_.layout + " but the tree is packed in " +
                                 scene_.packed.layout + " (prepareScene's layout)");
+  if (options_.triangles != scene_.packed.triangleFormat)
+    throw std::invalid_argument("the shader is assembled for triangle format " + options_.triangles +
+                                " but the tree's triangles are packed as " + scene_.packed.triangleFormat);
   if (options_.bvhStackSize < 1) options_.bvhStackSize = 1;
   shader_ = assembleTracer(features, options_);
   program_ = compileFullscreenProgram(shader_);
@@ -155,6 +158,7 @@ void GpuRenderer::upload() {
   streams_[0] = uploadBvhStream(p.nodes, options_.storage, "node", &streamBuffers_[0]);
   streams_[1] = uploadBvhStream(p.triangles, options_.storage, "triangle", &streamBuffers_[1]);
   streams_[2] = uploadBvhStream(p.attributes, options_.storage, "attribute", &streamBuffers_[2]);
+  streams_[3] = uploadBvhStream(p.vertices, options_.storage, "vertex", &streamBuffers_[3]);  // indexed only
 
   // Material textures (a 1x1x1 dummy keeps the uber shader's sampler complete).
   const TextureArray& ta = d.textures;
@@ -192,6 +196,7 @@ void GpuRenderer::upload() {
   seti("u_nodes", kUnitNodes);
   seti("u_triangles", kUnitTriangles);
   seti("u_attributes", kUnitAttributes);
+  seti("u_vertices", kUnitVertices);
   seti("u_textures", kUnitTextures);
   seti("u_worldMap", kUnitWorld);
   seti("u_meshPresent", p.triangles.empty() ? 0 : 1);
@@ -246,6 +251,7 @@ double GpuRenderer::drawFrame() {
   glBindTextureUnit(kUnitNodes, streams_[0]);
   glBindTextureUnit(kUnitTriangles, streams_[1]);
   glBindTextureUnit(kUnitAttributes, streams_[2]);
+  glBindTextureUnit(kUnitVertices, streams_[3]);
   glBindTextureUnit(kUnitTextures, texArray_);
   glBindTextureUnit(kUnitWorld, worldTex_);
   glBindVertexArray(vao_);

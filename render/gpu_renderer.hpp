@@ -62,7 +62,7 @@ class GpuRenderer {
   FrameOptions frame_;
   AssembledShader shader_;
   unsigned program_ = 0, vao_ = 0, fbo_ = 0, colorTex_ = 0, statsTex_ = 0, ubo_ = 0;
-  unsigned streams_[3] = {0, 0, 0}, streamBuffers_[3] = {0, 0, 0};
+  unsigned streams_[4] = {0, 0, 0, 0}, streamBuffers_[4] = {0, 0, 0, 0};  // node, triangle, attribute, vertex
   unsigned texArray_ = 0, worldTex_ = 0;
 };
 

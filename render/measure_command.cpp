@@ -97,7 +97,7 @@ json measureGroup(const json& spec) {
       auto tree = trees.find(tk);
       if (tree == trees.end())
         tree = trees.emplace(tk, prepareScene(std::move(e->setup.scene), e->cmd.builder, e->setup.build,
-                                                e->setup.shader.layout)).first;
+                                                e->setup.shader.layout, e->setup.shader.triangles)).first;
       e->prepared = tree->second;
     } catch (const std::exception& ex) {
       e->error = ex.what();

@@ -2,13 +2,15 @@
 
 #include "builders/epo.hpp"
 #include "layout/layouts.hpp"
+#include "layout/triangle_formats.hpp"
 #include "layout/tree_hash.hpp"
 
 namespace bvhlab {
 
 std::unique_ptr<PreparedScene> prepareScene(Scene scene, const std::string& builder, const BuildOptions& options,
-                                            const std::string& layout) {
+                                            const std::string& layout, const std::string& triangles) {
   const LayoutInfo& packer = findLayout(layout);  // an unknown name fails before the build
+  const std::string& triangleFormat = findTriangleFormat(triangles).name;
   auto p = std::make_unique<PreparedScene>();
   p->scene = std::move(scene);
   p->cost = options.cost;
@@ -19,10 +21,12 @@ std::unique_ptr<PreparedScene> prepareScene(Scene scene, const std::string& buil
     std::vector<glm::vec3> centroids = triangleCentroids(p->soup);
     p->bvh = buildBvh(builder, BuildInput{boxes, centroids, p->soup.v0, p->soup.v1, p->soup.v2}, options, &p->stats);
     p->packed = packer.pack(p->bvh, p->soup);
+    packTriangles(p->packed, p->soup, triangleFormat);
     p->stats.bytes = p->packed.bytes();
   } else {
     findBuilder(builder);  // an unknown name is still an error without a mesh
     p->packed.layout = packer.name;
+    p->packed.triangleFormat = triangleFormat;
   }
   return p;
 }

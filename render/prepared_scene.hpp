@@ -34,7 +34,8 @@ struct PreparedScene {
 // `scene` is moved in; SceneData points into it, so PreparedScene is not copyable. `layout`: a
 // registered layout name (packed.layout is set to it, with or without triangles); stats.bytes is the
 // packed streams' size in it.
+// `triangles`: a triangle format (layout/triangle_formats.hpp), applied after the layout's packer.
 std::unique_ptr<PreparedScene> prepareScene(Scene scene, const std::string& builder, const BuildOptions& options,
-                                            const std::string& layout = "v1");
+                                            const std::string& layout = "v1", const std::string& triangles = "raw");
 
 }  // namespace bvhlab

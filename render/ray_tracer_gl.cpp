@@ -35,16 +35,19 @@ GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& option
   const int stack = stackSizeFor(packed);
   const std::string& layout = packed.layout;
   timed_ = compileComputeProgram(
-      assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, false, layout));
+      assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, false, layout,
+                        packed.triangleFormat));
   counted_ = compileComputeProgram(
-      assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, true, layout));
+      assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, true, layout,
+                        packed.triangleFormat));
   streams_[0] = uploadBvhStream(packed.nodes, options.storage, "node", &streamBuffers_[0]);
   streams_[1] = uploadBvhStream(packed.triangles, options.storage, "triangle", &streamBuffers_[1]);
   streams_[2] = uploadBvhStream(packed.attributes, options.storage, "attribute", &streamBuffers_[2]);
-  const char* names[3] = {"u_nodes", "u_triangles", "u_attributes"};
+  streams_[3] = uploadBvhStream(packed.vertices, options.storage, "vertex", &streamBuffers_[3]);  // indexed only
+  const char* names[4] = {"u_nodes", "u_triangles", "u_attributes", "u_vertices"};
   for (GLuint program : {timed_, counted_}) {
     glUseProgram(program);
-    for (int unit = 0; unit < 3; ++unit) glUniform1i(glGetUniformLocation(program, names[unit]), unit);
+    for (int unit = 0; unit < 4; ++unit) glUniform1i(glGetUniformLocation(program, names[unit]), unit);
   }
   glCreateBuffers(1, &rayBuffer_);
   glCreateBuffers(1, &resultBuffer_);
@@ -55,8 +58,8 @@ GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& option
 GlRayTracer::~GlRayTracer() {
   glDeleteProgram(timed_);
   glDeleteProgram(counted_);
-  glDeleteTextures(3, streams_);
-  glDeleteBuffers(3, streamBuffers_);
+  glDeleteTextures(4, streams_);
+  glDeleteBuffers(4, streamBuffers_);
   GLuint buffers[] = {rayBuffer_, resultBuffer_, countBuffer_};
   glDeleteBuffers(3, buffers);
 }
@@ -76,7 +79,7 @@ double GlRayTracer::dispatch(unsigned program) {
   const auto start = std::chrono::steady_clock::now();
   glUseProgram(program);
   glUniform1i(glGetUniformLocation(program, "u_count"), GLint(count_));
-  for (GLuint unit = 0; unit < 3; ++unit) glBindTextureUnit(unit, streams_[unit]);
+  for (GLuint unit = 0; unit < 4; ++unit) glBindTextureUnit(unit, streams_[unit]);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, rayBuffer_);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, resultBuffer_);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, countBuffer_);

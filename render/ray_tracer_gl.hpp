@@ -43,7 +43,7 @@ class GlRayTracer {
   double dispatch(unsigned program);
   RayTracerOptions options_;
   unsigned timed_ = 0, counted_ = 0;
-  unsigned streams_[3] = {0, 0, 0}, streamBuffers_[3] = {0, 0, 0};
+  unsigned streams_[4] = {0, 0, 0, 0}, streamBuffers_[4] = {0, 0, 0, 0};  // node, triangle, attribute, vertex
   unsigned rayBuffer_ = 0, resultBuffer_ = 0, countBuffer_ = 0;
   size_t count_ = 0;
   std::vector<float> tMax_;  // per ray, for any-hit answers

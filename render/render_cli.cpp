@@ -30,6 +30,8 @@ CLI::Validator notADirectory(const std::string& expected) {
 void addTreeOptions(CLI::App& app, RenderCommand& rc) {
   app.add_option("--builder", rc.builder, "BVH builder (see `bvhlab builders`)");
   app.add_option("--layout", rc.layout, "texture layout of the tree (see `bvhlab layouts`)");
+  app.add_option("--triangles", rc.triangles,
+                 "triangle format: raw | precomputed (fast tests only) | indexed (see `bvhlab layouts`)");
   app.add_option("--kernel", rc.kernel,
                  "traversal kernel of that layout (see `bvhlab kernels`; default: the layout's, stack-ordered for v1)");
   app.add_option("--leaf-size", rc.leafSize, "max triangles per BVH leaf");

@@ -12,7 +12,8 @@ namespace bvhlab {
 int runRender(const RenderCommand& cmd) {
   RenderSetup setup = setupRender(cmd);
   for (const std::string& w : setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';
-  std::shared_ptr<const PreparedScene> prepared = prepareScene(std::move(setup.scene), cmd.builder, setup.build, setup.shader.layout);
+  std::shared_ptr<const PreparedScene> prepared = prepareScene(std::move(setup.scene), cmd.builder, setup.build, setup.shader.layout,
+                                                               setup.shader.triangles);
   const bool wantStats = cmd.json || cmd.view == "visits" || !cmd.visitsOutput.empty();
 
   FrameTimes times;

@@ -20,6 +20,7 @@ struct RenderCommand {
   std::string builder = "sah-binned";
   std::string layout = "v1";  // texture layout the tree is packed in (layout/layouts.hpp)
   std::string kernel;         // traversal kernel; "" = the layout's default (stack-ordered for v1)
+  std::string triangles = "raw";  // triangle format (layout/triangle_formats.hpp), any layout
   int leafSize = 4;
   int bins = 0;
   std::string optimize;    // post-pass after the builder: "" | "reinsert"

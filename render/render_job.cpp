@@ -10,6 +10,7 @@
 #include "render/frame_stats.hpp"
 #include "render/heatmap.hpp"
 #include "layout/layouts.hpp"
+#include "layout/triangle_formats.hpp"
 #include "traversal/kernels.hpp"
 
 namespace bvhlab {
@@ -53,6 +54,9 @@ RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
   // Layout and kernel names fail before the input is read; a kernel of another layout is refused here.
   s.shader.layout = findLayout(cmd.layout).name;
   s.shader.kernel = findKernel(s.shader.layout, cmd.kernel).name;
+  // The triangle format too, with the pairing it cannot run (precomputed + a watertight test).
+  s.shader.triangles = findTriangleFormat(cmd.triangles).name;
+  checkTriangleFormat(s.shader.triangles, parseRobustness(cmd.robust));
   if (!cmd.cameraPath.empty()) {
     if (cmd.eye || cmd.target || cmd.up || cmd.fov)
       throw std::invalid_argument("--camera-path sets the camera; drop --eye/--target/--up/--fov");
@@ -113,7 +117,7 @@ std::string treeKey(const RenderCommand& c) {
     if (!key.empty()) key += '|';
     key += text;
   };
-  for (const std::string& f : {c.input, c.layout, c.builder, std::to_string(c.leafSize), std::to_string(c.bins), c.optimize,
+  for (const std::string& f : {c.input, c.layout, c.triangles, c.builder, std::to_string(c.leafSize), std::to_string(c.bins), c.optimize,
                                std::to_string(c.sbvhAlpha), std::to_string(c.plocRadius), c.cameraPath})
     field(f);
   for (const auto& v : {c.width, c.height, c.depth}) field(v ? std::to_string(*v) : "-");
@@ -242,6 +246,7 @@ nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, 
   }
   out["builder"] = cmd.builder;
   out["layout"] = so.layout;
+  out["triangle_format"] = so.triangles;  // "triangles" is the triangle count
   out["kernel"] = so.kernel;
   out["leaf_size"] = setup.buildReview.leafSize;  // what the leaves were limited to (a builder may cap it)
   out["leaf_size_requested"] = cmd.leafSize;

@@ -88,7 +88,8 @@ int runTrace(const TraceCommand& c) {
   const RenderCommand& rc = c.render;
   RenderSetup setup = setupRender(rc);
   for (const std::string& w : setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';
-  std::shared_ptr<const PreparedScene> prepared = prepareScene(std::move(setup.scene), rc.builder, setup.build, setup.shader.layout);
+  std::shared_ptr<const PreparedScene> prepared = prepareScene(std::move(setup.scene), rc.builder, setup.build, setup.shader.layout,
+                                                               setup.shader.triangles);
   const TriangleSoup& soup = prepared->soup;
   if (soup.size() == 0) throw InputError(rc.input + ": no triangles to trace rays against");
 
@@ -242,6 +243,7 @@ int runTrace(const TraceCommand& c) {
   j["hit_ties"] = agree.ties;
   j["builder"] = rc.builder;
   j["layout"] = prepared->packed.layout;
+  j["triangle_format"] = prepared->packed.triangleFormat;  // "triangles" is the triangle count
   j["kernel"] = to.kernel;
   j["leaf_size"] = setup.buildReview.leafSize;
   j["warnings"] = setup.buildReview.warnings;

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "layout/layouts.hpp"
+#include "layout/triangle_formats.hpp"
 #include "traversal/kernels.hpp"
 
 namespace bvhlab {
@@ -99,6 +100,7 @@ const char* kKindDefines[6] = {"HAS_SPHERE", "HAS_BOX", "HAS_CYLINDER", "HAS_CON
 }  // namespace
 
 AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
+  checkTriangleFormat(o.triangles, o.robust);
   const bool uber = o.uber;
   std::ostringstream d;
   d << "#version 450 core\n";
@@ -144,6 +146,7 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
     // The robustness knobs (traversal/robustness.hpp): each test is a drop-in module.
     a.module(o.robust.box == BoxTest::Robust ? "ray_box_robust.glsl" : "ray_box.glsl");
     a.module(o.robust.triangle == TriangleTest::Watertight ? "ray_triangle_watertight.glsl" : "ray_triangle.glsl");
+    a.module(findTriangleFormat(o.triangles).glslModule);  // testTriangle and the triangle accessors
     a.module(findKernel(o.layout, o.kernel).glslFile);
   }
   for (int k = 0; k < 6; ++k)
@@ -164,8 +167,10 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
 }
 
 AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
-                                  bool anyHit, bool countStats, const std::string& layout) {
+                                  bool anyHit, bool countStats, const std::string& layout,
+                                  const std::string& triangles) {
   const std::string& kernelFile = findKernel(layout, kernel).glslFile;  // a mismatch fails before any GLSL
+  checkTriangleFormat(triangles, robust);
   std::ostringstream d;
   d << "#version 450 core\n#define BVH_STACK_SIZE " << bvhStackSize << "\n";
   if (anyHit) d << "#define ANY_HIT 1\n";
@@ -177,6 +182,7 @@ AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Ro
   for (const std::string& m : findLayout(layout).glslModules) a.module(m);
   a.module(robust.box == BoxTest::Robust ? "ray_box_robust.glsl" : "ray_box.glsl");
   a.module(robust.triangle == TriangleTest::Watertight ? "ray_triangle_watertight.glsl" : "ray_triangle.glsl");
+  a.module(findTriangleFormat(triangles).glslModule);
   a.module(kernelFile);
   a.module("trace_rays.glsl");
   return a.take();

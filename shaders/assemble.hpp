@@ -42,6 +42,7 @@ struct ShaderOptions {
   Branching branching = Branching::Full;
   std::string kernel = "stack-ordered";  // must walk `layout` (traversal/kernels.hpp findKernel(layout, name))
   std::string layout = "v1";             // the packed tree's layout (layout/layouts.hpp): its accessor modules
+  std::string triangles = "raw";         // the packed tree's triangle format (layout/triangle_formats.hpp)
   Storage storage = Storage::Tbo;
   int bvhStackSize = 64;  // from the packed tree depth (see traversal/kernels.hpp)
   bool countStats = false;
@@ -87,8 +88,11 @@ AssembledShader assembleTracer(const SceneFeatures& features, const ShaderOption
 // `bvhlab trace`'s compute shader: the kernel over its storage, layout and robustness modules plus
 // trace_rays.glsl (closest hit, or any hit), with or without the traversal counters. A kernel that
 // does not walk `layout` is refused (std::invalid_argument naming the layout's kernels).
+// A triangle format that cannot run the robustness variant's triangle test is refused likewise
+// (checkTriangleFormat).
 AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
-                                  bool anyHit, bool countStats, const std::string& layout = "v1");
+                                  bool anyHit, bool countStats, const std::string& layout = "v1",
+                                  const std::string& triangles = "raw");
 // A single-module full-screen pass (e.g. SMAA): `#version 450 core` + `defines` + the module.
 AssembledShader assembleModule(const std::string& defines, const std::string& module);
 std::string fullscreenVertexShader();

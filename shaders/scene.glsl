@@ -88,8 +88,17 @@ bool intersectObject(ObjectData o, Ray r, float tMax, out float t, out vec3 n, o
 }
 
 #ifdef HAS_MESH
-int triangleId(int tri) { return int(fetchTriangle(3 * tri).w); }
-int triangleMaterial(int tri) { return int(fetchTriangle(3 * tri + 1).w); }
+// Through the triangle format's loadTriangleIds (traversal/triangles_*.glsl).
+int triangleId(int tri) {
+  uint primitive, material, mesh;
+  loadTriangleIds(tri, primitive, material, mesh);
+  return int(primitive);
+}
+int triangleMaterial(int tri) {
+  uint primitive, material, mesh;
+  loadTriangleIds(tri, primitive, material, mesh);
+  return int(material);
+}
 #endif
 
 // Closest hit with 0 < t < tMax (callers offset secondary origins, see offsetRayOrigin).

@@ -102,8 +102,16 @@ struct Tracer {
     return false;
   }
 
-  int triangleId(int tri) const { return int(bvh.triangles[size_t(3 * tri)].w); }
-  int triangleMaterial(int tri) const { return int(bvh.triangles[size_t(3 * tri + 1)].w); }
+  int triangleId(int tri) const {
+    uint primitive, material, mesh;
+    loadTriangleIds(storage, tri, primitive, material, mesh);
+    return int(primitive);
+  }
+  int triangleMaterial(int tri) const {
+    uint primitive, material, mesh;
+    loadTriangleIds(storage, tri, primitive, material, mesh);
+    return int(material);
+  }
 
   bool intersectScene(Ray ray, float tMax, Hit& hit) {
     hit.t = tMax;

@@ -656,7 +656,8 @@ void main() {
     for (const KernelInfo& k : kernels()) {
       std::string source = "#version 450 core\n#define BVH_STACK_SIZE 7\n";
       for (const std::string& module : {std::string("common.glsl"), std::string(storage), std::string("layout.glsl"),
-                                        std::string("ray_box.glsl"), std::string("ray_triangle.glsl"), k.glslFile})
+                                        std::string("ray_box.glsl"), std::string("ray_triangle.glsl"),
+                                        std::string("triangles_raw.glsl"), k.glslFile})
         source += glslModule(module);
       source += stubMain;
       const std::filesystem::path file = dir / (k.name + "_" + storage + ".frag");
@@ -753,7 +754,8 @@ GLuint crossCheckProgram(const KernelInfo& kernel, bool tex2d, int stackSize) {
   std::string source = "#version 450 core\n#define BVH_STACK_SIZE " + std::to_string(stackSize) + "\n";
   for (const std::string& module : {std::string("common.glsl"), std::string(tex2d ? "storage_tex2d.glsl" : "storage_tbo.glsl"),
                                     std::string("layout.glsl"), std::string("ray_box.glsl"),
-                                    std::string("ray_triangle.glsl"), kernel.glslFile})
+                                    std::string("ray_triangle.glsl"), std::string("triangles_raw.glsl"),
+                                    kernel.glslFile})
     source += glslModule(module);
   return programs[key] = compileCompute(source + kCrossCheckMain);
 }

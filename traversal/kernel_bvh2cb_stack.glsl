@@ -20,7 +20,7 @@
 // included, whether descended into or popped; its two box tests are not counted separately. A leaf
 // costs no visit (its slot came with its parent's record), only its triangle tests. So a bvh2-cb visit
 // is a 64-byte fetch where a v1 visit (kernel_stack_ordered.glsl) is a 32-byte one, and the visit
-// counts of the two layouts are not comparable one to one. g_triTests += 1 per intersectTriangle call.
+// counts of the two layouts are not comparable one to one. g_triTests += 1 per testTriangle call.
 // g_boxTests += 1 per intersectAabb call (two per record).
 
 bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
@@ -69,12 +69,10 @@ bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hi
     if (count != kBvh2cbInner) {
       for (uint i = 0u; i < count; ++i) {
         int tri = int(link + i);
-        vec3 v0, v1, v2;
-        loadTriangle(tri, v0, v1, v2);
         float t;
         vec2 bary;
         g_triTests++;
-        if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+        if (testTriangle(ray, tri, tMin, hit.t, t, bary)) {
           hit = MeshHit(t, tri, bary);
           if (anyHit) return true;
         }

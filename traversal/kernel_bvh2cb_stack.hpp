@@ -49,12 +49,10 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
     if (count != kBvh2cbInner) {
       for (uint i = 0u; i < count; ++i) {
         int tri = int(link + i);
-        vec3 v0, v1, v2;
-        loadTriangle(s, tri, v0, v1, v2);
         float t;
         vec2 bary;
         c.triTests++;
-        if (Tests::intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+        if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
           hit = MeshHit{t, tri, bary};
           if (anyHit) return true;
         }

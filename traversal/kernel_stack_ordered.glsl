@@ -11,7 +11,7 @@
 //
 // Counters: g_nodeVisits += 1 per node record fetched (loadNode): the root, each child whose box
 // is tested, and each node popped (its record is fetched again; its box is not re-tested).
-// g_triTests += 1 per intersectTriangle call; g_boxTests += 1 per intersectAabb call.
+// g_triTests += 1 per testTriangle call; g_boxTests += 1 per intersectAabb call.
 
 bool traverseOrdered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
@@ -32,12 +32,10 @@ bool traverseOrdered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit h
     if (count > 0u) {
       for (uint i = 0u; i < count; ++i) {
         int tri = int(a + i);
-        vec3 v0, v1, v2;
-        loadTriangle(tri, v0, v1, v2);
         float t;
         vec2 bary;
         g_triTests++;
-        if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+        if (testTriangle(ray, tri, tMin, hit.t, t, bary)) {
           hit = MeshHit(t, tri, bary);
           if (anyHit) return true;
         }

@@ -27,12 +27,10 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
     if (count > 0u) {
       for (uint i = 0u; i < count; ++i) {
         int tri = int(a + i);
-        vec3 v0, v1, v2;
-        loadTriangle(s, tri, v0, v1, v2);
         float t;
         vec2 bary;
         c.triTests++;
-        if (Tests::intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+        if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
           hit = MeshHit{t, tri, bary};
           if (anyHit) return true;
         }

@@ -13,7 +13,7 @@
 //
 // Counters: g_nodeVisits += 1 per node record fetched (loadNode): each pop and each child whose
 // box is tested, so a node pushed and later popped counts twice. g_triTests += 1 per
-// intersectTriangle call; g_boxTests += 1 per intersectAabb call.
+// testTriangle call; g_boxTests += 1 per intersectAabb call.
 
 bool traverseUnordered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
@@ -30,12 +30,10 @@ bool traverseUnordered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit
     if (count > 0u) {
       for (uint i = 0u; i < count; ++i) {
         int tri = int(a + i);
-        vec3 v0, v1, v2;
-        loadTriangle(tri, v0, v1, v2);
         float t;
         vec2 bary;
         g_triTests++;
-        if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+        if (testTriangle(ray, tri, tMin, hit.t, t, bary)) {
           hit = MeshHit(t, tri, bary);
           if (anyHit) return true;
         }

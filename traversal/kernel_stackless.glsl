@@ -5,7 +5,7 @@
 // C++ mirror: kernel_stackless.hpp.
 //
 // Counters: g_nodeVisits += 1 per node record fetched (loadNode), i.e. per node the walk reaches;
-// each has its box tested once. g_triTests += 1 per intersectTriangle call;
+// each has its box tested once. g_triTests += 1 per testTriangle call;
 // g_boxTests += 1 per intersectAabb call.
 
 bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
@@ -29,12 +29,10 @@ bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit
     }
     for (uint i = 0u; i < count; ++i) {
       int tri = int(a + i);
-      vec3 v0, v1, v2;
-      loadTriangle(tri, v0, v1, v2);
       float t;
       vec2 bary;
       g_triTests++;
-      if (intersectTriangle(ray, v0, v1, v2, tMin, hit.t, t, bary)) {
+      if (testTriangle(ray, tri, tMin, hit.t, t, bary)) {
         hit = MeshHit(t, tri, bary);
         if (anyHit) return true;
       }

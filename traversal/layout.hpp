@@ -1,7 +1,9 @@
-// layout.hpp (traversal) — C++ mirror of layout.glsl: decodes the texel streams described in
-// layout/layout.hpp (kEscapeEnd and kIndexMask come from there).
+// layout.hpp (traversal) — C++ mirror of layout.glsl: decodes layout v1's NODE stream described in
+// layout/layout.hpp (kEscapeEnd and kIndexMask come from there). The triangle streams' decoders
+// (loadTriangle, loadTriangleIds, loadAttributes, in the tree's triangle format) come with it.
 #pragma once
 #include "traversal/storage.hpp"
+#include "traversal/triangles_format.hpp"
 
 namespace bvhlab::glsl {
 
@@ -13,35 +15,6 @@ inline void loadNode(const Storage& s, int node, vec3& bmin, vec3& bmax, uint& a
   a = minTexel.w & kIndexMask;
   escape = maxTexel.w & kIndexMask;
   count = (minTexel.w >> 28) | ((maxTexel.w >> 28) << 4);
-}
-
-inline void loadTriangle(const Storage& s, int tri, vec3& v0, vec3& v1, vec3& v2) {
-  v0 = uintBitsToFloat(uvec3(fetchTriangle(s, 3 * tri + 0)));
-  v1 = uintBitsToFloat(uvec3(fetchTriangle(s, 3 * tri + 1)));
-  v2 = uintBitsToFloat(uvec3(fetchTriangle(s, 3 * tri + 2)));
-}
-
-inline void loadTriangleIds(const Storage& s, int tri, uint& primitive, uint& material, uint& mesh) {
-  primitive = fetchTriangle(s, 3 * tri + 0).w;
-  material = fetchTriangle(s, 3 * tri + 1).w;
-  mesh = fetchTriangle(s, 3 * tri + 2).w;
-}
-
-// The normal is interpolated, NOT normalised (see layout.glsl).
-inline void loadAttributes(const Storage& s, int tri, vec2 bary, vec3& normal, vec2& uv) {
-  uvec4 t0 = fetchAttribute(s, 4 * tri + 0);
-  uvec4 t1 = fetchAttribute(s, 4 * tri + 1);
-  uvec4 t2 = fetchAttribute(s, 4 * tri + 2);
-  uvec4 t3 = fetchAttribute(s, 4 * tri + 3);
-  vec3 n0 = uintBitsToFloat(uvec3(t0));
-  vec3 n1 = uintBitsToFloat(uvec3(t1));
-  vec3 n2 = uintBitsToFloat(uvec3(t2));
-  vec2 uv0 = uintBitsToFloat(uvec2(t0.w, t1.w));
-  vec2 uv1 = uintBitsToFloat(uvec2(t2.w, t3.x));
-  vec2 uv2 = uintBitsToFloat(uvec2(t3.y, t3.z));
-  float w = 1.0f - bary.x - bary.y;
-  normal = w * n0 + bary.x * n1 + bary.y * n2;
-  uv = w * uv0 + bary.x * uv1 + bary.y * uv2;
 }
 
 }  // namespace bvhlab::glsl

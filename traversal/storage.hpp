@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "layout/layout.hpp"
+#include "layout/triangle_formats.hpp"
 #include "shaders/common.hpp"
 
 namespace bvhlab {
@@ -19,16 +20,20 @@ int stackSizeFor(const PackedBvh& packed);
 
 namespace bvhlab::glsl {
 
-// What the GLSL reads from its uniforms and #defines, passed explicitly: the three streams and
+// What the GLSL reads from its uniforms and #defines, passed explicitly: the streams and
 // BVH_STACK_SIZE.
 struct Storage {
   const PackedBvh* bvh;
   int stackSize;  // BVH_STACK_SIZE
+  // The triangle format's accessor module the shader assembler would pick (packed.triangleFormat):
+  // the mirrors' triangle accessors switch on it (traversal/triangles_format.hpp).
+  TriangleFormat triangles;
 
   // Implicit on purpose: a PackedBvh passes for a Storage, with the stack size the shader
   // assembler defines for it.
   Storage(const PackedBvh& packed) : Storage(packed, stackSizeFor(packed)) {}
-  Storage(const PackedBvh& packed, int stackSize_) : bvh(&packed), stackSize(stackSize_) {
+  Storage(const PackedBvh& packed, int stackSize_)
+      : bvh(&packed), stackSize(stackSize_), triangles(findTriangleFormat(packed.triangleFormat).format) {
     // GLSL refuses an array of size 0; the stack kernels push the root unconditionally.
     if (stackSize < 1) throw std::invalid_argument("BVH_STACK_SIZE must be >= 1, got " + std::to_string(stackSize));
   }
@@ -47,6 +52,7 @@ inline uvec3 floatBitsToUint(vec3 v) { return uvec3(floatBitsToUint(v.x), floatB
 inline uvec4 fetchNode(const Storage& s, int texel) { return s.bvh->nodes.at(size_t(texel)); }
 inline uvec4 fetchTriangle(const Storage& s, int texel) { return s.bvh->triangles.at(size_t(texel)); }
 inline uvec4 fetchAttribute(const Storage& s, int texel) { return s.bvh->attributes.at(size_t(texel)); }
+inline uvec4 fetchVertex(const Storage& s, int texel) { return s.bvh->vertices.at(size_t(texel)); }
 
 // GLSL `T stack[BVH_STACK_SIZE];`: a fixed-size local array, its size known only at run time
 // here. Up to kInline entries live on the C++ stack (no allocation per ray); more go to the heap.
