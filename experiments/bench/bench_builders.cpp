@@ -12,12 +12,25 @@
 // figures are the MEDIAN over the repetitions (with min and max, ->ComputeStatistics). The end of
 // the output is a table per mesh: median time with 1 and 2 threads, SAH and the ratios against
 // embree-raw with 2 threads, then the sah-binned target line (1 thread vs embree-raw with 2 threads).
-//   bench_builders [--reps=N] [--benchmark_filter=...]   (the bunny comes from `bash datasets/fetch.sh`)
+//
+// --curve runs the accuracy curve of sah-binned's bin count instead (issue 15: what accuracy costs in
+// time): bins in kCurveBins on the bunny, the elephant, the armadillo and makeLargeMesh(1M), 1 and 2
+// threads, beside embree-raw (2 threads), all repetitions interleaved. Beside wall time it records
+// the process's CPU time (all threads; MeasureProcessCPUTime), which other processes on a loaded
+// machine do not inflate; Embree's is halved for the comparison (its 2-thread wall time can be no
+// shorter than that), so the CPU-time ratio is the conservative one. Per tree, once, outside the
+// timing: SAH, EPO (builders/epo.hpp) and the ray cost (node visits + triangle tests per ray, Ct =
+// Ci = 1) of closest-hit rays traversed front to back on the CPU here, against the registered
+// `embree` builder's tree (MEDIUM, the same build embree-raw times).
+//   bench_builders [--reps=N] [--curve] [--benchmark_filter=...]   (meshes: `bash datasets/fetch.sh`)
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <map>
+#include <set>
 #include <new>
 #include <string>
 #include <tuple>
@@ -27,6 +40,7 @@
 #include <embree3/rtcore.h>
 
 #include "builders/builder.hpp"
+#include "builders/epo.hpp"
 #include "builders/test_inputs.hpp"
 #include "datasets/procedural.hpp"
 
@@ -37,6 +51,7 @@ using bvhlab::testing::PrimitiveSet;
 
 constexpr uint32_t kLeafSize = 4;
 
+std::filesystem::path bunnyDir() { return bvhlab::testing::bunnyPath().parent_path(); }
 const PrimitiveSet& bunny() {
   static const PrimitiveSet set = bvhlab::testing::loadTriangles(bvhlab::testing::bunnyPath());
   return set;
@@ -49,6 +64,14 @@ const PrimitiveSet& largeMesh() {  // makeLargeMesh: dense and sparse regions, l
     for (const glm::uvec3& t : mesh.triangles) s.addTriangle(mesh.positions[t.x], mesh.positions[t.y], mesh.positions[t.z]);
     return s;
   }();
+  return set;
+}
+const PrimitiveSet& elephantMesh() {
+  static const PrimitiveSet set = bvhlab::testing::loadTriangles(bunnyDir() / "refined_elephant.off");
+  return set;
+}
+const PrimitiveSet& armadilloMesh() {
+  static const PrimitiveSet set = bvhlab::testing::loadTriangles(bunnyDir() / "armadillo.off");
   return set;
 }
 const PrimitiveSet& sphereMesh() {  // 1000 x 500 quads: 1,000,000 triangles
@@ -189,9 +212,155 @@ void buildWith(benchmark::State& state, std::string builder, MeshFn mesh, uint32
   state.counters["nodes"] = double(stats.nodes);
 }
 
+// ---- the bins curve (--curve): tree quality beside the time --------------------------------------
+
+constexpr uint32_t kCurveBins[] = {8, 12, 16, 24, 32, 48, 64, 128};
+
+// Closest-hit rays traversed front to back over the Bvh itself: a node counts as visited when it is
+// entered (its box was hit closer than the closest hit so far when it is popped); every triangle of
+// a visited leaf counts as tested. Rays: from random points on the sphere around the scene (radius
+// its diagonal) to random points in its box, so most rays hit. The same rays for every tree.
+struct Ray {
+  glm::vec3 origin, dir, invDir;
+};
+
+std::vector<Ray> curveRays(const PrimitiveSet& set, size_t count) {
+  Aabb bounds;
+  for (const Aabb& b : set.boxes) bounds.grow(b);
+  const glm::vec3 centre = 0.5f * (bounds.min + bounds.max), extent = bounds.max - bounds.min;
+  const float radius = glm::length(extent);
+  std::mt19937 rng(15);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f), n(-1.0f, 1.0f);
+  std::vector<Ray> rays;
+  while (rays.size() < count) {
+    const glm::vec3 p(n(rng), n(rng), n(rng));
+    if (!(glm::dot(p, p) > 1e-6f && glm::dot(p, p) <= 1.0f)) continue;  // uniform direction by rejection
+    const glm::vec3 origin = centre + radius * glm::normalize(p);
+    const glm::vec3 target = bounds.min + glm::vec3(u(rng), u(rng), u(rng)) * extent;
+    glm::vec3 dir = glm::normalize(target - origin);
+    // No zero components: 1 / 0 and then 0 * inf would make the slab test NaN for origins on a slab.
+    // 1e-20 is far below any direction component that changes a float slab distance in these scenes.
+    for (int k = 0; k < 3; ++k)
+      if (std::fabs(dir[k]) < 1e-20f) dir[k] = 1e-20f;
+    rays.push_back({origin, dir, 1.0f / dir});
+  }
+  return rays;
+}
+
+// Entry distance of the ray into the box, or +inf when it misses it or enters it beyond tMax.
+float entry(const Ray& r, const Aabb& b, float tMax) {
+  const glm::vec3 t0 = (b.min - r.origin) * r.invDir, t1 = (b.max - r.origin) * r.invDir;
+  const glm::vec3 lo = glm::min(t0, t1), hi = glm::max(t0, t1);
+  const float tNear = std::max({lo.x, lo.y, lo.z, 0.0f}), tFar = std::min({hi.x, hi.y, hi.z, tMax});
+  return tNear <= tFar ? tNear : INFINITY;
+}
+
+// Möller & Trumbore (1997): the hit distance, or tMax when there is none closer.
+float hitTriangle(const Ray& r, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, float tMax) {
+  const glm::vec3 e1 = b - a, e2 = c - a, p = glm::cross(r.dir, e2);
+  const float det = glm::dot(e1, p);
+  if (!(std::fabs(det) > 0.0f)) return tMax;  // parallel or degenerate
+  const float inv = 1.0f / det;
+  const glm::vec3 s = r.origin - a;
+  const float u = glm::dot(s, p) * inv;
+  if (!(u >= 0.0f && u <= 1.0f)) return tMax;
+  const glm::vec3 q = glm::cross(s, e1);
+  const float v = glm::dot(r.dir, q) * inv;
+  if (!(v >= 0.0f && u + v <= 1.0f)) return tMax;
+  const float t = glm::dot(e2, q) * inv;
+  return t > 0.0f && t < tMax ? t : tMax;
+}
+
+double rayCost(const Bvh& bvh, const PrimitiveSet& set, const std::vector<Ray>& rays) {
+  double cost = 0.0;
+  std::vector<std::pair<uint32_t, float>> stack;
+  for (const Ray& ray : rays) {
+    float tBest = INFINITY;
+    stack.clear();
+    if (const float t = entry(ray, bvh.nodes[0].bounds, tBest); t < INFINITY) stack.push_back({0u, t});
+    while (!stack.empty()) {
+      const auto [index, t] = stack.back();
+      stack.pop_back();
+      if (!(t < tBest)) continue;
+      cost += 1.0;  // a node visit
+      const BvhNode& node = bvh.nodes[index];
+      if (node.isLeaf()) {
+        cost += node.count;  // triangle tests
+        for (uint32_t k = node.first; k < node.first + node.count; ++k) {
+          const uint32_t id = bvh.primIndices[k];
+          tBest = hitTriangle(ray, set.v0[id], set.v1[id], set.v2[id], tBest);
+        }
+        continue;
+      }
+      const float tl = entry(ray, bvh.nodes[node.left].bounds, tBest), tr = entry(ray, bvh.nodes[node.right].bounds, tBest);
+      const bool leftFirst = tl <= tr;  // both finite or +inf: never NaN
+      const std::pair<uint32_t, float> near{leftFirst ? node.left : node.right, leftFirst ? tl : tr};
+      const std::pair<uint32_t, float> far{leftFirst ? node.right : node.left, leftFirst ? tr : tl};
+      if (far.second < INFINITY) stack.push_back(far);
+      if (near.second < INFINITY) stack.push_back(near);
+    }
+  }
+  return cost / double(rays.size());
+}
+
+struct Quality {
+  double sah = 0, epo = 0, rayCost = 0;
+};
+
+// Once per (mesh, builder, bins): repetitions reuse it.
+const Quality& treeQuality(const PrimitiveSet& set, const std::string& builder, uint32_t bins) {
+  static std::map<std::tuple<std::string, std::string, uint32_t>, Quality> cache;
+  static std::map<std::string, std::vector<Ray>> rays;
+  const auto key = std::make_tuple(set.name, builder, bins);
+  if (const auto it = cache.find(key); it != cache.end()) return it->second;
+  BuildOptions options;
+  options.maxLeafSize = kLeafSize;
+  options.bins = bins;
+  const Bvh bvh = buildBvh(builder, set.input(), options);
+  std::vector<Ray>& r = rays[set.name];
+  if (r.empty()) r = curveRays(set, 20000);
+  Quality q;
+  q.sah = sahCost(bvh, options.cost);
+  q.epo = endPointOverlap(bvh, set.v0, set.v1, set.v2, options.cost);
+  q.rayCost = rayCost(bvh, set, r);
+  return cache[key] = q;
+}
+
+void curveBinned(benchmark::State& state, MeshFn mesh, uint32_t bins, uint32_t threads) {
+  const PrimitiveSet* set = &mesh();
+  if (set->size() == 0) return state.SkipWithError("mesh missing: run `bash datasets/fetch.sh`");
+  BuildOptions options;
+  options.maxLeafSize = kLeafSize;
+  options.threads = threads;
+  options.bins = bins;
+  const BuildInput input = set->input();
+  validateBuildInput(input, options);
+  const BuilderInfo& info = findBuilder("sah-binned");
+  for (auto _ : state) {
+    Bvh bvh = info.build(input, options);
+    benchmark::DoNotOptimize(bvh.nodes.data());
+  }
+  const Quality& q = treeQuality(*set, "sah-binned", bins);
+  state.counters["sah"] = q.sah;
+  state.counters["epo"] = q.epo;
+  state.counters["ray_cost"] = q.rayCost;
+}
+
+// embree-raw for the time, and the registered `embree` builder's tree for the quality measures.
+void curveEmbree(benchmark::State& state, MeshFn mesh) {
+  embreeRaw(state, mesh, 2);
+  const PrimitiveSet& set = mesh();
+  if (set.size() == 0) return;
+  const Quality& q = treeQuality(set, "embree", 0);
+  state.counters["sah"] = q.sah;
+  state.counters["epo"] = q.epo;
+  state.counters["ray_cost"] = q.rayCost;
+}
+
 // Console output as usual (aggregates only), plus a table per mesh at the end, from the medians.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
+  explicit RatioReporter(bool curve) : curve_(curve) {}
   void ReportRuns(const std::vector<Run>& runs) override {
     ConsoleReporter::ReportRuns(runs);
     for (const Run& run : runs) {
@@ -202,20 +371,24 @@ class RatioReporter : public benchmark::ConsoleReporter {
       if (a == std::string::npos || b == std::string::npos) continue;
       Result& r = results_[{name.substr(a + 1, b - a - 1), name.substr(0, a)}];
       const int threads = std::atoi(name.c_str() + b + 9) == 1 ? 0 : 1;
-      const double t = run.GetAdjustedRealTime();
+      const double t = run.GetAdjustedRealTime(), cpu = run.GetAdjustedCPUTime();
+      auto counter = [&run](const char* name) {
+        const auto it = run.counters.find(name);
+        return it == run.counters.end() ? 0.0 : double(it->second);
+      };
       if (run.aggregate_name == "median") {
-        r.time[threads] = t;
-        const auto sah = run.counters.find("sah");
-        if (sah != run.counters.end()) r.sah = sah->second;
+        r.time[threads] = t, r.cpu[threads] = cpu;
+        r.sah = counter("sah"), r.epo = counter("epo"), r.rayCost = counter("ray_cost");
       } else if (run.aggregate_name == "min") {
-        r.low[threads] = t;
+        r.low[threads] = t, r.cpuLow[threads] = cpu;
       } else if (run.aggregate_name == "max") {
-        r.high[threads] = t;
+        r.high[threads] = t, r.cpuHigh[threads] = cpu;
       }
     }
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
+    if (curve_) return printCurve();
     std::string mesh;
     for (const auto& [key, r] : results_) {
       if (key.first != mesh) {
@@ -249,9 +422,47 @@ class RatioReporter : public benchmark::ConsoleReporter {
 
  private:
   struct Result {
-    double time[2] = {0, 0}, low[2] = {0, 0}, high[2] = {0, 0};  // [1 thread, 2 threads], ms
-    double sah = 0;
+    double time[2] = {0, 0}, low[2] = {0, 0}, high[2] = {0, 0};  // [1 thread, 2 threads], wall ms
+    double cpu[2] = {0, 0}, cpuLow[2] = {0, 0}, cpuHigh[2] = {0, 0};  // process CPU ms (--curve)
+    double sah = 0, epo = 0, rayCost = 0;
   };
+
+  // Ratios of medians, with the range [min / ref max, max / ref min] over the repetitions beside them.
+  static std::string ratio(double median, double low, double high, double refMedian, double refLow, double refHigh) {
+    char buf[64];
+    if (median > 0 && refMedian > 0)
+      std::snprintf(buf, sizeof buf, "%.3f [%.2f-%.2f]", median / refMedian, low / refHigh, high / refLow);
+    else
+      std::snprintf(buf, sizeof buf, "-");
+    return buf;
+  }
+  void printCurve() const {
+    std::printf("\nsah-binned bins curve (leaf 4, Ct = Ci = 1): ratios to embree-raw (MEDIUM, 2 threads) as median "
+                "[min-max range over the repetitions]; wall = real time; CPU = process CPU time, against Embree's "
+                "halved (its 2-thread wall time is at least that); SAH, EPO and ray cost against the registered "
+                "embree builder's tree\n");
+    std::set<std::string> meshes;
+    for (const auto& [key, r] : results_) meshes.insert(key.first);
+    for (const std::string& mesh : meshes) {
+      const Result* ref = find(mesh, "embree-raw");
+      if (!ref) continue;
+      std::printf("\n%s: embree-raw wall %.2f [%.2f, %.2f] ms, CPU %.2f ms; SAH %.3f, EPO %.3f, ray cost %.2f\n", mesh.c_str(),
+                  ref->time[1], ref->low[1], ref->high[1], ref->cpu[1], ref->sah, ref->epo, ref->rayCost);
+      std::printf("%5s %10s %20s %20s %10s %20s %8s %8s %8s\n", "bins", "1t wall ms", "x wall (1 thread)", "x CPU/2 (1 thread)",
+                  "2t wall ms", "x wall (2 threads)", "x SAH", "x EPO", "x rays");
+      for (uint32_t bins : kCurveBins) {
+        const Result* r = find(mesh, "sah-binned:" + std::to_string(bins));
+        if (!r) continue;
+        const double half = 0.5;  // Embree's CPU time over its two threads, halved
+        std::printf("%5u %10.2f %20s %20s %10.2f %20s %8.4f %8.4f %8.4f\n", bins, r->time[0],
+                    ratio(r->time[0], r->low[0], r->high[0], ref->time[1], ref->low[1], ref->high[1]).c_str(),
+                    ratio(r->cpu[0], r->cpuLow[0], r->cpuHigh[0], half * ref->cpu[1], half * ref->cpuLow[1], half * ref->cpuHigh[1]).c_str(),
+                    r->time[1], ratio(r->time[1], r->low[1], r->high[1], ref->time[1], ref->low[1], ref->high[1]).c_str(),
+                    r->sah / ref->sah, r->epo / ref->epo, r->rayCost / ref->rayCost);
+      }
+    }
+  }
+  bool curve_ = false;
   const Result* find(const std::string& mesh, const std::string& builder) const {
     const auto it = results_.find({mesh, builder});
     return it == results_.end() ? nullptr : &it->second;
@@ -265,11 +476,15 @@ int main(int argc, char** argv) {
   // Our own flag, and random interleaving by default (a shared machine drifts; interleaved
   // repetitions see the same drift).
   int reps = 5;
-  bool interleaving = false;
+  bool interleaving = false, curve = false;
   std::vector<char*> args;
   for (int i = 0; i < argc; ++i) {
     if (std::strncmp(argv[i], "--reps=", 7) == 0) {
       reps = std::max(1, std::atoi(argv[i] + 7));
+      continue;
+    }
+    if (std::strcmp(argv[i], "--curve") == 0) {
+      curve = true;
       continue;
     }
     if (std::strncmp(argv[i], "--benchmark_enable_random_interleaving", 38) == 0) interleaving = true;
@@ -285,8 +500,19 @@ int main(int argc, char** argv) {
     b->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(0.2)->Repetitions(reps)->ReportAggregatesOnly(true);
     b->ComputeStatistics("min", minimum)->ComputeStatistics("max", maximum);
   };
+  const std::vector<std::pair<std::string, MeshFn>> curveMeshes = {
+      {"bunny", bunny}, {"elephant", elephantMesh}, {"armadillo", armadilloMesh}, {"large1M", largeMesh}};
+  for (const auto& [meshName, set] : curve ? curveMeshes : decltype(curveMeshes){}) {
+    auto timeCpuToo = [&](benchmark::internal::Benchmark* b) { configure(b), b->MeasureProcessCPUTime(); };
+    timeCpuToo(benchmark::RegisterBenchmark(("embree-raw/" + meshName + "/threads:2").c_str(), curveEmbree, set));
+    for (uint32_t bins : kCurveBins)
+      for (uint32_t threads : {1u, 2u})
+        timeCpuToo(benchmark::RegisterBenchmark(
+            ("sah-binned:" + std::to_string(bins) + "/" + meshName + "/threads:" + std::to_string(threads)).c_str(),
+            curveBinned, set, bins, threads));
+  }
   const std::vector<std::pair<std::string, MeshFn>> meshes = {{"bunny", bunny}, {"large1M", largeMesh}, {"sphere1M", sphereMesh}};
-  for (const auto& [meshName, set] : meshes) {
+  for (const auto& [meshName, set] : curve ? decltype(meshes){} : meshes) {
     for (unsigned threads : {1u, 2u}) {
       const std::string suffix = "/" + meshName + "/threads:" + std::to_string(threads);
       if (threads == 2) configure(benchmark::RegisterBenchmark(("embree-raw" + suffix).c_str(), embreeRaw, set, threads));
@@ -296,7 +522,7 @@ int main(int argc, char** argv) {
   }
   benchmark::Initialize(&count, args.data());
   if (benchmark::ReportUnrecognizedArguments(count, args.data())) return 1;
-  RatioReporter reporter;
+  RatioReporter reporter(curve);
   benchmark::RunSpecifiedBenchmarks(&reporter);
   benchmark::Shutdown();
 }
