@@ -1,6 +1,12 @@
 // PLOC-specific properties (builders/ploc.cpp). The invariants every builder keeps (boxes, ranges,
 // leaf sizes, degenerate inputs) are checked for ploc too by tests/test_builders.cpp's registry tests.
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <limits>
+#include <random>
 #include <bit>
 #include <cmath>
 #include <stdexcept>
@@ -17,6 +23,12 @@ namespace bvhlab {
 namespace {
 
 using testing::PrimitiveSet;
+
+double threadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * double(t.tv_sec) + 1e-6 * double(t.tv_nsec);
+}
 
 bool sameTree(const Bvh& a, const Bvh& b) {
   if (a.nodes.size() != b.nodes.size() || a.primIndices != b.primIndices) return false;
@@ -267,6 +279,100 @@ TEST(Ploc, CoincidentCentroidsMakeABalancedTree) {
   }
   const Bvh bvh = buildBvh("ploc", set.input(), withRadius(16, 0, 1));
   EXPECT_EQ(walk(bvh, set.size()).depth, 11u);  // ceil(log2(1000)) + 1
+}
+
+// ---- measurements (not run by default) -----------------------------------------------------------
+// ./tests/test_ploc --gtest_also_run_disabled_tests --gtest_filter='*DISABLED_RadiusCurve'
+// prints docs/builders.md's radius table: per mesh (PLOC_MESH: one of the names below), sah-binned and
+// ploc at each radius: SAH, ray cost, single-thread build CPU ms, median [min-max] of 5 runs.
+
+// Node visits + triangle tests per ray of an ordered stack traversal over the Bvh itself (both
+// children's boxes tested, the nearer pushed last; closest hit, Moller-Trumbore): a layout-free
+// count, so builders compare without a packer in between.
+double rayCost(const Bvh& bvh, const PrimitiveSet& set, const std::vector<glm::vec3>& origins,
+               const std::vector<glm::vec3>& directions) {
+  auto slab = [](const Aabb& b, const glm::vec3& o, const glm::vec3& inv, float tMax, float& tNear) {
+    const glm::vec3 t0 = (b.min - o) * inv, t1 = (b.max - o) * inv;
+    const glm::vec3 lo = glm::min(t0, t1), hi = glm::max(t0, t1);
+    tNear = std::max(std::max(lo.x, lo.y), std::max(lo.z, 0.0f));
+    return tNear <= std::min(std::min(hi.x, hi.y), std::min(hi.z, tMax));
+  };
+  double cost = 0.0;
+  std::vector<uint32_t> stack;
+  for (size_t r = 0; r < origins.size(); ++r) {
+    const glm::vec3 o = origins[r], d = directions[r], inv = 1.0f / d;
+    float t = std::numeric_limits<float>::max(), near = 0.0f, nearRight = 0.0f;
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+      const BvhNode& n = bvh.nodes[stack.back()];
+      stack.pop_back();
+      cost += 1.0;
+      if (n.isLeaf()) {
+        for (uint32_t k = n.first; k < n.first + n.count; ++k) {
+          cost += 1.0;
+          const uint32_t i = bvh.primIndices[k];
+          const glm::vec3 e1 = set.v1[i] - set.v0[i], e2 = set.v2[i] - set.v0[i], p = glm::cross(d, e2);
+          const float det = glm::dot(e1, p);
+          if (det == 0.0f) continue;  // parallel to the triangle's plane
+          const glm::vec3 s = o - set.v0[i], q = glm::cross(s, e1);
+          const float u = glm::dot(s, p) / det, v = glm::dot(d, q) / det, h = glm::dot(e2, q) / det;
+          if (u >= 0.0f && v >= 0.0f && u + v <= 1.0f && h > 0.0f && h < t) t = h;
+        }
+        continue;
+      }
+      const bool left = slab(bvh.nodes[n.left].bounds, o, inv, t, near);
+      const bool right = slab(bvh.nodes[n.right].bounds, o, inv, t, nearRight);
+      if (left && right) {
+        stack.push_back(near <= nearRight ? n.right : n.left);
+        stack.push_back(near <= nearRight ? n.left : n.right);
+      } else if (left || right) {
+        stack.push_back(left ? n.left : n.right);
+      }
+    }
+  }
+  return cost / double(origins.size());
+}
+
+TEST(PlocMeasure, DISABLED_RadiusCurve) {
+  const char* only = std::getenv("PLOC_MESH");
+  const std::filesystem::path dir = std::filesystem::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes";
+  for (const std::string mesh : {"bunny00", "refined_elephant", "armadillo"}) {
+    if (only && mesh != only) continue;
+    const PrimitiveSet set = testing::loadTriangles(dir / (mesh + ".off"));
+    if (set.size() == 0) continue;
+    Aabb bounds;
+    for (const Aabb& b : set.boxes) bounds.grow(b);
+    // 20,000 rays from a sphere around the mesh towards points in its box.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::vector<glm::vec3> origins, directions;
+    const glm::vec3 centre = 0.5f * (bounds.min + bounds.max);
+    const float radius = glm::length(bounds.max - bounds.min);
+    while (origins.size() < 20000) {
+      const glm::vec3 w = glm::vec3(u(rng), u(rng), u(rng)) * 2.0f - 1.0f;
+      if (glm::length(w) > 1.0f || glm::length(w) < 1e-3f) continue;  // uniform directions, none near 0
+      const glm::vec3 from = centre + radius * glm::normalize(w);
+      const glm::vec3 to = bounds.min + glm::vec3(u(rng), u(rng), u(rng)) * (bounds.max - bounds.min);
+      origins.push_back(from);
+      directions.push_back(glm::normalize(to - from));
+    }
+    std::vector<std::pair<std::string, uint32_t>> runs{{"sah-binned", 16}};
+    for (uint32_t r : {1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u, 256u}) runs.push_back({"ploc", r});
+    for (const auto& [builder, r] : runs) {
+      const BuildOptions options = withRadius(r, 1);
+      std::vector<double> ms;
+      Bvh bvh;
+      for (int k = 0; k < 5; ++k) {
+        const double c0 = threadCpuMs();
+        bvh = buildBvh(builder, set.input(), options);
+        ms.push_back(threadCpuMs() - c0);
+      }
+      std::sort(ms.begin(), ms.end());
+      std::printf("| %s | %s | %u | %.3f | %.2f | %.1f [%.1f-%.1f] |\n", mesh.c_str(), builder.c_str(), r,
+                  sahCost(bvh, options.cost), rayCost(bvh, set, origins, directions), ms[2], ms[0], ms[4]);
+      std::fflush(stdout);
+    }
+  }
 }
 
 }  // namespace
