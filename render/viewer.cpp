@@ -15,6 +15,7 @@
 
 #include "builders/builder.hpp"
 #include "datasets/scene_io.hpp"
+#include "layout/layouts.hpp"
 #include "render/viewer_app.hpp"
 #include "traversal/kernels.hpp"
 
@@ -25,7 +26,9 @@ namespace viewer_detail {
 Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
   // Validate everything before a window appears.
   findBuilder(o.builder);
-  findKernel(o.kernel);
+  // As `bvhlab render`: an unknown layout, or a kernel of another layout, is refused naming the valid ones.
+  layout_ = findLayout(o.layout).name;
+  kernel_ = findKernel(layout_, o.kernel).name;
   if (o.leafSize < 1 || o.leafSize > int(kMaxLeafSize))
     throw std::invalid_argument("--leaf-size must be in 1.." + std::to_string(kMaxLeafSize));
   if (o.depth && (*o.depth < 1 || *o.depth > kMaxDepth))
@@ -34,8 +37,9 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
     throw std::invalid_argument("--view must be one of shaded, normal, depth, primid, visits");
   if (!(o.resolutionScale >= 0.05f && o.resolutionScale <= 1.0f))
     throw std::invalid_argument("--scale must be in 0.05..1");
-  if (std::string e = settingError("aa", o.aa); !e.empty()) throw std::invalid_argument("--aa: " + e);
-  if (std::string e = settingError("robust", o.robust); !e.empty()) throw std::invalid_argument("--robust: " + e);
+  if (std::string e = settingError("aa", o.aa, layout_); !e.empty()) throw std::invalid_argument("--aa: " + e);
+  if (std::string e = settingError("robust", o.robust, layout_); !e.empty())
+    throw std::invalid_argument("--robust: " + e);
   if (o.frames < 0) throw std::invalid_argument("--frames must be >= 0");
   if ((o.width && (*o.width < 1 || *o.width > 16384)) || (o.height && (*o.height < 1 || *o.height > 16384)))
     throw std::invalid_argument("--width/--height must be in 1..16384");
@@ -47,7 +51,7 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
         throw InputError(script_->file + ":" + std::to_string(e.line) + ": unknown key '" + e.key +
                          "' (see docs/viewer.md)");
       else if (e.kind == ScriptEvent::Kind::Set)
-        if (std::string error = settingError(e.key, e.value); !error.empty())
+        if (std::string error = settingError(e.key, e.value, layout_); !error.empty())
           throw InputError(script_->file + ":" + std::to_string(e.line) + ": " + error);
   }
   if (!o.replay.empty()) replay_ = loadCameraPath(o.replay), replaying_ = true;
@@ -61,7 +65,6 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
   if (o.fov) original_.camera.fovDeg = *o.fov;
   camera_.setCamera(original_.camera);
   builder_ = o.builder;
-  kernel_ = o.kernel;
   view_ = o.view;
   aa_ = o.aa;
   robust_ = o.robust;
@@ -259,7 +262,7 @@ void Viewer::cycle(const std::string& what, int step) {
     int i = std::clamp(int(it - kScales.begin()) + step, 0, int(kScales.size()) - 1);
     set(what, shortest(kScales[size_t(i)]));
   } else {
-    const std::vector<std::string> names = choices(what);
+    const std::vector<std::string> names = choices(what, layout_);
     const std::string& cur = what == "builder" ? builder_ : what == "kernel" ? kernel_ : what == "view" ? view_
                              : what == "aa"    ? aa_      : robust_;
     auto it = std::find(names.begin(), names.end(), cur);
@@ -310,9 +313,10 @@ ShaderOptions Viewer::shaderOptions(bool countStats) const {
   ShaderOptions so;
   so.maxDepth = depth_;
   so.view = view_ == "visits" ? View::Shaded : parseView(view_);
+  so.layout = layout_;
   so.kernel = kernel_;
   so.reinhard = sc.settings.reinhard;
-  so.bvhStackSize = stackSizeFor(std::max<uint32_t>(1, prepared_->packed.depth));
+  so.bvhStackSize = stackSizeFor(prepared_->packed);  // the layout's own bound (a wide node pushes W - 1)
   so.countStats = countStats;
   so.ssaaGrid = ssaaGridOf(aa_);
   so.robust = parseRobustness(robust_);
@@ -331,7 +335,7 @@ void Viewer::ensureRenderers() {
     bo.maxLeafSize = uint32_t(leafSize_);
     bo.optimize = optimize_;
     auto start = Clock::now();
-    prepared_ = prepareScene(Scene(original_), builder_, bo);
+    prepared_ = prepareScene(Scene(original_), builder_, bo, layout_);
     prepareMs_ = msSince(start);
     if (!switches_.empty()) {
       switches_.back()["build_ms"] = prepared_->stats.buildMs;
@@ -410,6 +414,7 @@ int Viewer::run() {
                           {"renderer", glRenderer_},
                           {"frames", rendered_},
                           {"builder", builder_},
+                          {"layout", layout_},
                           {"kernel", kernel_},
                           {"leaf_size", leafSize_},
                           {"depth", depth_},
@@ -422,6 +427,9 @@ int Viewer::run() {
                           {"height", renderH_},
                           {"build_ms", b.buildMs},
                           {"sah_cost", b.sahCost},
+                          {"bytes", b.bytes},
+                          {"bytes_per_triangle",
+                           prepared_->soup.size() ? double(b.bytes) / double(prepared_->soup.size()) : 0.0},
                           {"frame_ms_median", median({recentMs_.begin(), recentMs_.end()})},
                           {"aa_ms_median", median({recentAaMs_.begin(), recentAaMs_.end()})},
                           {"loop_ms_median", median({recentLoopMs_.begin(), recentLoopMs_.end()})},

@@ -16,7 +16,8 @@ struct ViewerOptions {
   std::optional<int> width, height;   // window size (default: the scene's image size)
   std::string builder = "sah-binned";
   std::string optimize;  // post-pass after every (re)build: "" | "reinsert"
-  std::string kernel = "stack-ordered";
+  std::string layout = "v1";          // texture layout of the tree (layout/layouts.hpp), for the session
+  std::string kernel;                 // "" = the layout's default kernel (K cycles through its kernels)
   int leafSize = 4;
   std::optional<int> depth;
   std::string view = "shaded";        // shaded | normal | depth | primid | visits

@@ -66,11 +66,13 @@ std::optional<T> parseNumber(const std::string& text) {
   return v;
 }
 
-// The values a named setting cycles through (keys, combos); empty for numeric settings.
-std::vector<std::string> choices(const std::string& what);
+// The values a named setting cycles through (keys, combos); empty for numeric settings. Kernels are
+// those that walk `layout` (traversal/kernels.hpp).
+std::vector<std::string> choices(const std::string& what, const std::string& layout);
 std::string joined(const std::vector<std::string>& names);
-// "" when `value` is valid for the setting (one of scriptSettings()), else what is wrong.
-std::string settingError(const std::string& what, const std::string& value);
+// "" when `value` is valid for the setting (one of scriptSettings()) with the tree in `layout`, else
+// what is wrong.
+std::string settingError(const std::string& what, const std::string& value, const std::string& layout);
 // Script key names -> GLFW keys (docs/viewer.md lists them).
 int keyFromName(const std::string& name);
 // "SHIFT+B", "CTRL+1" -> key + modifier bits; GLFW_KEY_UNKNOWN when the name is not a key.
@@ -139,7 +141,7 @@ class Viewer {
   std::string glRenderer_;
 
   // live configuration
-  std::string builder_, kernel_, view_, aa_, robust_;
+  std::string builder_, layout_, kernel_, view_, aa_, robust_;  // layout_ is fixed for the session
   int leafSize_ = 4, depth_ = 5;
   std::string optimize_;  // ViewerOptions::optimize, applied after every rebuild
   float scale_ = 1.0f;

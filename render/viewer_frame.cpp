@@ -162,7 +162,7 @@ void Viewer::drawOverlay() {
     auto combo = [&](const char* label, const std::string& what, const std::string& current) {
       ImGui::SetNextItemWidth(130);
       if (ImGui::BeginCombo(label, current.c_str())) {
-        for (const std::string& c : choices(what)) {
+        for (const std::string& c : choices(what, layout_)) {
           const bool selected = c == current;
           if (ImGui::Selectable(c.c_str(), selected) && !selected) set(what, c);
           if (selected) ImGui::SetItemDefaultFocus();
@@ -173,7 +173,7 @@ void Viewer::drawOverlay() {
     combo("[B] builder", "builder", builder_);
     ImGui::SameLine();
     ImGui::Text("build %.1f ms (prepare %.1f ms)", b.buildMs, prepareMs_);
-    combo("[K] kernel", "kernel", kernel_);
+    combo(("[K] kernel (" + layout_ + ")").c_str(), "kernel", kernel_);
     ImGui::SameLine();
     ImGui::Text("first frame %.0f ms", firstFrameMs_);
     combo("[M] AA", "aa", aa_);
@@ -186,6 +186,8 @@ void Viewer::drawOverlay() {
     ImGui::Text("[L] leaf %d   [ ] depth %d", leafSize_, depth_);
     ImGui::Text("[,.] scale %.3f -> %dx%d", scale_, renderW_, renderH_);
     ImGui::Text("SAH %.2f  nodes %zu  leaves %zu  tree depth %u", b.sahCost, b.nodes, b.leaves, b.depth);
+    ImGui::Text("layout %s: %.1f bytes per triangle", layout_.c_str(),
+                prepared_->soup.size() ? double(b.bytes) / double(prepared_->soup.size()) : 0.0);
     if (rayStats_.valid)
       ImGui::Text("per ray: %.1f node visits, %.1f triangle tests%s", rayStats_.visitsPerRay, rayStats_.testsPerRay,
                   rayStats_.overflows ? "  STACK OVERFLOW" : "");

@@ -23,12 +23,12 @@ double median(std::vector<double> v) {
 }
 
 // The values a named setting cycles through (keys, combos); empty for numeric settings.
-std::vector<std::string> choices(const std::string& what) {
+std::vector<std::string> choices(const std::string& what, const std::string& layout) {
   std::vector<std::string> names;
   if (what == "builder")
     for (const BuilderInfo& b : builders()) names.push_back(b.name);
   if (what == "kernel")
-    for (const KernelInfo& k : kernels()) names.push_back(k.name);
+    for (const KernelInfo& k : kernelsFor(layout)) names.push_back(k.name);
   if (what == "view") names = kViews;
   if (what == "aa") names = kAaModes;
   if (what == "robust") names = robustnessNames();
@@ -42,7 +42,7 @@ std::string joined(const std::vector<std::string>& names) {
 }
 
 // "" when `value` is valid for the setting (one of scriptSettings()), else what is wrong.
-std::string settingError(const std::string& what, const std::string& value) {
+std::string settingError(const std::string& what, const std::string& value, const std::string& layout) {
   if (what == "leaf_size") {
     std::optional<int> v = parseNumber<int>(value);
     return v && *v >= 1 && *v <= int(kMaxLeafSize) ? "" : "leaf_size must be in 1.." + std::to_string(kMaxLeafSize);
@@ -55,7 +55,7 @@ std::string settingError(const std::string& what, const std::string& value) {
     std::optional<float> v = parseNumber<float>(value);
     return v && *v >= 0.05f && *v <= 1.0f ? "" : "scale must be in 0.05..1";
   }
-  const std::vector<std::string> names = choices(what);
+  const std::vector<std::string> names = choices(what, layout);
   if (names.empty()) return "unknown setting '" + what + "' (" + joined(scriptSettings()) + ")";
   if (std::find(names.begin(), names.end(), value) == names.end())
     return "unknown " + what + " '" + value + "' (valid: " + joined(names) + ")";

@@ -16,6 +16,7 @@
 
 #include "builders/builder.hpp"
 #include "datasets/image_io.hpp"
+#include "layout/layouts.hpp"
 #include "render/fly_camera.hpp"
 #include "render/viewer.hpp"
 #include "traversal/kernels.hpp"
@@ -314,6 +315,50 @@ TEST(ViewCommand, ScriptedKeysSwitchBuilderAndKernel) {
   EXPECT_TRUE(j["switches"][0].contains("build_ms"));
   EXPECT_EQ(j["switches"][1]["switch"], "kernel");
   EXPECT_EQ(j["switches"][1]["frame"], 2);
+}
+
+// `--layout`: refused as `bvhlab render` refuses it (before any window), and every layout's scripted
+// frame equals the headless render of that layout; K cycles through the layout's own kernels.
+TEST(ViewCommand, LayoutOptionRefusesLikeRenderAndDrawsEveryLayoutLikeRender) {
+  if (shell(std::string(BVHLAB_BINARY) + " view --help >/dev/null").rc != 0)
+    GTEST_SKIP() << "this bvhlab has no `view` subcommand";
+  auto errorLine = [](const std::string& err) {  // the "bvhlab: error: ..." line
+    const size_t at = err.find("error:");
+    return at == std::string::npos ? err : err.substr(at, err.find('\n', at) - at);
+  };
+  for (const char* bad : {"--layout bvh9", "--layout bvh2-cb --kernel stackless"}) {
+    SCOPED_TRACE(bad);
+    Result v = shell("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(BVHLAB_BINARY) + " view " +
+                     cubeMesh().string() + " " + bad);
+    Result r = shell(std::string(BVHLAB_BINARY) + " render " + cubeMesh().string() + " " + bad + " -o " +
+                     (tempDir() / "refused.png").string());
+    EXPECT_EQ(v.rc, r.rc) << v.err;
+    EXPECT_NE(v.rc, 0);
+    EXPECT_EQ(errorLine(v.err), errorLine(r.err));
+    EXPECT_NE(v.err.find("bvh2-cb"), std::string::npos) << v.err;  // names the layouts / the layout's kernels
+  }
+
+  REQUIRE_VIEWER(prefix);
+  const fs::path dir = tempDir();
+  writeFile(dir / "layout.txt", std::string(kPoseLine) + "2 key K\n");
+  for (const LayoutInfo& layout : layouts()) {
+    SCOPED_TRACE(layout.name);
+    const fs::path shot = dir / ("view-" + layout.name + ".png"), headless = dir / ("render-" + layout.name + ".png");
+    Result v = shell(view(*prefix, "--layout " + layout.name + " --json --frames 4 --script " +
+                                       (dir / "layout.txt").string() + " --screenshot " + shot.string()));
+    ASSERT_EQ(v.rc, 0) << v.err;
+    const nlohmann::json j = nlohmann::json::parse(v.out);
+    EXPECT_EQ(j["layout"], layout.name);
+    const std::vector<KernelInfo>& own = kernelsFor(layout.name);
+    size_t next = 0;  // K from the layout's default kernel: the next of its own kernels
+    for (size_t i = 0; i < own.size(); ++i)
+      if (own[i].name == layout.defaultKernel) next = (i + 1) % own.size();
+    EXPECT_EQ(j["kernel"], own[next].name);
+    EXPECT_GT(j["bytes_per_triangle"].get<double>(), 0.0);
+    Result r = renderHeadless(headless, "--layout " + layout.name + " --kernel " + own[next].name);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    expectSameImage(shot, headless);
+  }
 }
 
 TEST(ViewCommand, RecordedPathReplaysToSamePoses) {
