@@ -17,9 +17,11 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_run.hpp"
+#include "gl_compute.hpp"
 #include "layout/layouts.hpp"
 #include "layout/triangle_formats.hpp"
 #include "layout_test_util.hpp"
+#include "render/gpu_renderer.hpp"
 #include "render/ray_tracer_gl.hpp"
 #include "shaders/assemble.hpp"
 #include "traversal/intersectors.hpp"
@@ -289,6 +291,18 @@ TEST(TriangleFormatKernels, EveryFormatLayoutAndKernelFindTheBruteForceHits) {
           for (const BatchRay& r : rays)
             expected.push_back(robust == Robustness::Fast ? bruteForceStream<glsl::FastTests>(s, streamTriangles(p), r)
                                                           : bruteForceStream<glsl::RobustTests>(s, streamTriangles(p), r));
+          // precomputed's arithmetic differs from Moller-Trumbore's only in rounding: the same hits as
+          // raw with the fast test, t within 2^-16 relative, but for rays grazing an edge (a few).
+          if (f.format == TriangleFormat::Precomputed) {
+            const PackedBvh rawPacked = packed(l, bvh, m.soup, "raw");
+            const glsl::Storage rawStorage(rawPacked);
+            size_t disagree = 0;
+            for (size_t i = 0; i < rays.size(); ++i) {
+              const BatchHit mt = bruteForceStream<glsl::FastTests>(rawStorage, streamTriangles(rawPacked), rays[i]);
+              disagree += mt.hit != expected[i].hit || (mt.hit && !nearlyEqual(mt.t, expected[i].t));
+            }
+            EXPECT_LE(disagree, rays.size() / 50) << m.name << " / " << l.name << ": precomputed vs raw";
+          }
           if (robust == Robustness::Watertight) {
             for (size_t i = 0; i < rays.size(); ++i)
               ASSERT_TRUE(expected[i].hit == soupHits[i].hit && expected[i].t == soupHits[i].t)
@@ -362,6 +376,82 @@ TEST(TriangleFormatKernelsGlsl, EqualTheMirrorPerRay) {
           }
           EXPECT_GT(found, rays.size() / 10);
         }
+    }
+}
+
+// Each format's GLSL accessors decode what their mirrors decode, triangle by triangle: vertices and ids
+// exactly, the interpolated normal and uv to float rounding (llvmpipe may fuse the interpolation's
+// multiply-adds; 1e-6 is far below the oct bound and far above that), flat corners included.
+TEST(TriangleFormatKernelsGlsl, AccessorsEqualTheMirror) {
+  auto ctx = contextOrNull();
+  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  const char* kMain = R"(
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) readonly buffer In { vec4 unused[]; };
+layout(std430, binding = 1) writeonly buffer Out { uvec4 results[]; };
+uniform int u_count;
+void main() {
+  int i = int(gl_GlobalInvocationID.x);
+  if (i >= u_count) return;
+  vec3 v0, v1, v2;
+  loadTriangle(i, v0, v1, v2);
+  uint primitive, material, mesh;
+  loadTriangleIds(i, primitive, material, mesh);
+  vec3 normal;
+  vec2 uv;
+  loadAttributes(i, vec2(0.2, 0.3), normal, uv);
+  results[5 * i + 0] = uvec4(floatBitsToUint(v0), primitive);
+  results[5 * i + 1] = uvec4(floatBitsToUint(v1), material);
+  results[5 * i + 2] = uvec4(floatBitsToUint(v2), mesh);
+  results[5 * i + 3] = uvec4(floatBitsToUint(normal), 0u);
+  results[5 * i + 4] = uvec4(floatBitsToUint(uv), 0u, 0u);
+}
+)";
+  for (const TestMesh& m : {meshes()[1], meshes().back()})  // flat corners, then smooth ones with uvs
+    for (const TriangleFormatInfo& f : triangleFormats()) {
+      SCOPED_TRACE(m.name + " / " + f.name);
+      const PackedBvh p = packed(findLayout("v1"), build("sah-binned", m.soup), m.soup, f.name);
+      const size_t count = streamTriangles(p);
+      const std::string source = "#version 450 core\n#define BVH_STACK_SIZE 1\n" + glslModule("common.glsl") +
+                                 glslModule("storage_tbo.glsl") + glslModule("ray_triangle.glsl") +
+                                 glslModule(f.glslModule) + kMain;
+      const GLuint program = test::compileCompute(source);
+      unsigned buffers[4], textures[4];
+      const std::vector<glm::uvec4>* streams[4] = {&p.nodes, &p.triangles, &p.attributes, &p.vertices};
+      const char* names[4] = {"u_nodes", "u_triangles", "u_attributes", "u_vertices"};
+      glUseProgram(program);
+      for (int unit = 0; unit < 4; ++unit) {
+        textures[unit] = uploadBvhStream(*streams[unit], Storage::Tbo, names[unit], &buffers[unit]);
+        glBindTextureUnit(GLuint(unit), textures[unit]);
+        glUniform1i(glGetUniformLocation(program, names[unit]), unit);
+      }
+      const std::vector<glm::uvec4> out = test::dispatchCompute<glm::uvec4>(
+          program, std::vector<glm::vec4>(1), 5 * count, count, "triangle accessors");
+      glDeleteTextures(4, textures);
+      glDeleteBuffers(4, buffers);
+      glDeleteProgram(program);
+      const glsl::Storage s(p);
+      int failures = 0;
+      for (size_t j = 0; j < count && failures < 3; ++j) {
+        glm::vec3 v[3], n;
+        glm::vec2 uv;
+        uint32_t ids[3];
+        glsl::loadTriangle(s, int(j), v[0], v[1], v[2]);
+        glsl::loadTriangleIds(s, int(j), ids[0], ids[1], ids[2]);
+        glsl::loadAttributes(s, int(j), glm::vec2(0.2f, 0.3f), n, uv);
+        bool same = true;
+        for (int k = 0; k < 3; ++k)
+          same = same && glm::uvec4(glsl::floatBitsToUint(v[k]), ids[k]) == out[5 * j + size_t(k)];
+        const glm::vec3 gn = glsl::uintBitsToFloat(glm::uvec3(out[5 * j + 3]));
+        const glm::vec2 guv = glsl::uintBitsToFloat(glm::uvec2(out[5 * j + 4]));
+        same = same && glm::all(glm::lessThanEqual(glm::abs(gn - n), glm::vec3(1e-6f))) &&
+               glm::all(glm::lessThanEqual(glm::abs(guv - uv), glm::vec2(1e-6f * std::max(1.0f, glm::length(uv)))));
+        if (!same) {
+          ++failures;
+          ADD_FAILURE() << "triangle " << j << ": GLSL normal " << gn.x << " " << gn.y << " " << gn.z << " uv " << guv.x
+                        << " " << guv.y << "; mirror " << n.x << " " << n.y << " " << n.z << " uv " << uv.x << " " << uv.y;
+        }
+      }
     }
 }
 
