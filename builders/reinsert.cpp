@@ -5,7 +5,9 @@
 // primIndices is never touched, so any builder's tree can be optimised (SBVH's duplicate references
 // included), and the node count stays the same. With the leaves and the root box fixed, the SAH
 // changes only through Ct * sum(inner areas), so every decision compares changes of that sum, in
-// double, from the same float boxes (min/max unions are exact) the final tree stores.
+// double, from the same float boxes (min/max unions are exact) the final tree stores. (buildBvh runs
+// builders/reinsert_leaves.cpp, which expands the leaves to single primitives before this pass and
+// collapses them by SAH after it.)
 //
 // Operations; each is kept only if it lowers the sum by more than eps, otherwise undone exactly:
 //  - a leaf L is removed with its parent (L's sibling takes the parent's place, the ancestors are
