@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include "datasets/hard_cases.hpp"
 #include "layout/collapse_wide.hpp"
 #include "layout/layout_bvh2cb.hpp"
 #include "layout/layout_wide.hpp"
@@ -301,6 +302,48 @@ TEST(WideKernels, NearestFirstCutsTheWork) {
     const uint64_t ordered = totalTests(findLayout(layout).pack(bvh, m.soup), "");
     EXPECT_LT(double(ordered), 0.8 * double(unordered)) << layout;
   }
+}
+
+// The hard-case suite (shared edges and vertices, slab planes, far and scaled copies) in watertight
+// mode: the wide kernels leak no ray that must hit, and answer every ray as v1's stack-ordered does on
+// the same tree (same hit or miss; t within nearlyEqual: where a ray meets a shared edge, the two
+// triangles' rounded t can differ by an ulp, and which one a walk keeps depends on its visit order,
+// since a box entered beyond the first t found is culled).
+TEST(WideKernels, HardCasesLeakNothingInWatertightMode) {
+  size_t mustHit = 0;
+  for (const hard::HardCase& hc : hard::makeHardCases()) {
+    Mesh mesh;
+    mesh.positions = hc.positions;
+    mesh.triangles = hc.triangles;
+    MeshSceneOptions mo;
+    mo.groundPlane = false;
+    const TriangleSoup soup = gatherTriangles(makeMeshScene(mesh, mo));
+    const Bvh bvh = build("sah-binned", soup);
+    const PackedBvh v1 = packBvh(bvh, soup);
+    const glsl::Storage reference(v1);
+    for (const char* layout : {kLayoutBvh4, kLayoutBvh8}) {
+      SCOPED_TRACE(hc.name + " / " + layout);
+      const PackedBvh packed = findLayout(layout).pack(bvh, soup);
+      const glsl::Storage s(packed);
+      const KernelInfo& k = findKernel(layout, "");
+      int failures = 0;
+      for (size_t i = 0; i < hc.rays.size() && failures < 3; ++i) {
+        const hard::HardRay& r = hc.rays[i];
+        const glsl::Ray ray{r.origin, r.dir};
+        glsl::Counters c, cv1;
+        glsl::MeshHit hit{}, hitV1{};
+        const bool found = k.closest(Robustness::Watertight)(s, ray, r.tMin, r.tMax, hit, c);
+        const bool foundV1 = findKernel("stack-ordered").closest(Robustness::Watertight)(reference, ray, r.tMin, r.tMax, hitV1, cv1);
+        mustHit += r.mustHit;
+        if ((r.mustHit && !found) || found != foundV1 || (found && !nearlyEqual(hit.t, hitV1.t)) || c.stackOverflow) {
+          ++failures;
+          ADD_FAILURE() << "ray " << i << (r.mustHit ? " (must hit)" : "") << ": " << found << " t " << hit.t << "; v1 "
+                        << foundV1 << " t " << hitV1.t;
+        }
+      }
+    }
+  }
+  EXPECT_GT(mustHit, 100u);
 }
 
 // The GLSL kernels give their C++ mirror's answer and counters per ray (visits, triangle tests, box
