@@ -35,7 +35,45 @@ namespace {
 struct Sweep {
   std::string name;
   AxisMap axes;
+  std::map<std::string, const toml::node*> nodes;  // singular -> where the axis was written
+  std::map<std::string, std::string> keys;         // singular -> its key for errors ("axes.kernels")
+  std::set<std::string> every;                     // axes given as "all"
 };
+
+// A run's kernel paired with its layout (the `layout` axis, else the default layout): "default"
+// becomes that layout's default kernel; false when the kernel walks another layout (the run is not
+// part of the product). Unchecked when the names carry no layouts.
+bool pairKernel(RunSpec& run, const KnownNames& names) {
+  auto kernel = std::find_if(run.axes.begin(), run.axes.end(), [](const auto& a) { return a.first == "kernel"; });
+  if (kernel == run.axes.end()) return true;  // the renderer runs the layout's default kernel
+  const AxisValue* layoutValue = run.axis("layout");
+  const KnownLayout* layout = names.findLayout(layoutValue ? layoutValue->label : names.defaultLayout);
+  if (!layout) return true;
+  if (kernel->second.label == kDefaultKernel) {
+    kernel->second = AxisValue{layout->defaultKernel, layout->defaultKernel, {}};
+    return true;
+  }
+  return std::find(layout->kernels.begin(), layout->kernels.end(), kernel->second.label) != layout->kernels.end();
+}
+
+// Whether the run's triangle format can run its robustness variant (the `robust` axis, else the
+// renderer's default): precomputed triangles cannot run the watertight test.
+bool formatRuns(const RunSpec& run, const KnownNames& names) {
+  const AxisValue* format = run.axis("triangle_format");
+  if (!format) return true;
+  const auto refused = names.triangleFormatRefuses.find(format->label);
+  if (refused == names.triangleFormatRefuses.end()) return true;
+  const AxisValue* robust = run.axis("robust");
+  const std::string variant = robust ? robust->label : names.defaultRobust;
+  return std::find(refused->second.begin(), refused->second.end(), variant) == refused->second.end();
+}
+
+// The layout a kernel walks ("" when no known layout has it).
+std::string layoutOfKernel(const KnownNames& names, const std::string& kernel) {
+  for (const KnownLayout& l : names.layouts)
+    if (std::find(l.kernels.begin(), l.kernels.end(), kernel) != l.kernels.end()) return l.name;
+  return "";
+}
 
 // A label in [[exclude]] names a value by its label, a builder by its name, a scene by its file.
 bool namesValue(const std::string& axis, const std::string& label, const AxisValue& v) {
@@ -108,7 +146,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
     throw InputError(msg.str());
   }
 
-  AxisMap topAxes;
+  Sweep topAxes;
   std::vector<Sweep> sweeps;
   std::vector<Exclusion> exclusions;
   const toml::table* referenceTable = nullptr;
@@ -116,8 +154,9 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   const toml::node *framesNode = nullptr, *measureMinNode = nullptr, *maxFramesNode = nullptr;
   std::optional<int> measureMin;
 
-  auto readAxes = [&](const toml::table& t, const std::string& section, AxisMap& out,
+  auto readAxes = [&](const toml::table& t, const std::string& section, Sweep& into,
                       const std::set<std::string>& skip) {
+    AxisMap& out = into.axes;
     for (auto&& [k, v] : t) {
       const std::string name(k.str());
       if (skip.count(name)) continue;
@@ -132,6 +171,9 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
       if (out.count(singular)) r.fail(k.source(), key, "axis given twice (as '" + std::string(axis->plural) +
                                                            "' and '" + std::string(axis->singular) + "')");
       out[singular] = r.axisValues(*axis, v, key);
+      into.nodes[singular] = &v;
+      into.keys[singular] = key;
+      if (ConfigReader::isEveryValue(*axis, v)) into.every.insert(singular);
     }
   };
 
@@ -252,7 +294,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         for (const Sweep& other : sweeps)
           if (other.name == s.name) r.fail(nameNode->source(), key + ".name", "duplicate sweep name '" + s.name + "'");
         if (const toml::node* d = t.get("description")) r.string(*d, key + ".description");
-        readAxes(t, key, s.axes, {"name", "description"});
+        readAxes(t, key, s, {"name", "description"});
         sweeps.push_back(std::move(s));
       }
     } else if (section == "exclude") {
@@ -295,11 +337,17 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
     r.fail(maxFramesNode->source(), "measure.max_frames",
            std::to_string(cfg.render.maxFrames) + " is below min_frames " + std::to_string(cfg.render.frames));
 
-  if (sweeps.empty()) sweeps.push_back(Sweep{"main", {}});
+  if (sweeps.empty()) sweeps.push_back(Sweep{"main", {}, {}, {}, {}});
   for (Sweep& s : sweeps) {
-    AxisMap merged = topAxes;
+    AxisMap merged = topAxes.axes;
     for (auto& [axis, values] : s.axes) merged[axis] = values;
     s.axes = std::move(merged);
+    for (const auto& [axis, node] : topAxes.nodes)
+      if (!s.nodes.count(axis)) {
+        s.nodes[axis] = node;
+        s.keys[axis] = topAxes.keys.at(axis);
+        if (topAxes.every.count(axis)) s.every.insert(axis);
+      }
     if (!s.axes.count("scene"))
       r.fail(root.source(), s.name == "main" ? "axes.scenes" : "sweep '" + s.name + "'.scenes",
              "missing: every run needs a scene (or mesh) file");
@@ -348,6 +396,8 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
     for (const AxisInfo& a : experimentAxes())
       if (s.axes.count(std::string(a.singular))) present.push_back(&a);
     std::vector<size_t> digit(present.size(), 0);
+    std::set<std::string> pairedKernels;  // kernel values some layout of this sweep walks
+    std::set<std::string> runnableFormats;  // triangle formats some run of this sweep can run
     for (bool more = true; more;) {
       RunSpec run;
       run.render = cfg.render;
@@ -355,9 +405,15 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         const std::string name(present[i]->singular);
         run.axes.emplace_back(name, s.axes.at(name)[digit[i]]);
       }
+      const AxisValue* written = run.axis("kernel");
+      const std::string kernelLabel = written ? written->label : "";
+      const bool formatOk = formatRuns(run, r.names());
+      const bool paired = pairKernel(run, r.names()) && formatOk;
+      if (paired) pairedKernels.insert(kernelLabel);
+      if (formatOk && run.axis("triangle_format")) runnableFormats.insert(run.axis("triangle_format")->label);
       finishRun(run);
-      const bool excluded = std::any_of(exclusions.begin(), exclusions.end(),
-                                        [&](const Exclusion& ex) { return ex.matches(run); });
+      const bool excluded = !paired || std::any_of(exclusions.begin(), exclusions.end(),
+                                                   [&](const Exclusion& ex) { return ex.matches(run); });
       if (!excluded) {
         auto it = byKey.find(run.key);
         if (it == byKey.end()) {
@@ -380,6 +436,39 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         digit[i] = 0;
       }
     }
+    // A kernel no layout of the sweep walks is a mistake (kernels = "all" offers every one on purpose).
+    if (auto it = s.axes.find("kernel"); it != s.axes.end() && !s.every.count("kernel"))
+      for (size_t i = 0; i < it->second.size(); ++i) {
+        const std::string& k = it->second[i].label;
+        if (pairedKernels.count(k)) continue;
+        const std::string walks = layoutOfKernel(r.names(), k);
+        std::string layoutsUsed = r.names().defaultLayout + " (the default: the sweep has no `layouts`)";
+        if (auto l = s.axes.find("layout"); l != s.axes.end()) {
+          layoutsUsed.clear();
+          for (const AxisValue& v : l->second) layoutsUsed += (layoutsUsed.empty() ? "" : ", ") + v.label;
+        }
+        r.fail(s.nodes.at("kernel")->source(), s.keys.at("kernel") + "[" + std::to_string(i) + "]",
+               "kernel '" + k + "' walks layout " + walks + ", but this sweep's runs use " + layoutsUsed +
+                   "; add \"" + walks + "\" to `layouts` (or use kernel \"default\": each layout's own)");
+      }
+    // Likewise a triangle format that none of the sweep's robustness variants can run.
+    if (auto it = s.axes.find("triangle_format"); it != s.axes.end() && !s.every.count("triangle_format"))
+      for (size_t i = 0; i < it->second.size(); ++i) {
+        const std::string& f = it->second[i].label;
+        if (runnableFormats.count(f)) continue;
+        std::string used = r.names().defaultRobust + " (the default: the sweep has no `robust`)";
+        if (auto v = s.axes.find("robust"); v != s.axes.end()) {
+          used.clear();
+          for (const AxisValue& x : v->second) used += (used.empty() ? "" : ", ") + x.label;
+        }
+        const std::vector<std::string>& refused = r.names().triangleFormatRefuses.at(f);
+        std::string works;
+        for (const std::string& variant : kRobustness)
+          if (std::find(refused.begin(), refused.end(), variant) == refused.end())
+            works += (works.empty() ? "" : ", ") + variant;
+        r.fail(s.nodes.at("triangle_format")->source(), s.keys.at("triangle_format") + "[" + std::to_string(i) + "]",
+               "triangle format '" + f + "' cannot run robust " + used + "; it runs with robust " + works);
+      }
   }
   if (cfg.runs.empty())
     r.fail(root.source(), "exclude", "the [[exclude]] entries remove every run of the product");
@@ -421,6 +510,11 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
       }
       if (frames) ref.render.frames = ref.render.maxFrames = *frames;  // a reference is drawn, not timed
       if (warmup) ref.render.warmup = *warmup;
+      if (!pairKernel(ref, r.names()) || !formatRuns(ref, r.names()))
+        r.fail(referenceTable->source(), "experiment.reference",
+               "the reference of run '" + cfg.runs[i].describe() + "' pairs kernel '" + ref.axis("kernel")->label +
+                   "' with a layout it does not walk, or its triangle format with a robustness variant it "
+                   "cannot run");
       finishRun(ref);
       auto it = byKey.find(ref.key);
       if (it == byKey.end()) {

@@ -77,12 +77,28 @@ struct RunSpec {
   static RunSpec fromJson(const nlohmann::json& j);
 };
 
+// A layout the renderer packs trees into, and the kernels that walk it (layout/layouts.hpp,
+// traversal/kernels.hpp).
+struct KnownLayout {
+  std::string name;
+  std::string defaultKernel;         // what a kernel value "default" (or no kernel axis) means with it
+  std::vector<std::string> kernels;  // the kernels that walk it
+};
+
 // Names the renderer accepts, for validation. An empty list is not checked (registry not built in).
 struct KnownNames {
   std::vector<std::string> builders;
-  std::vector<std::string> kernels;
+  std::vector<std::string> kernels;   // every layout's
+  std::vector<KnownLayout> layouts = {};  // empty: layout names and layout/kernel pairs are not checked
+  std::string defaultLayout = "v1";   // the layout of a run that does not sweep `layouts`
+  std::vector<std::string> triangleFormats = {};  // empty: not checked
+  // Triangle format -> the robustness variants it cannot run (precomputed: those with the watertight
+  // triangle test); such pairs are not part of a product.
+  std::map<std::string, std::vector<std::string>> triangleFormatRefuses = {};
+  std::string defaultRobust = "watertight";  // the variant of a run that does not sweep `robust`
+  const KnownLayout* findLayout(const std::string& name) const;
 };
-KnownNames registeredNames();  // from bvhlab::builders() and the kernel registry when present
+KnownNames registeredNames();  // from bvhlab::builders(), layouts() and the kernel registry when present
 
 struct ExperimentConfig {
   std::filesystem::path file;

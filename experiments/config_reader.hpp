@@ -40,6 +40,8 @@ const std::vector<std::string> kSmaaEdges = {"luma", "color"};
 const std::vector<std::string> kViews = {"shaded", "normal", "depth", "primid", "visits"};
 const std::vector<std::string> kBackends = {"osmesa", "egl"};
 inline const std::vector<std::string>& kWorkloads = workloadNames();  // render/workloads.hpp
+constexpr const char* kDefaultKernel = "default";  // a kernel value: the run's layout's default kernel
+constexpr const char* kEveryValue = "all";         // `layouts = "all"`, `kernels = "all"`, `triangle_formats`
 
 inline std::string joined(const std::vector<std::string>& names) {
   std::string out;
@@ -121,8 +123,21 @@ class ConfigReader {
     if (a == "scene") return sceneValue(node, key);
     if (a == "builder") return builderValue(node, key);
     if (a == "kernel") {
-      std::string k = oneOf(node, key, names_.kernels, "kernel");
+      // "default": the run's layout's default kernel (experiments/config.cpp pairs them).
+      std::vector<std::string> valid = names_.kernels;
+      if (!valid.empty()) valid.push_back(kDefaultKernel);
+      std::string k = oneOf(node, key, valid, "kernel");
       return {k, k, {}};
+    }
+    if (a == "triangle_format") {
+      std::string f = oneOf(node, key, names_.triangleFormats, "triangle format");
+      return {f, f, {}};
+    }
+    if (a == "layout") {
+      std::vector<std::string> valid;
+      for (const KnownLayout& l : names_.layouts) valid.push_back(l.name);
+      std::string l = oneOf(node, key, valid, "layout");
+      return {l, l, {}};
     }
     if (a == "leaf_size" || a == "depth") {
       // Leaves hold at most 255 triangles (layout/layout.hpp); the depth bound only catches typos.
@@ -239,10 +254,21 @@ class ConfigReader {
     return {label, value, {}};
   }
 
-  // `key = value` or `key = [values]` in [axes] / [[sweep]]: the values, in order.
+  // `key = value` or `key = [values]` in [axes] / [[sweep]]: the values, in order. `layouts = "all"`
+  // is every registered layout, `kernels = "all"` every registered kernel (each run keeps those that
+  // walk its layout), `triangle_formats = "all"` every triangle format (each run keeps those its
+  // robustness variant can run): a config written that way picks up new ones without an edit.
   std::vector<AxisValue> axisValues(const AxisInfo& axis, const toml::node& node, const std::string& key) const {
     std::vector<AxisValue> out;
-    if (const toml::array* a = node.as_array()) {
+    if (isEveryValue(axis, node)) {
+      if (axis.singular == "layout")
+        for (const KnownLayout& l : names_.layouts) out.push_back({l.name, l.name, {}});
+      else if (axis.singular == "triangle_format")
+        for (const std::string& f : names_.triangleFormats) out.push_back({f, f, {}});
+      else
+        for (const std::string& k : names_.kernels) out.push_back({k, k, {}});
+      if (out.empty()) fail(node.source(), key, "\"all\" needs the renderer's registry, which is not built in");
+    } else if (const toml::array* a = node.as_array()) {
       if (a->empty()) fail(node.source(), key, "empty list (an axis needs at least one value)");
       for (size_t i = 0; i < a->size(); ++i)
         out.push_back(axisValue(axis, *a->get(i), key + "[" + std::to_string(i) + "]"));
@@ -256,8 +282,16 @@ class ConfigReader {
     return out;
   }
 
+  // `layouts = "all"` / `kernels = "all"` / `triangle_formats = "all"`.
+  static bool isEveryValue(const AxisInfo& axis, const toml::node& node) {
+    return (axis.singular == "layout" || axis.singular == "kernel" || axis.singular == "triangle_format") &&
+           node.is_string() &&
+           node.as_string()->get() == kEveryValue;
+  }
+
   const fs::path& file() const { return file_; }
   const fs::path& dir() const { return dir_; }
+  const KnownNames& names() const { return names_; }
 
  private:
   fs::path file_, dir_;

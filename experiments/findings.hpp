@@ -19,7 +19,9 @@ namespace bvhlab {
 
 // The axes findings compare along. Design axes compare each run with the fastest of its context
 // (the runs equal in every other axis); knob axes compare each value with the config's first value.
-const std::vector<std::string>& findingDesignAxes();  // builder, kernel, leaf_size
+// A kernel walks one layout, so along `layout` the context leaves the kernel free: each layout at its
+// fastest kernel against the fastest layout.
+const std::vector<std::string>& findingDesignAxes();  // builder, layout, triangle_format, kernel, leaf_size
 const std::vector<std::string>& findingKnobAxes();    // depth, storage, aa, robust, branching, view, uber, smaa_edges
 
 // `rows`: results.json's rows; `axisOrder`: plan.json's experiment.axes (singular axis -> labels in

@@ -10,7 +10,7 @@ and a run's own A/A columns (aa_control_*) are only read through findings.json's
 
 Modules, next to this file: report_data (rows, findings.json, formatting), report_html (the page),
 report_plots, report_findings, report_tables, report_seed (seed figures, anti-aliasing),
-report_robust (robustness variants).
+report_robust (robustness variants), report_rays (traced workloads), report_layouts (layouts: memory vs time).
 
 Run with Debian's interpreter, which has python3-matplotlib:
     /usr/bin/python3 experiments/report.py DIR
@@ -28,6 +28,7 @@ from report_findings import section_findings  # noqa: E402
 from report_html import CSS, Page, section_plot  # noqa: E402
 from report_plots import (Styles, builder_costs, deep_rows, line_plot, pareto_plot, scatter_visits_vs_sah,  # noqa: E402
                           time_vs_costs)
+from report_layouts import section_layouts  # noqa: E402
 from report_rays import section_rays  # noqa: E402
 from report_robust import section_robustness  # noqa: E402
 from report_seed import section_antialiasing, seed_sections  # noqa: E402
@@ -78,6 +79,7 @@ def build(root):
                  notes=pareto_notes)
     pareto_table(body, data, fronts)
     section_rays(body, data)
+    section_layouts(body, data)
     section_antialiasing(body, data)
     section_images(body, data)
     section_builder_table(body, data)

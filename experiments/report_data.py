@@ -26,12 +26,12 @@ except ImportError as e:  # pragma: no cover - depends on the machine
     )
     sys.exit(3)
 
-AXES = ["scene", "builder", "kernel", "leaf_size", "depth", "storage", "aa", "robust", "branching", "view", "uber",
-        "smaa_edges", "workload"]
+AXES = ["scene", "builder", "layout", "triangle_format", "kernel", "leaf_size", "depth", "storage", "aa", "robust", "branching", "view",
+        "uber", "smaa_edges", "workload"]
 NUMERIC_AXES = {"leaf_size", "depth"}
 # The axes that choose a tree and how it is walked: a builder's "best configuration" ranges over these,
 # the others (depth, aa, robust, ...) are held at one setting shared by every builder.
-TREE_AXES = ("builder", "kernel", "leaf_size", "bins")
+TREE_AXES = ("builder", "layout", "triangle_format", "kernel", "leaf_size", "bins")
 # Deterministic per-run cost measures, in the order the report shows them (row column, short label).
 COUNTS = [("sah_cost", "SAH"), ("epo", "EPO"), ("node_visits_per_ray", "visits/ray"),
           ("triangle_tests_per_ray", "tests/ray"), ("ray_cost", "ray cost")]

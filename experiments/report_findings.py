@@ -122,7 +122,7 @@ def builder_verdicts(data, scene, entries):
 
 
 # Axes whose runs are compared with the fastest of their context; the others (knobs) with the config's first value.
-FASTEST_AXES = ("builder", "kernel", "leaf_size", "bins")
+FASTEST_AXES = ("builder", "layout", "triangle_format", "kernel", "leaf_size", "bins")
 
 
 def verdict_summary(data, entries):
@@ -138,7 +138,8 @@ def verdict_summary(data, entries):
         counts = {v: sum(1 for c in mine if c.get("verdict") == v) for v in VERDICTS}
         other = len(mine) - sum(counts.values())
         parts = ["%d %s" % (n, v) for v, n in counts.items() if n] + (["%d other" % other] if other else [])
-        against = ("each run against the fastest run of its context" if a in FASTEST_AXES else
+        against = ("each layout at its fastest kernel against the fastest layout of its context" if a == "layout" else
+                   "each run against the fastest run of its context" if a in FASTEST_AXES else
                    "each value against %s" % html.escape("%s=%s" % (a, data.baseline(a)) if data.baseline(a) is not None
                                                          else "the config's first value"))
         out.append("<b>%s</b> (%s): %s — %s." % (html.escape(str(a)), against, plural(len(mine), "comparison"),

@@ -4,6 +4,8 @@
 
 #include "builders/builder.hpp"
 #include "experiments/config.hpp"
+#include "layout/layouts.hpp"
+#include "layout/triangle_formats.hpp"
 #if __has_include("traversal/kernels.hpp")
 #include "traversal/kernels.hpp"
 #define BVHLAB_HAVE_KERNEL_REGISTRY 1
@@ -17,6 +19,11 @@ const std::vector<AxisInfo>& experimentAxes() {
   static const std::vector<AxisInfo> axes = {
       {"scenes", "scene", ""},  // the scene is the positional INPUT of `bvhlab render`
       {"builders", "builder", "--builder"},
+      // The texture layout the tree is packed in (layout/layouts.hpp); a kernel walks one layout.
+      {"layouts", "layout", "--layout"},
+      // How triangles are stored (layout/triangle_formats.hpp; render JSON "triangle_format": "triangles"
+      // is the triangle count there).
+      {"triangle_formats", "triangle_format", "--triangles"},
       {"kernels", "kernel", "--kernel"},
       {"leaf_sizes", "leaf_size", "--leaf-size"},
       {"depths", "depth", "--depth"},
@@ -154,12 +161,38 @@ RunSpec RunSpec::fromJson(const json& j) {
   return s;
 }
 
+const KnownLayout* KnownNames::findLayout(const std::string& name) const {
+  for (const KnownLayout& l : layouts)
+    if (l.name == name) return &l;
+  return nullptr;
+}
+
 KnownNames registeredNames() {
   KnownNames names;
   for (const BuilderInfo& b : builders()) names.builders.push_back(b.name);
 #ifdef BVHLAB_HAVE_KERNEL_REGISTRY
-  for (const KernelInfo& k : kernels()) names.kernels.push_back(k.name);
+  for (const KernelInfo* k : allKernels()) names.kernels.push_back(k->name);
+  for (const LayoutInfo& l : layouts()) {
+    KnownLayout known{l.name, l.defaultKernel, {}};
+    for (const KernelInfo& k : kernelsFor(l.name)) known.kernels.push_back(k.name);
+    names.layouts.push_back(std::move(known));
+  }
 #endif
+  names.defaultLayout = kDefaultLayout;
+  // Which robustness variants each triangle format cannot run: asked of the format's own check.
+  const std::vector<Robustness>& variants = robustnessVariants();
+  for (const TriangleFormatInfo& f : triangleFormats()) {
+    names.triangleFormats.push_back(f.name);
+    std::vector<std::string>& refused = names.triangleFormatRefuses[f.name];
+    for (size_t i = 0; i < variants.size(); ++i) {
+      try {
+        checkTriangleFormat(f.name, variants[i]);
+      } catch (const std::invalid_argument&) {
+        refused.push_back(robustnessNames()[i]);
+      }
+    }
+  }
+  names.defaultRobust = robustnessName(Robustness::Watertight);  // shaders/assemble.hpp's default
   return names;
 }
 

@@ -116,7 +116,7 @@ const std::vector<std::string>& resultColumns() {
   static const std::vector<std::string> columns = {
       "key", "index", "status", "sweeps", "reference_only", "reference_key",
       // axes (the config's value, else what the renderer reports it used)
-      "scene", "scene_file", "builder", "bins", "kernel", "leaf_size", "depth", "storage", "aa", "robust",
+      "scene", "scene_file", "builder", "bins", "layout", "triangle_format", "kernel", "leaf_size", "depth", "storage", "aa", "robust",
       "branching", "view", "uber", "workload",
       // render settings
       "width", "height", "frames", "warmup", "backend",
@@ -125,7 +125,7 @@ const std::vector<std::string>& resultColumns() {
       "frame_ms_max", "fps", "aa_control_ratio", "aa_control_ci_low", "aa_control_ci_high", "session",
       "build_ms", "sah_cost", "epo", "tree_hash", "references", "sah_before_optimize", "optimize_ms", "nodes",
       "leaves", "bvh_depth",
-      "bytes", "triangles", "node_visits_per_ray", "node_visits_p95", "triangle_tests_per_ray",
+      "bytes", "bytes_per_triangle", "triangles", "node_visits_per_ray", "node_visits_p95", "triangle_tests_per_ray",
       "triangle_tests_p95", "ray_cost", "mesh_rays", "effective_depth", "image_mae", "image_psnr", "image_error_note",
       "image", "visits_image",
       // trace runs (rays axis): the batch, Embree on the same rays, agreement
@@ -140,7 +140,7 @@ const std::vector<std::string>& resultColumns() {
 namespace {
 
 // The axes the renderer reports back (render JSON key = row column).
-const char* const kReportedAxes[] = {"builder", "kernel", "leaf_size", "depth", "storage", "aa",
+const char* const kReportedAxes[] = {"builder", "layout", "triangle_format", "kernel", "leaf_size", "depth", "storage", "aa",
                                      "robust",  "branching", "view", "uber", "workload"};
 
 json flattenRecord(const json& record) {

@@ -2,6 +2,7 @@
 // expansion minus exclusions, stable run keys, sweep unions and references, generated scenes, camera
 // paths, the render command line, and every shipped config against the real registries and data.
 #include "test_experiments_fixture.hpp"
+#include "layout/layouts.hpp"
 
 using namespace bvhlab::experiments_test;
 
@@ -183,9 +184,12 @@ leaf_sizes = [1, 4]
 // one added later is loaded and checked for runs without a count.
 TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
   const fs::path dir = fs::path(BVHLAB_SOURCE_DIR) / "experiments" / "configs";
-  const std::map<std::string, size_t> expectedRuns = {
+  std::map<std::string, size_t> expectedRuns = {
       {"quick.toml", 56},      {"seed-figures.toml", 18}, {"builders.toml", 1810}, {"accuracy-vs-time.toml", 30},
       {"antialiasing.toml", 16}, {"flythrough.toml", 15}, {"large.toml", 2}, {"bench.toml", 400}};
+  // layouts.toml sweeps `layouts = "all"`: (3 scenes x 2 workloads + the report scene + the bunny's diffuse
+  // rays with indexed triangles) per registered layout.
+  expectedRuns["layouts.toml"] = 8 * layouts().size();
   std::set<std::string> seen;
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (entry.path().extension() != ".toml") continue;
