@@ -4,16 +4,18 @@
 #   bash setup.sh test   install, fetch datasets, build, run every test (CTest)
 #   bash setup.sh deps   install Debian packages only
 #   bash setup.sh build  configure + build only
-#   bash setup.sh sanitize        ASan + UBSan build (clang, build-sanitize/), run the CPU tests (ctest -L cpu)
-#   bash setup.sh fuzz [SECONDS]  libFuzzer targets for every file parser, SECONDS each (default 60);
-#                                 exits 1 on a finding and prints its reproducer (tests/fuzz/run.sh)
+#   bash setup.sh sanitize        ASan + UBSan build (clang, build-sanitize/), run the CPU tests (ctest -L '^cpu$')
+#   bash setup.sh fuzz [SECONDS]  libFuzzer targets for every file parser and importer, SECONDS each
+#                                 (default 60), off the same build; exits 1 on a finding and prints its
+#                                 reproducer (tests/fuzz/run.sh)
+# CI (.ci/run) runs test, then sanitize, then fuzz 15.
 set -euo pipefail
 cd "$(dirname "$0")"
 
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git ca-certificates
   libglm-dev libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri
-  libopenmesh-dev libcgal-dev libbenchmark-dev libgtest-dev libopenimageio-dev libembree-dev libassimp-dev
+  libopenmesh-dev libcgal-dev libbenchmark-dev libgtest-dev libopenimageio-dev libembree-dev libassimp-dev libpugixml-dev
   libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libglfw3-dev libimgui-dev
   python3-glad glslang-tools python3 python3-matplotlib python3-numpy xvfb xauth
 )
@@ -82,6 +84,7 @@ case "${1:-}" in
     sanitizer_env
     # Only the tests labelled "cpu" (tests/CMakeLists.txt): no GL (llvmpipe under ASan is not ours to
     # check) and not the "cpu-slow" scale tests (run those with: ctest --test-dir build-sanitize -L cpu).
+    # One CTest test per executable here (tests/CMakeLists.txt says why); a failure names its gtest case.
     ctest --test-dir build-sanitize -L '^cpu$' --output-on-failure -j "$(nproc)" ;;
   fuzz)
     deps "${CHECK_PACKAGES[@]}"; bash datasets/fetch.sh; sanitize_build fuzz_targets

@@ -25,8 +25,8 @@ namespace bvhlab::fuzz {
 
 // Parser names: the fuzz target fuzz_NAME, the regression folder tests/fuzz/regressions/NAME/.
 inline const std::vector<std::string>& parserNames() {
-  static const std::vector<std::string> names = {"obj",    "off",    "ply",         "stl",
-                                                 "scene",  "config", "camera_path", "viewer_script"};
+  static const std::vector<std::string> names = {"obj",  "off", "ply", "stl", "gltf", "glb", "dae", "ac", "3ds", "fbx",
+                                                 "scene", "config", "camera_path", "viewer_script"};
   return names;
 }
 
@@ -55,11 +55,19 @@ inline void writeFile(const std::filesystem::path& path, std::string_view data) 
   if (!out) invariantBroken("harness", "cannot write " + path.string());
 }
 
-// Parses `data` as `parser`. Parsers that read a file get it at dir/input.EXT (rewritten each call);
+// Parses `data` as `parser`. Parsers that read a file get it at dir/input.EXT (rewritten each call, EXT
+// the parser's name for the mesh formats, so loadMesh picks the reader by extension as for a user's file);
 // `dir` must exist and should be empty apart from that (relative references in a scene or config
 // then name nothing).
+// The mesh formats: OpenMesh or our own readers (obj off ply stl), assimp (the rest, mesh_io_assimp.cpp).
+inline bool isMeshFormat(const std::string& parser) {
+  for (const char* ext : {"obj", "off", "ply", "stl", "gltf", "glb", "dae", "ac", "3ds", "fbx"})
+    if (parser == ext) return true;
+  return false;
+}
+
 inline void parseAs(const std::string& parser, std::string_view data, const std::filesystem::path& dir) {
-  if (parser == "obj" || parser == "off" || parser == "ply" || parser == "stl") {
+  if (isMeshFormat(parser)) {
     const std::filesystem::path file = dir / ("input." + parser);
     writeFile(file, data);
     checkMesh(parser, loadMesh(file));

@@ -13,7 +13,9 @@ build=$(cd "${1:?usage: run.sh BUILD_DIR [SECONDS] [PARSER...]}" && pwd)
 seconds=${2:-60}
 shift $(( $# >= 2 ? 2 : 1 ))
 parsers=("$@")
-[ ${#parsers[@]} -gt 0 ] || parsers=(obj off ply stl scene config camera_path viewer_script)
+if [ ${#parsers[@]} -eq 0 ]; then  # every target: one tests/fuzz/fuzz_PARSER.cpp each (as CMake globs them)
+  for f in "$root"/tests/fuzz/fuzz_*.cpp; do f=${f##*/fuzz_}; parsers+=("${f%.cpp}"); done
+fi
 work=$build/fuzz
 jobs=${FUZZ_JOBS:-$(nproc)}
 
@@ -24,6 +26,8 @@ seed_globs() {
     off) echo "datasets/cache/meshes/*.off tests/fixtures/*/*.off" ;;
     ply) echo "datasets/cache/meshes/*.ply tests/fixtures/*/*.ply" ;;
     stl) echo "datasets/cache/meshes/*.stl tests/fixtures/*/*.stl" ;;
+    gltf|glb|dae|ac|3ds|fbx)  # the assimp formats (hand-written seeds in seeds/PARSER; big models skipped)
+      echo "datasets/cache/meshes/*.$1 datasets/scenes/*.$1 datasets/scenes/*/*.$1 tests/fixtures/*/*.$1" ;;
     scene) echo "datasets/scenes/*.toml datasets/hard/*.toml" ;;
     config) echo "experiments/configs/*.toml tests/fixtures/experiments/*.toml" ;;
     camera_path) echo "experiments/configs/paths/*.txt" ;;

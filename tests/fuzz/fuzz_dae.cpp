@@ -1,0 +1,4 @@
+// libFuzzer target for the dae importer (assimp behind loadMesh; tests/fuzz/parsers.hpp); run by `bash setup.sh fuzz`.
+#include "fuzz_common.hpp"
+
+BVHLAB_FUZZ_TARGET("dae")
