@@ -1,8 +1,15 @@
 // sah-binned's three-axis sweep: the SAH at every boundary of the three axes at once, one axis per
-// SSE2 lane. Included by the files whose split finders use it (sah_binned_small.cpp,
-// sah_binned_bins.cpp); nothing here on the portable path.
+// SSE2 lane (the double costs of the suffix sweep in one AVX register where the CPU has AVX2, chosen
+// at run time; the same operations per lane, so the same tree). Included by the files whose split
+// finders use it (sah_binned_small.cpp, sah_binned_bins.cpp); nothing here on the portable path.
 #pragma once
 #include "builders/sah_binned.hpp"
+
+#if defined(BVHLAB_BINNED_SSE)
+#include <cstdlib>
+
+#include <immintrin.h>
+#endif
 
 #if defined(BVHLAB_BINNED_SSE)
 namespace bvhlab::binned {
@@ -26,14 +33,24 @@ bool BinnedStepper::sweepLanes(uint32_t m, Gather gather, Split& best, uint32_t&
   const bool unitCi = ci == 1.0, smallCounts = uint32_t(_mm_cvtsi128_si32(lanes_[m - 1].leftCount)) < 0x80000000u;  // the node's count
   __m128d best01 = _mm_set1_pd(kInf), best23 = best01;
   __m128i at01 = _mm_setzero_si128(), at23 = _mm_setzero_si128();
-  if (unitCi && smallCounts)
-    suffixSweep<true, true>(m, ci, best01, best23, at01, at23);
-  else
-    suffixSweep<false, false>(m, ci, best01, best23, at01, at23);
-  alignas(16) double lowest[4];
-  alignas(16) int64_t at[4];
-  _mm_store_pd(lowest, best01), _mm_store_pd(lowest + 2, best23);
-  _mm_store_si128(reinterpret_cast<__m128i*>(at), at01), _mm_store_si128(reinterpret_cast<__m128i*>(at + 2), at23);
+  alignas(32) double lowest[4];
+  alignas(32) int64_t at[4];
+  // AVX2 when the CPU has it, unless BVHLAB_NO_AVX2 is set (any value): the tests run the SSE2 sweep
+  // that way too (tests/CMakeLists.txt, sah_binned_sse2).
+  static const bool avx2 = __builtin_cpu_supports("avx2") && !std::getenv("BVHLAB_NO_AVX2");
+  if (avx2) {
+    if (unitCi && smallCounts)
+      suffixSweepAvx2<true, true>(m, ci, lowest, at);
+    else
+      suffixSweepAvx2<false, false>(m, ci, lowest, at);
+  } else {
+    if (unitCi && smallCounts)
+      suffixSweep<true, true>(m, ci, best01, best23, at01, at23);
+    else
+      suffixSweep<false, false>(m, ci, best01, best23, at01, at23);
+    _mm_store_pd(lowest, best01), _mm_store_pd(lowest + 2, best23);
+    _mm_store_si128(reinterpret_cast<__m128i*>(at), at01), _mm_store_si128(reinterpret_cast<__m128i*>(at + 2), at23);
+  }
   int axis = -1;
   for (int a = 0; a < 3; ++a)
     if (lowest[a] < best.cost) best.cost = lowest[a], axis = a;
@@ -97,6 +114,41 @@ void BinnedStepper::suffixSweep(uint32_t m, double ci, __m128d& best01, __m128d&
     at01 = _mm_or_si128(_mm_and_si128(_mm_castpd_si128(better01), at), _mm_andnot_si128(_mm_castpd_si128(better01), at01));
     at23 = _mm_or_si128(_mm_and_si128(_mm_castpd_si128(better23), at), _mm_andnot_si128(_mm_castpd_si128(better23), at23));
   }
+}
+
+template <bool kUnitCi, bool kSmallCounts>
+__attribute__((target("avx2"))) void BinnedStepper::suffixSweepAvx2(uint32_t m, double ci, double* lowest, int64_t* atOut) {
+  __m128 lx = _mm_set1_ps(kInf), ly = lx, lz = lx, hx = _mm_set1_ps(-kInf), hy = hx, hz = hx;
+  __m128i count = _mm_setzero_si128();
+  const __m256d ci4 = _mm256_set1_pd(ci);
+  __m256d best = _mm256_set1_pd(kInf);
+  __m256i at = _mm256_setzero_si256();
+  for (uint32_t j = m - 1; j > 0; --j) {
+    const Lanes& r = lanes_[j];
+    lx = _mm_min_ps(lx, r.lx), ly = _mm_min_ps(ly, r.ly), lz = _mm_min_ps(lz, r.lz);
+    hx = _mm_max_ps(hx, r.hx), hy = _mm_max_ps(hy, r.hy), hz = _mm_max_ps(hz, r.hz);
+    count = _mm_add_epi32(count, r.count);
+    const __m128i none = _mm_or_si128(_mm_cmpeq_epi32(count, _mm_setzero_si128()), lanes_[j - 1].noCut);
+    const __m128 rightArea = _mm_andnot_ps(_mm_castsi128_ps(none), halfAreas(lx, ly, lz, hx, hy, hz));
+    const Lanes& l = lanes_[j - 1];
+    __m256d leftN, rightN;  // the counts, unsigned, as doubles (exactly)
+    if constexpr (kSmallCounts) {
+      leftN = _mm256_cvtepi32_pd(l.leftCount), rightN = _mm256_cvtepi32_pd(count);
+    } else {
+      const __m128i flip = _mm_set1_epi32(int32_t(0x80000000u));
+      const __m256d offset = _mm256_set1_pd(2147483648.0);
+      leftN = _mm256_add_pd(_mm256_cvtepi32_pd(_mm_xor_si128(l.leftCount, flip)), offset);
+      rightN = _mm256_add_pd(_mm256_cvtepi32_pd(_mm_xor_si128(count, flip)), offset);
+    }
+    __m256d c = _mm256_add_pd(_mm256_mul_pd(_mm256_cvtps_pd(l.leftArea), leftN), _mm256_mul_pd(_mm256_cvtps_pd(rightArea), rightN));
+    if constexpr (!kUnitCi) c = _mm256_mul_pd(ci4, c);
+    const __m256d none4 = _mm256_castsi256_pd(_mm256_cvtepi32_epi64(none));  // -1 -> all ones
+    const __m256d better = _mm256_andnot_pd(none4, _mm256_cmp_pd(c, best, _CMP_LE_OQ));
+    best = _mm256_blendv_pd(best, c, better);
+    at = _mm256_castpd_si256(_mm256_blendv_pd(_mm256_castsi256_pd(at), _mm256_castsi256_pd(_mm256_set1_epi64x(j - 1)), better));
+  }
+  _mm256_store_pd(lowest, best);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(atOut), at);
 }
 
 // Half areas of the boxes in lanes (corners given per coordinate): (x y + y z) + z x, per lane.
