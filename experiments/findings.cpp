@@ -73,6 +73,23 @@ std::vector<double> frames(const json& row) {
   return out;
 }
 
+// A traced run's rounds as multiples of Embree's time in the same round (frame_ms_all[i] /
+// embree_ms_all[i]): Embree ran interleaved in the same process, so this cancels what the machine did
+// to the whole process (load, clock). Empty when the run has no such pairs.
+std::vector<double> embreeNormalised(const json& row) {
+  const std::vector<double> glsl = frames(row);
+  std::vector<double> embree, out;
+  if (auto it = row.find("embree_ms_all"); it != row.end() && it->is_array())
+    for (const json& v : *it)
+      if (v.is_number()) embree.push_back(v.get<double>());
+  if (embree.size() != glsl.size()) return {};
+  for (size_t i = 0; i < glsl.size(); ++i) {
+    if (!(embree[i] > 0.0)) return {};  // NaN or 0: no honest ratio
+    out.push_back(glsl[i] / embree[i]);
+  }
+  return out;
+}
+
 std::string session(const json& row) {
   auto it = row.find("session");
   return it != row.end() && it->is_string() ? it->get<std::string>() : "";
@@ -195,13 +212,19 @@ class Finder {
               {"metric", "frame_ms"}};
     const std::vector<double> fa = frames(a), fb = frames(b);
     const bool paired = !session(a).empty() && session(a) == session(b) && fa.size() == fb.size() && !fa.empty();
+    // Traced runs in two processes: compared through their in-process Embree rounds (drift cancels).
+    const std::vector<double> na = paired ? std::vector<double>() : embreeNormalised(a),
+                              nb = paired ? std::vector<double>() : embreeNormalised(b);
+    const bool viaEmbree = !na.empty() && !nb.empty();
     std::optional<Interval> ratio;
     if (paired)
       ratio = pairedRatio(fa, fb);
     else
-      ratio = unpairedRatio(fa, fb, std::hash<std::string>{}(label(a, "key") + "/" + label(b, "key")));
+      ratio = unpairedRatio(viaEmbree ? na : fa, viaEmbree ? nb : fb,
+                            std::hash<std::string>{}(label(a, "key") + "/" + label(b, "key")));
     const double band = bandOf(a, b);
     c["paired"] = paired;
+    c["normalised_by"] = viaEmbree ? json("embree") : json();
     c["band"] = band;
     c["n"] = ratio ? ratio->n : std::min(fa.size(), fb.size());
     c["ratio"] = ratio ? ratio->estimate : *number(a, "frame_ms") / *number(b, "frame_ms");

@@ -11,6 +11,9 @@
 //                               the extent of the A/A control's interval in the runs' sessions (0
 //                               without one): a difference the noise floor cannot explain;
 //   "no detectable difference"  otherwise, or when there are too few frames for an interval.
+// Traced runs (two `bvhlab trace` processes, each with Embree's rounds interleaved) are compared
+// through their per-round ratios to Embree (normalised_by "embree"): the machine's drift between the
+// processes cancels.
 // Beside each ratio: the runs' clock-free counts (SAH, EPO, visits and tests per ray, ray_cost).
 #pragma once
 #include <nlohmann/json.hpp>

@@ -5,6 +5,7 @@
 // findings along the axis, the report's layout section, and a real two-layout sweep through
 // `bvhlab measure` and `bvhlab trace`.
 #include "test_experiments_fixture.hpp"
+#include "experiments/findings.hpp"
 #include "layout/layouts.hpp"
 #include "traversal/kernels.hpp"
 
@@ -268,6 +269,29 @@ TEST_F(LayoutAxis, RowsCarryLayoutAndMemoryAndFindingsCompareLayouts) {
     EXPECT_NEAR(c["ratio"].get<double>(), 1.25, 1e-9);
   }
   EXPECT_EQ(layoutComparisons, 4u) << "one per scene and builder";
+}
+
+// Traced runs are separate processes: compared through the Embree rounds each traced beside its own, so
+// a machine twice as slow during one of them does not make its layout look twice as slow.
+TEST(LayoutFindings, TracedRunsOfTwoProcessesAreComparedThroughTheirEmbreeRounds) {
+  auto traced = [](const char* key, const char* layout, double machine) {
+    json glsl = json::array(), embree = json::array();
+    for (int i = 0; i < 12; ++i) {
+      glsl.push_back(machine * (20.0 + 0.25 * (i % 4)));
+      embree.push_back(machine * (10.0 + 0.125 * (i % 4)));
+    }
+    return json{{"key", key},        {"status", "ok"},      {"scene", "s"},        {"layout", layout},
+                {"workload", "diffuse"}, {"frame_ms", machine * 20.25}, {"frame_ms_all", glsl},
+                {"embree_ms_all", embree}};
+  };
+  const json rows = json::array({traced("a", "v1", 1.0), traced("b", "bvh2-cb", 2.0)});
+  const json findings = computeFindings(rows, json::object());
+  ASSERT_EQ(findings["comparisons"].size(), 1u) << findings.dump();
+  const json& c = findings["comparisons"][0];
+  EXPECT_EQ(c["axis"], "layout");
+  EXPECT_EQ(c["normalised_by"], "embree");
+  EXPECT_NEAR(c["ratio"].get<double>(), 1.0, 1e-9);
+  EXPECT_EQ(c["verdict"], "no detectable difference");
 }
 
 bool reportToolsAvailable() {
