@@ -14,11 +14,19 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <pugixml.hpp>
+
 #include <algorithm>
+#include <charconv>
+#include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <optional>
+#include <sstream>
 #include <type_traits>
+#include <unordered_map>
 #include <utility>
 
 #include "datasets/mesh_io_detail.hpp"
@@ -48,6 +56,159 @@ constexpr size_t kMaxMeshVertices = 3 * kMaxMeshTriangles;
 // A squared normal length below which the normal carries no direction (as fromSoup in mesh_io.cpp):
 // far below any normal a file stores on purpose, far above float underflow.
 constexpr double kMinNormalLength2 = 1e-12;
+
+// Most nodes a COLLADA file may expand to. assimp copies a node once per <instance_node> that names
+// it, recursively, before we see the scene, so a chain of nodes each instancing the next twice doubles
+// per link: measured with assimp 5.2.5 (Release, idle), 16 links gave 65,537 nodes, 87 MB, 0.8 s; 18
+// links 262,145 nodes, 317 MB, 2.2 s (~1.2 KB per aiNode); 30 links would need over a terabyte. At
+// 2^17 fuzz_dae found a file assimp took 5.3 s to expand (over libFuzzer's 10 s under ASan). 2^16 is
+// far above the node count of any model this testbed renders (CG-57.ac: 443 objects).
+constexpr uint64_t kMaxColladaNodes = uint64_t(1) << 16;
+
+// A COLLADA count, stride or offset attribute against the file: each counted value, primitive or
+// index takes at least one byte of it. assimp trusts them: measured, <polylist count="2000000000"> in a
+// 2 KB file reserved past 2 GB (an OOM under ASan), and <accessor stride="2000000000"> made it read out
+// of bounds (SIGSEGV). An accessor reads offset + count * stride values of its array.
+void checkColladaCounts(const pugi::xml_node& element, size_t fileBytes) {
+  uint64_t product = 1, offset = 0;
+  const bool accessor = std::string_view(element.name()) == "accessor";
+  for (const char* key : {"count", "stride", "offset"}) {
+    const pugi::xml_attribute a = element.attribute(key);
+    if (!a) continue;
+    const std::string_view text = a.value();
+    uint64_t v = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || end != text.data() + text.size() || v > fileBytes)
+      fail("COLLADA <" + std::string(element.name()) + " " + key + "=\"" + std::string(text) +
+           "\">: expected a count no larger than the file (" + std::to_string(fileBytes) + " bytes)");
+    if (std::string_view(key) == "offset") offset = v;
+    else product *= std::max<uint64_t>(v, 1);  // both <= fileBytes: no overflow
+  }
+  if (accessor && offset + product > fileBytes)
+    fail("COLLADA <accessor>: offset + count * stride = " + std::to_string(offset + product) +
+         " values, more than the file could hold (" + std::to_string(fileBytes) + " bytes)");
+}
+
+// The node graph of a COLLADA document before assimp expands it: refuses an <instance_node> cycle
+// (assimp recurses until its stack overflows: measured, a SIGSEGV on a 1 KB file) and a graph that
+// expands to more than kMaxColladaNodes nodes. A reference is resolved as assimp resolves it: by id,
+// else by name; one that names no node is skipped (assimp warns and skips it too). Every element's
+// counts are checked on the way (checkColladaCounts).
+void checkCollada(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  const std::string bytes = std::move(text).str();
+  pugi::xml_document doc;
+  const pugi::xml_parse_result parsed = doc.load_buffer(bytes.data(), bytes.size());
+  if (!parsed)
+    fail("not a well-formed COLLADA (XML) file: " + std::string(parsed.description()) + " at byte " +
+         std::to_string(parsed.offset));
+
+  // Every <node>, in document order, without recursion (a file may nest nodes deeply).
+  std::vector<pugi::xml_node> nodes;
+  std::unordered_map<std::string, size_t> byId, byName;
+  std::vector<pugi::xml_node> scenes;
+  for (pugi::xml_node n = doc.first_child(); n;) {
+    if (n.type() == pugi::node_element) {
+      checkColladaCounts(n, bytes.size());
+      const std::string name = n.name();
+      if (name == "node") {
+        byId.emplace(n.attribute("id").value(), nodes.size());
+        byName.emplace(n.attribute("name").value(), nodes.size());
+        nodes.push_back(n);
+      } else if (name == "visual_scene") {
+        scenes.push_back(n);
+      }
+    }
+    if (n.first_child()) {
+      n = n.first_child();
+    } else {
+      while (n && !n.next_sibling()) n = n.parent();
+      if (n) n = n.next_sibling();
+    }
+  }
+  byId.erase("");
+  byName.erase("");
+  std::unordered_map<const void*, size_t> indexOf;
+  for (size_t i = 0; i < nodes.size(); ++i) indexOf.emplace(nodes[i].internal_object(), i);
+
+  // Nodes a node holds: its child <node>s and the nodes its <instance_node>s name.
+  auto successors = [&](size_t i) {
+    std::vector<size_t> out;
+    for (pugi::xml_node c : nodes[i].children()) {
+      const std::string name = c.name();
+      if (name == "node") {
+        out.push_back(indexOf.at(c.internal_object()));
+      } else if (name == "instance_node") {
+        const std::string url = c.attribute("url").value();
+        if (url.size() < 2 || url[0] != '#') continue;  // assimp refuses these itself
+        const std::string ref = url.substr(1);
+        if (auto it = byId.find(ref); it != byId.end()) out.push_back(it->second);
+        else if (auto jt = byName.find(ref); jt != byName.end()) out.push_back(jt->second);
+      }
+    }
+    return out;
+  };
+
+  // Expanded size of every node (itself plus everything it holds, instances copied), depth first
+  // with an explicit stack; sums saturate just above the limit.
+  const uint64_t over = kMaxColladaNodes + 1;
+  auto add = [&](uint64_t a, uint64_t b) { return std::min(over, a + b); };
+  enum State : uint8_t { kNew, kOpen, kDone };
+  std::vector<State> state(nodes.size(), kNew);
+  std::vector<uint64_t> size(nodes.size(), 0);
+  for (size_t root = 0; root < nodes.size(); ++root) {
+    if (state[root] != kNew) continue;
+    std::vector<std::pair<size_t, std::vector<size_t>>> stack;
+    stack.emplace_back(root, successors(root));
+    state[root] = kOpen;
+    while (!stack.empty()) {
+      auto& [i, next] = stack.back();
+      if (next.empty()) {
+        uint64_t total = 1;
+        for (size_t j : successors(i)) total = add(total, size[j]);
+        size[i] = total;
+        state[i] = kDone;
+        stack.pop_back();
+        continue;
+      }
+      const size_t j = next.back();
+      next.pop_back();
+      if (state[j] == kOpen)
+        fail("COLLADA <instance_node> cycle: node '" + std::string(nodes[j].attribute("id").value()) +
+             "' instances itself through its own subtree");
+      if (state[j] == kNew) {
+        state[j] = kOpen;
+        stack.emplace_back(j, successors(j));
+      }
+    }
+  }
+  for (const pugi::xml_node& scene : scenes) {
+    uint64_t total = 1;
+    for (pugi::xml_node c : scene.children("node")) total = add(total, size[indexOf.at(c.internal_object())]);
+    if (total > kMaxColladaNodes)
+      fail("COLLADA visual scene '" + std::string(scene.attribute("id").value()) + "' expands to more than " +
+           std::to_string(kMaxColladaNodes) + " nodes through <instance_node> (kMaxColladaNodes)");
+  }
+}
+
+// What assimp would read through a reader other than the extension's: when that reader refuses the
+// content, assimp tries every reader on it, so a COLLADA document named .gltf reaches the COLLADA
+// reader (it accepts any file with "<collada" in its first 200 bytes, NULs dropped, any case), and a
+// zip archive holding a .dae reaches it too (.zae). None of the formats read here is a zip archive.
+void checkBeforeAssimp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(4096, '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(size_t(in.gcount()));
+  if (head.rfind("PK\x03\x04", 0) == 0) fail("a zip archive, not a " + fs::path(path).extension().string() + " file");
+  std::erase(head, '\0');
+  std::transform(head.begin(), head.end(), head.begin(), [](char c) { return char(std::tolower(uint8_t(c))); });
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](char c) { return char(std::tolower(uint8_t(c))); });
+  if (ext == ".dae" || head.find("<collada") != std::string::npos) checkCollada(path);
+}
 
 glm::dmat4 toDmat4(const aiMatrix4x4& m) {
   // aiMatrix4x4 is row-major with column vectors (translation in a4, b4, c4); glm is column-major.
@@ -301,6 +462,7 @@ MeshData readWithAssimp(const std::string& path) {
   // AC3D 'subdiv N' asks for N Catmull-Clark steps (4^N triangles): a resource the file controls.
   // Kept off; the control mesh is used.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_AC_EVAL_SUBDIVISION, false);
+  checkBeforeAssimp(path);
   const aiScene* scene = importer.ReadFile(path, kImportFlags);
   if (!scene) {
     std::string why = importer.GetErrorString();
