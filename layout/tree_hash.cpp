@@ -40,6 +40,7 @@ std::string packedTreeHash(const PackedBvh& packed) {
   f.stream(packed.nodes);
   f.stream(packed.triangles);
   f.stream(packed.attributes);
+  if (!packed.vertices.empty()) f.stream(packed.vertices);  // indexed triangles; absent: the hash stays as before
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(f.h));
   return hex;
