@@ -71,7 +71,12 @@ constexpr uint64_t kMaxColladaNodes = uint64_t(1) << 16;
 // of bounds (SIGSEGV). An accessor reads offset + count * stride values of its array.
 void checkColladaCounts(const pugi::xml_node& element, size_t fileBytes) {
   uint64_t product = 1, offset = 0;
-  const bool accessor = std::string_view(element.name()) == "accessor";
+  const std::string_view name = element.name();
+  const bool accessor = name == "accessor";
+  // An array without its count: assimp 5.2.5 writes its values to an array it never sized (SIGSEGV,
+  // found by fuzz_dae).
+  if (name.size() > 6 && name.substr(name.size() - 6) == "_array" && !element.attribute("count"))
+    fail("COLLADA <" + std::string(name) + ">: no count attribute");
   for (const char* key : {"count", "stride", "offset"}) {
     const pugi::xml_attribute a = element.attribute(key);
     if (!a) continue;
@@ -89,10 +94,23 @@ void checkColladaCounts(const pugi::xml_node& element, size_t fileBytes) {
          " values, more than the file could hold (" + std::to_string(fileBytes) + " bytes)");
 }
 
+// A COLLADA index list (<p>, <vcount>, <v>, <h>, <int_array>) holds integers only. fuzz_dae found
+// assimp 5.2.5 allocating without bound (std::bad_alloc after gigabytes) on <p>0"1 2</p>: its index
+// reader stops at a character that is not a digit without moving past it.
+void checkColladaIntegers(const pugi::xml_node& element) {
+  const std::string_view name = element.name();
+  if (name != "p" && name != "vcount" && name != "v" && name != "h" && name != "int_array") return;
+  for (const char c : std::string_view(element.child_value()))
+    if (!std::isdigit(uint8_t(c)) && !std::isspace(uint8_t(c)) && c != '-' && c != '+')
+      fail("COLLADA <" + std::string(name) + ">: expected integers, found '" + std::string(1, c) + "'");
+}
+
 // The node graph of a COLLADA document before assimp expands it: refuses an <instance_node> cycle
 // (assimp recurses until its stack overflows: measured, a SIGSEGV on a 1 KB file) and a graph that
 // expands to more than kMaxColladaNodes nodes. A reference is resolved as assimp resolves it: by id,
-// else by name; one that names no node is skipped (assimp warns and skips it too). Every element's
+// else by name; one that names no node is skipped (assimp warns and skips it too). An id or name that
+// several nodes share (COLLADA forbids it; fuzz_dae found assimp taking another one than the first)
+// counts as all of them, so the check over-estimates and never misses. Every element's
 // counts are checked on the way (checkColladaCounts).
 void checkCollada(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -107,15 +125,16 @@ void checkCollada(const std::string& path) {
 
   // Every <node>, in document order, without recursion (a file may nest nodes deeply).
   std::vector<pugi::xml_node> nodes;
-  std::unordered_map<std::string, size_t> byId, byName;
+  std::unordered_map<std::string, std::vector<size_t>> byId, byName;
   std::vector<pugi::xml_node> scenes;
   for (pugi::xml_node n = doc.first_child(); n;) {
     if (n.type() == pugi::node_element) {
       checkColladaCounts(n, bytes.size());
+      checkColladaIntegers(n);
       const std::string name = n.name();
       if (name == "node") {
-        byId.emplace(n.attribute("id").value(), nodes.size());
-        byName.emplace(n.attribute("name").value(), nodes.size());
+        byId[n.attribute("id").value()].push_back(nodes.size());
+        byName[n.attribute("name").value()].push_back(nodes.size());
         nodes.push_back(n);
       } else if (name == "visual_scene") {
         scenes.push_back(n);
@@ -144,8 +163,8 @@ void checkCollada(const std::string& path) {
         const std::string url = c.attribute("url").value();
         if (url.size() < 2 || url[0] != '#') continue;  // assimp refuses these itself
         const std::string ref = url.substr(1);
-        if (auto it = byId.find(ref); it != byId.end()) out.push_back(it->second);
-        else if (auto jt = byName.find(ref); jt != byName.end()) out.push_back(jt->second);
+        if (auto it = byId.find(ref); it != byId.end()) out.insert(out.end(), it->second.begin(), it->second.end());
+        else if (auto jt = byName.find(ref); jt != byName.end()) out.insert(out.end(), jt->second.begin(), jt->second.end());
       }
     }
     return out;
