@@ -28,7 +28,6 @@ namespace bvhlab {
 namespace {
 
 using testing::PrimitiveSet;
-constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // ---- invariants with duplicate references -------------------------------------------------------
 
