@@ -13,6 +13,7 @@
 
 #include "builders/builder.hpp"
 #include "builders/test_inputs.hpp"
+#include "builder_test_util.hpp"
 #include "datasets/scene.hpp"
 
 namespace bvhlab {
@@ -20,13 +21,9 @@ namespace {
 
 using testing::PrimitiveSet;
 
-std::vector<std::string> builderNames() {
-  std::vector<std::string> names;
-  for (const BuilderInfo& info : builders()) names.push_back(info.name);
-  return names;
-}
-
-bool sameBox(const Aabb& a, const Aabb& b) { return a.min == b.min && a.max == b.max; }
+using testing::builderNames;
+using testing::identical;
+using testing::sameBox;
 
 // The SAH of the brief, written out independently of builders/stats.cpp:
 // Ct * sum_inner A(n) / A(root) + Ci * sum_leaf A(n) / A(root) * count(n).
@@ -163,17 +160,6 @@ uint32_t checkTree(const Bvh& bvh, const PrimitiveSet& set, uint32_t maxLeafSize
         break;
       }
   return maxDepth;
-}
-
-bool identical(const Bvh& a, const Bvh& b) {
-  if (a.nodes.size() != b.nodes.size() || a.primIndices != b.primIndices) return false;
-  for (size_t i = 0; i < a.nodes.size(); ++i) {
-    const BvhNode &x = a.nodes[i], &y = b.nodes[i];
-    if (!sameBox(x.bounds, y.bounds) || x.count != y.count ||
-        (x.isLeaf() ? x.first != y.first : (x.left != y.left || x.right != y.right)))
-      return false;
-  }
-  return true;
 }
 
 // Builds, checks the invariants and the reported statistics; returns the tree.

@@ -17,30 +17,16 @@
 #include "builders/builder.hpp"
 #include "builders/reinsert.hpp"
 #include "builders/test_inputs.hpp"
+#include "builder_test_util.hpp"
 
 namespace bvhlab {
 namespace {
 
 using testing::PrimitiveSet;
 
-std::vector<std::string> builderNames() {
-  std::vector<std::string> names;
-  for (const BuilderInfo& info : builders()) names.push_back(info.name);
-  return names;
-}
-
-bool sameBox(const Aabb& a, const Aabb& b) { return a.min == b.min && a.max == b.max; }
-
-bool identical(const Bvh& a, const Bvh& b) {
-  if (a.nodes.size() != b.nodes.size() || a.primIndices != b.primIndices) return false;
-  for (size_t i = 0; i < a.nodes.size(); ++i) {
-    const BvhNode &x = a.nodes[i], &y = b.nodes[i];
-    if (!sameBox(x.bounds, y.bounds) || x.count != y.count ||
-        (x.isLeaf() ? x.first != y.first : (x.left != y.left || x.right != y.right)))
-      return false;
-  }
-  return true;
-}
+using testing::builderNames;
+using testing::identical;
+using testing::sameBox;
 
 // Depth (root alone = 1) of a tree already checked to be one.
 uint32_t depthOf(const Bvh& bvh) {
