@@ -1,6 +1,7 @@
 // Mesh loading (mesh_io.hpp): the file is read once, scanned by our per-format pass (double
 // positions, counts, indices), parsed by OpenMesh for faces and attributes (OBJ, OFF, PLY) or by our
-// own STL reader, and validated again; glTF/COLLADA/FBX/3DS/AC3D go to assimp (mesh_io_assimp.cpp).
+// own STL reader, and validated again; glTF/COLLADA/FBX/3DS/AC3D go to assimp (mesh_io_assimp.cpp),
+// after our checks (mesh_io_prechecks.cpp).
 // Also the OBJ writer.
 #include "datasets/mesh_io.hpp"
 
@@ -125,14 +126,13 @@ MeshData loadMeshImpl(const fs::path& path) {
     fail("unsupported mesh format '" + ext + "' (supported: .obj .off .ply .stl .gltf .glb .dae .fbx .3ds .ac)");
   const auto& viaAssimp = assimpExtensions();
   const bool assimp = std::find(viaAssimp.begin(), viaAssimp.end(), ext) != viaAssimp.end();
-  // assimp reads the file itself (and what it references: a glTF's .bin buffers); AC3D's counts are
-  // checked by our own pass first.
-  const std::string text = assimp && ext != ".ac" ? std::string() : readWholeFile(path);
-  if (assimp && ext != ".ac" ? checkedFileSize(path) == 0 : text.empty()) fail("empty file");
+  // assimp reads the file itself (and what it references: a glTF's .bin buffers), after our own
+  // checks (readWithAssimp: checkBeforeAssimp).
+  const std::string text = assimp ? std::string() : readWholeFile(path);
+  if (assimp ? checkedFileSize(path) == 0 : text.empty()) fail("empty file");
 
   MeshData mesh;
   if (assimp) {
-    if (ext == ".ac") checkAc3dCounts(text);
     mesh = readWithAssimp(path.string());
   } else if (ext == ".stl") {
     mesh = readStl(text);

@@ -80,9 +80,14 @@ const std::vector<std::string>& assimpExtensions();
 // (points and lines skipped), materials mapped (MeshData::materials). Errors are MeshFileError with
 // assimp's message.
 MeshData readWithAssimp(const std::string& path);
-// AC3D's counts (numvert, numsurf, refs, kids) against the lines left in the file, before assimp
-// sees it: assimp's AC3D reader loops and allocates per claimed surface (measured: 'numsurf 1e8' in a
-// 1 KB file held 3.1 GB for 5.8 s). Every counted item takes at least one line.
-void checkAc3dCounts(std::string_view text);
+// Our own passes over a file before assimp reads it (mesh_io_prechecks.cpp): COLLADA's node graph and
+// counts, AC3D's structure and counts, and content that would reach another reader than the
+// extension's. Each refuses, with a named error, a file that crashed, exhausted memory or corrupted
+// memory inside assimp 5.2.5.
+void checkBeforeAssimp(const std::string& path);
+// AC3D: every count (numvert, numsurf, refs, kids) against the lines left in the file (assimp loops
+// and allocates per claimed item), every SURF a known type with a 'refs' line, lines of at least 2
+// points, and every 'mat' index below the MATERIALs defined before it.
+void checkAc3d(std::string_view text);
 
 }  // namespace bvhlab::meshio

@@ -381,6 +381,43 @@ TEST(AssimpErrors, AFileWithoutTrianglesIsAnError) {
   EXPECT_NE(e.find("no faces"), std::string::npos) << e;
 }
 
+// AC3D structure assimp 5.2.5 mishandles, refused by our pass before assimp reads it, with the line
+// (mesh_io_prechecks.cpp: checkAc3d). A line surface without refs made assimp size its face array from
+// refs - 1 in unsigned arithmetic and write past it (fuzz_ac: an ASan bad-free; valgrind: invalid writes;
+// tests/fuzz/regressions/ac/). Each edit below breaks one rule of the valid quad file.
+TEST(AssimpErrors, MalformedAc3dSurfacesAreRefusedWithTheirLine) {
+  auto edit = [](const std::string& from, const std::string& to) {
+    std::string t = kQuadAc;
+    t.replace(t.find(from), from.size(), to);
+    return t;
+  };
+  struct Case {
+    const char* name;
+    std::string text;
+    size_t line;
+    const char* says;
+  };
+  const Case cases[] = {
+      {"line-no-refs.ac", edit("SURF 0x02\nmat 0\nrefs 2\n0 0 0\n2 0 0\n", "SURF 0x02\nmat 0\n"), 21, "without a 'refs' line"},
+      {"line-one-ref.ac", edit("refs 2\n0 0 0\n2 0 0\n", "refs 1\n0 0 0\n"), 21, "at least 2"},
+      {"refs-no-count.ac", edit("refs 2\n0 0 0", "refs\n0 0 0"), 23, "expected a count"},
+      {"mat-out-of-range.ac", edit("SURF 0x02\nmat 0", "SURF 0x02\nmat 1"), 22, "defines 1 MATERIAL"},
+      {"surf-type-5.ac", edit("SURF 0x02", "SURF 0x05"), 21, "unknown surface type 5"},
+      {"surf-no-flags.ac", edit("SURF 0x02", "SURF zz"), 21, "expected flags"},
+      // assimp's reader takes any file starting with "AC3D", whatever its name.
+      {"ac3d-named.gltf", edit("SURF 0x02\nmat 0", "SURF 0x02\nmat 7"), 22, "defines 1 MATERIAL"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const fs::path p = writeFile(c.name, c.text);
+    const std::string e = inputErrorOf(p);
+    EXPECT_EQ(e.rfind(p.string() + ":" + std::to_string(c.line) + ": ", 0), 0u) << e;
+    EXPECT_NE(e.find(c.says), std::string::npos) << e;
+  }
+  // The valid file with its line surface of 2 refs still reads (the guard refuses only what it names).
+  EXPECT_EQ(loadMeshData(writeFile("quad-ok.ac", kQuadAc)).triangles.size(), 2u);
+}
+
 // Counts a file claims far beyond its size must not be allocated: each file is refused and the
 // process's peak memory stays small (a vector of 2e9 vertices would be 24 GB).
 TEST(AssimpErrors, HugeClaimedCountsAreRefusedWithoutAllocating) {
