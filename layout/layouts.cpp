@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "layout/layout_bvh2cb.hpp"
+#include "layout/layout_cwbvh.hpp"
 #include "layout/layout_wide.hpp"
 
 namespace bvhlab {
@@ -20,6 +21,8 @@ const std::vector<LayoutInfo>& layouts() {
        packBvh4, {"layout.glsl", "layout_wide.glsl"}, "bvh4-stack-ordered"},
       {"bvh8", "8-wide, SAH-optimal collapse (Ylitie et al. 2017), 32-byte child slots, leaves in the parent",
        packBvh8, {"layout.glsl", "layout_wide.glsl"}, "bvh8-stack-ordered"},
+      {"cwbvh", "8-wide compressed node (Ylitie et al. 2017): 80 bytes, child boxes quantised to 8 bits on the node's grid",
+       packCwbvh, {"layout.glsl", "layout_cwbvh.glsl"}, "cwbvh-stack-ordered"},
   };
   return table;
 }

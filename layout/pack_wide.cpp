@@ -1,14 +1,13 @@
 // packWide: any builder's Bvh -> layout bvh4 / bvh8 (layout/layout_wide.hpp). It goes through v1's
-// packer, which checks the tree, orders it depth-first and writes the TRIANGLE and ATTRIBUTE streams
-// (kept as they are); v1's nodes are read back as a binary tree whose every subtree covers one
-// contiguous triangle range, collapsed (layout/collapse_wide.hpp) and written as slots and records.
+// packer and the collapse (layout/collapse_v1.hpp), keeps v1's TRIANGLE and ATTRIBUTE streams as they
+// are, and writes the wide tree as slots and records.
 #include <algorithm>
 #include <bit>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
-#include "layout/collapse_wide.hpp"
+#include "layout/collapse_v1.hpp"
 #include "layout/layout_wide.hpp"
 
 namespace bvhlab {
@@ -25,22 +24,6 @@ void writeSlot(std::vector<glm::uvec4>& out, size_t texel, const Aabb& box, uint
   out[texel + 1] = {bits(box.max.x), bits(box.max.y), bits(box.max.z), count};
 }
 
-// v1's NODE stream as a Bvh in the same (depth-first) order: node i's children are i + 1 and a, a
-// leaf's range indexes the TRIANGLE stream.
-Bvh binaryFromV1(const PackedBvh& v1) {
-  Bvh b;
-  const uint32_t count = uint32_t(v1.nodes.size() / kNodeTexels);
-  b.nodes.resize(count);
-  for (uint32_t i = 0; i < count; ++i) {
-    const NodeRecord r = unpackNode(v1, i);
-    BvhNode& n = b.nodes[i];
-    n.bounds = Aabb{r.bmin, r.bmax};
-    if (r.isLeaf()) n.first = r.a, n.count = r.count;
-    else n.left = i + 1, n.right = r.a;
-  }
-  return b;
-}
-
 }  // namespace
 
 uint32_t wideWidth(const std::string& layout) {
@@ -51,26 +34,11 @@ uint32_t wideWidth(const std::string& layout) {
 
 PackedBvh packWide(const Bvh& bvh, const TriangleSoup& soup, uint32_t width) {
   if (width != 4 && width != 8) throw std::invalid_argument("packWide: width must be 4 or 8, got " + std::to_string(width));
-  PackedBvh v1 = packBvh(bvh, soup);
-  const Bvh binary = binaryFromV1(v1);
-  const std::vector<uint32_t> refs = subtreeReferences(binary);
-  // First triangle of every subtree; v1's depth-first order makes a subtree's triangles contiguous.
-  std::vector<uint32_t> first(binary.nodes.size());
-  uint32_t maxLeaf = 1;
-  for (uint32_t i = uint32_t(binary.nodes.size()); i-- > 0;) {
-    const BvhNode& n = binary.nodes[i];
-    if (n.isLeaf()) {
-      first[i] = n.first;
-      maxLeaf = std::max(maxLeaf, n.count);
-      continue;
-    }
-    first[i] = first[n.left];
-    if (first[n.right] != first[n.left] + refs[n.left])
-      throw std::runtime_error("packWide: v1's triangle stream is not in depth-first leaf order");
-  }
-  // Merged leaves are capped at the largest leaf the builder made (its --leaf-size, in effect): the
-  // collapse trades nodes for references only within the leaf size the tree was asked for.
-  const WideTree wide = collapseWide(binary, width, CostModel{}, std::min(maxLeaf, kMaxLeafSize));
+  CollapsedV1 collapsed = collapseThroughV1(bvh, soup, width);
+  const Bvh& binary = collapsed.binary;
+  const std::vector<uint32_t>& refs = collapsed.refs;
+  const std::vector<uint32_t>& first = collapsed.first;
+  const WideTree& wide = collapsed.wide;
 
   PackedBvh out;
   out.layout = width == 4 ? kLayoutBvh4 : kLayoutBvh8;
@@ -109,8 +77,8 @@ PackedBvh packWide(const Bvh& bvh, const TriangleSoup& soup, uint32_t width) {
     }
     out.depth = maxDepth;
   }
-  out.triangles = std::move(v1.triangles);
-  out.attributes = std::move(v1.attributes);
+  out.triangles = std::move(collapsed.v1.triangles);
+  out.attributes = std::move(collapsed.v1.attributes);
   return out;
 }
 

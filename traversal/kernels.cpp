@@ -7,10 +7,12 @@
 
 #include "layout/layouts.hpp"
 #include "traversal/kernel_bvh2cb_stack.hpp"
+#include "traversal/kernel_cwbvh_stack.hpp"
 #include "traversal/kernel_stack_ordered.hpp"
 #include "traversal/kernel_stack_unordered.hpp"
 #include "traversal/kernel_stackless.hpp"
 #include "traversal/kernel_wide_stack.hpp"
+#include "layout/layout_cwbvh.hpp"
 #include "layout/layout_wide.hpp"
 
 namespace bvhlab {
@@ -64,6 +66,22 @@ const std::vector<KernelInfo>& wideKernels(uint32_t width) {
   return width == 4 ? bvh4 : bvh8;
 }
 
+const std::vector<KernelInfo>& cwbvhKernels() {
+  static const std::vector<KernelInfo> table = {
+      {"cwbvh-stack-ordered",
+       "explicit stack: every child box of a compressed 8-wide node decoded and tested, hits pushed nearest on top",
+       "kernel_cwbvh_stack.glsl", "cwbvh", BVHLAB_KERNEL_MIRRORS(glsl::cwbvh_stack)},
+  };
+  return table;
+}
+
+// The width W of a wide layout's tree, which bounds its kernels' stacks ((W - 1)(D - 1)); 0 for the
+// binary layouts. (Not wideWidth: that one names the bvh4/bvh8 slot format, which cwbvh is not.)
+uint32_t stackWidth(const std::string& layout) {
+  if (layout == kLayoutCwbvh) return kCwbvhWidth;
+  return wideWidth(layout);
+}
+
 std::string kernelList(const std::vector<KernelInfo>& table) {
   std::string list;
   for (const KernelInfo& k : table) list += (list.empty() ? "" : " ") + k.name;
@@ -76,6 +94,7 @@ std::string kernelList(const std::vector<KernelInfo>& table) {
 const std::vector<KernelInfo>& kernelsFor(const std::string& layout) {
   const std::string& name = findLayout(layout).name;  // an unknown layout names the valid ones
   if (name == "bvh2-cb") return bvh2cbKernels();
+  if (name == kLayoutCwbvh) return cwbvhKernels();
   if (wideWidth(name) != 0) return wideKernels(wideWidth(name));
   return kernels();
 }
@@ -118,9 +137,10 @@ int stackSizeFor(uint32_t treeDepth) {
 
 int stackSizeFor(const PackedBvh& packed) {
   const uint32_t depth = std::max<uint32_t>(1, packed.depth);
-  const uint32_t width = wideWidth(packed.layout);
+  const uint32_t width = stackWidth(packed.layout);
   if (width == 0) return stackSizeFor(depth);
-  // The wide kernels' bound (kernel_wide_stack.glsl): (W - 1)(D - 1) for the wide tree's depth D.
+  // The wide kernels' bound (kernel_wide_stack.glsl, kernel_cwbvh_stack.glsl): (W - 1)(D - 1) for the
+  // wide tree's depth D.
   const uint64_t bound = std::max<uint64_t>(1, uint64_t(width - 1) * (depth - 1));
   if (bound > uint64_t(std::numeric_limits<int>::max()))
     throw std::invalid_argument("stackSizeFor: wide tree depth " + std::to_string(depth) + " is too large");

@@ -53,8 +53,9 @@ const KernelInfo& findKernel(const std::string& layout, const std::string& name)
 // GLSL file (stack-unordered needs D, stack-ordered D - 1); this is the largest, and at least 1.
 int stackSizeFor(uint32_t treeDepth);
 // BVH_STACK_SIZE for this packed tree in its own layout: stackSizeFor(depth) for the binary layouts,
-// the wide kernels' bound max(1, (W - 1)(D - 1)) for bvh4/bvh8 (D: the wide tree's depth;
-// traversal/kernel_wide_stack.glsl derives it). What every caller with a PackedBvh should use.
+// the wide kernels' bound max(1, (W - 1)(D - 1)) for bvh4/bvh8/cwbvh (D: the wide tree's depth;
+// traversal/kernel_wide_stack.glsl and kernel_cwbvh_stack.glsl derive it). What every caller with a
+// PackedBvh should use.
 int stackSizeFor(const PackedBvh& packed);
 
 }  // namespace bvhlab

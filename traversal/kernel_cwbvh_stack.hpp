@@ -1,0 +1,114 @@
+// kernel_cwbvh_stack.hpp — C++ mirror of kernel_cwbvh_stack.glsl (ordered stack over layout cwbvh;
+// root entry, stack bound, NaN handling and counter definitions are documented there).
+#pragma once
+#include "traversal/intersectors.hpp"
+#include "traversal/layout_cwbvh.hpp"
+
+namespace bvhlab::glsl::cwbvh_stack {
+
+constexpr uint kCwbvhInner = 0x80000000u;
+
+template <class Tests>
+inline bool traverseCwbvh(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit, Counters& c) {
+  hit = MeshHit{tMax, -1, vec2(0.0f)};
+  vec3 invDir = Tests::rayInverseDirection(ray.dir);
+  StackArray<uint> stackLink(s.stackSize);
+  StackArray<uint> stackCount(s.stackSize);
+  StackArray<float> stackEnter(s.stackSize);
+  int sp = 0;
+
+  uint link = 0u;
+  uint count = kCwbvhInner;
+  while (true) {
+    if (count == kCwbvhInner) {
+      c.nodeVisits++;
+      CwNode node = loadCwNode(s, link);
+      int first = sp;
+      uint nearLink = 0u, nearCount = 0u;
+      float nearEnter = 0.0f;
+      bool met = false;
+      uint innerRank = 0u, triOffset = 0u;
+      for (uint i = 0u; i < node.k; ++i) {
+        uint meta = cwbvhMeta(node, i);
+        uint childLink, childCount;
+        if (meta == kCwbvhMetaInner) {
+          childLink = node.childBase + innerRank;
+          childCount = kCwbvhInner;
+          innerRank++;
+        } else {
+          childLink = node.triBase + triOffset;
+          childCount = meta;
+          triOffset += meta;
+        }
+        vec3 bmin, bmax;
+        float enter;
+        cwbvhChildBox(node, i, bmin, bmax);
+        c.boxTests++;
+        if (Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, enter)) {
+          if (!met) {
+            nearLink = childLink;
+            nearCount = childCount;
+            nearEnter = enter;
+            met = true;
+            continue;
+          }
+          if (sp == s.stackSize) {
+            c.stackOverflow = true;
+            return hit.tri >= 0;
+          }
+          bool childNearer = enter < nearEnter;
+          uint pushLink = childNearer ? nearLink : childLink;
+          uint pushCount = childNearer ? nearCount : childCount;
+          float pushEnter = childNearer ? nearEnter : enter;
+          nearLink = childNearer ? childLink : nearLink;
+          nearCount = childNearer ? childCount : nearCount;
+          nearEnter = childNearer ? enter : nearEnter;
+          int j = sp;
+          while (j > first && stackEnter[j - 1] <= pushEnter) {
+            stackLink[j] = stackLink[j - 1];
+            stackCount[j] = stackCount[j - 1];
+            stackEnter[j] = stackEnter[j - 1];
+            j--;
+          }
+          stackLink[j] = pushLink;
+          stackCount[j] = pushCount;
+          stackEnter[j] = pushEnter;
+          sp++;
+        }
+      }
+      link = nearLink;
+      count = met ? nearCount : 0u;
+    }
+    if (count != kCwbvhInner) {
+      for (uint i = 0u; i < count; ++i) {
+        int tri = int(link + i);
+        float t;
+        vec2 bary;
+        c.triTests++;
+        if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
+          hit = MeshHit{t, tri, bary};
+          if (anyHit) return true;
+        }
+      }
+      while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+      if (sp == 0) break;
+      sp--;
+      link = stackLink[sp];
+      count = stackCount[sp];
+    }
+  }
+  return hit.tri >= 0;
+}
+
+template <class Tests = FastTests>
+inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
+  return traverseCwbvh<Tests>(s, ray, tMin, tMax, false, hit, c);
+}
+
+template <class Tests = FastTests>
+inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
+  MeshHit hit;
+  return traverseCwbvh<Tests>(s, ray, tMin, tMax, true, hit, c);
+}
+
+}  // namespace bvhlab::glsl::cwbvh_stack
