@@ -173,6 +173,8 @@ int main(int argc, char** argv) {
   viewCmd->add_option("--builder", vo.builder, "initial BVH builder (B cycles)");
   viewCmd->add_option("--optimize", vo.optimize, "post-pass after every build: reinsert");
   viewCmd->add_option("--layout", vo.layout, "texture layout of the tree for the session (see `bvhlab layouts`)");
+  viewCmd->add_option("--triangles", vo.triangles,
+                      "triangle format for the session: raw | precomputed | indexed (see `bvhlab layouts`)");
   viewCmd->add_option("--kernel", vo.kernel,
                       "initial traversal kernel of that layout (K cycles through its kernels; default: the layout's)");
   viewCmd->add_option("--leaf-size", vo.leafSize, "initial max triangles per leaf (L / Shift+L)");

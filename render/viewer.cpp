@@ -16,6 +16,7 @@
 #include "builders/builder.hpp"
 #include "datasets/scene_io.hpp"
 #include "layout/layouts.hpp"
+#include "layout/triangle_formats.hpp"
 #include "render/viewer_app.hpp"
 #include "traversal/kernels.hpp"
 
@@ -29,6 +30,7 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
   // As `bvhlab render`: an unknown layout, or a kernel of another layout, is refused naming the valid ones.
   layout_ = findLayout(o.layout).name;
   kernel_ = findKernel(layout_, o.kernel).name;
+  triangles_ = findTriangleFormat(o.triangles).name;  // --robust is checked against it below (settingError)
   if (o.leafSize < 1 || o.leafSize > int(kMaxLeafSize))
     throw std::invalid_argument("--leaf-size must be in 1.." + std::to_string(kMaxLeafSize));
   if (o.depth && (*o.depth < 1 || *o.depth > kMaxDepth))
@@ -37,8 +39,8 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
     throw std::invalid_argument("--view must be one of shaded, normal, depth, primid, visits");
   if (!(o.resolutionScale >= 0.05f && o.resolutionScale <= 1.0f))
     throw std::invalid_argument("--scale must be in 0.05..1");
-  if (std::string e = settingError("aa", o.aa, layout_); !e.empty()) throw std::invalid_argument("--aa: " + e);
-  if (std::string e = settingError("robust", o.robust, layout_); !e.empty())
+  if (std::string e = settingError("aa", o.aa, layout_, triangles_); !e.empty()) throw std::invalid_argument("--aa: " + e);
+  if (std::string e = settingError("robust", o.robust, layout_, triangles_); !e.empty())
     throw std::invalid_argument("--robust: " + e);
   if (o.frames < 0) throw std::invalid_argument("--frames must be >= 0");
   if ((o.width && (*o.width < 1 || *o.width > 16384)) || (o.height && (*o.height < 1 || *o.height > 16384)))
@@ -51,7 +53,7 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
         throw InputError(script_->file + ":" + std::to_string(e.line) + ": unknown key '" + e.key +
                          "' (see docs/viewer.md)");
       else if (e.kind == ScriptEvent::Kind::Set)
-        if (std::string error = settingError(e.key, e.value, layout_); !error.empty())
+        if (std::string error = settingError(e.key, e.value, layout_, triangles_); !error.empty())
           throw InputError(script_->file + ":" + std::to_string(e.line) + ": " + error);
   }
   if (!o.replay.empty()) replay_ = loadCameraPath(o.replay), replaying_ = true;
@@ -262,7 +264,7 @@ void Viewer::cycle(const std::string& what, int step) {
     int i = std::clamp(int(it - kScales.begin()) + step, 0, int(kScales.size()) - 1);
     set(what, shortest(kScales[size_t(i)]));
   } else {
-    const std::vector<std::string> names = choices(what, layout_);
+    const std::vector<std::string> names = choices(what, layout_, triangles_);
     const std::string& cur = what == "builder" ? builder_ : what == "kernel" ? kernel_ : what == "view" ? view_
                              : what == "aa"    ? aa_      : robust_;
     auto it = std::find(names.begin(), names.end(), cur);
@@ -314,6 +316,7 @@ ShaderOptions Viewer::shaderOptions(bool countStats) const {
   so.maxDepth = depth_;
   so.view = view_ == "visits" ? View::Shaded : parseView(view_);
   so.layout = layout_;
+  so.triangles = triangles_;
   so.kernel = kernel_;
   so.reinhard = sc.settings.reinhard;
   so.bvhStackSize = stackSizeFor(prepared_->packed);  // the layout's own bound (a wide node pushes W - 1)
@@ -335,7 +338,7 @@ void Viewer::ensureRenderers() {
     bo.maxLeafSize = uint32_t(leafSize_);
     bo.optimize = optimize_;
     auto start = Clock::now();
-    prepared_ = prepareScene(Scene(original_), builder_, bo, layout_);
+    prepared_ = prepareScene(Scene(original_), builder_, bo, layout_, triangles_);
     prepareMs_ = msSince(start);
     if (!switches_.empty()) {
       switches_.back()["build_ms"] = prepared_->stats.buildMs;
@@ -415,6 +418,7 @@ int Viewer::run() {
                           {"frames", rendered_},
                           {"builder", builder_},
                           {"layout", layout_},
+                          {"triangle_format", triangles_},
                           {"kernel", kernel_},
                           {"leaf_size", leafSize_},
                           {"depth", depth_},

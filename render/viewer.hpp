@@ -17,6 +17,7 @@ struct ViewerOptions {
   std::string builder = "sah-binned";
   std::string optimize;  // post-pass after every (re)build: "" | "reinsert"
   std::string layout = "v1";          // texture layout of the tree (layout/layouts.hpp), for the session
+  std::string triangles = "raw";      // triangle format (layout/triangle_formats.hpp), for the session
   std::string kernel;                 // "" = the layout's default kernel (K cycles through its kernels)
   int leafSize = 4;
   std::optional<int> depth;

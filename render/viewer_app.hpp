@@ -67,12 +67,14 @@ std::optional<T> parseNumber(const std::string& text) {
 }
 
 // The values a named setting cycles through (keys, combos); empty for numeric settings. Kernels are
-// those that walk `layout` (traversal/kernels.hpp).
-std::vector<std::string> choices(const std::string& what, const std::string& layout);
+// those that walk `layout` (traversal/kernels.hpp); robustness variants those the triangle format
+// `triangles` can run (layout/triangle_formats.hpp: precomputed has no watertight test).
+std::vector<std::string> choices(const std::string& what, const std::string& layout, const std::string& triangles);
 std::string joined(const std::vector<std::string>& names);
-// "" when `value` is valid for the setting (one of scriptSettings()) with the tree in `layout`, else
-// what is wrong.
-std::string settingError(const std::string& what, const std::string& value, const std::string& layout);
+// "" when `value` is valid for the setting (one of scriptSettings()) with the tree in `layout` and
+// `triangles`, else what is wrong.
+std::string settingError(const std::string& what, const std::string& value, const std::string& layout,
+                         const std::string& triangles);
 // Script key names -> GLFW keys (docs/viewer.md lists them).
 int keyFromName(const std::string& name);
 // "SHIFT+B", "CTRL+1" -> key + modifier bits; GLFW_KEY_UNKNOWN when the name is not a key.
@@ -141,7 +143,8 @@ class Viewer {
   std::string glRenderer_;
 
   // live configuration
-  std::string builder_, layout_, kernel_, view_, aa_, robust_;  // layout_ is fixed for the session
+  // layout_ and triangles_ (the triangle format) are fixed for the session.
+  std::string builder_, layout_, triangles_, kernel_, view_, aa_, robust_;
   int leafSize_ = 4, depth_ = 5;
   std::string optimize_;  // ViewerOptions::optimize, applied after every rebuild
   float scale_ = 1.0f;

@@ -162,7 +162,7 @@ void Viewer::drawOverlay() {
     auto combo = [&](const char* label, const std::string& what, const std::string& current) {
       ImGui::SetNextItemWidth(130);
       if (ImGui::BeginCombo(label, current.c_str())) {
-        for (const std::string& c : choices(what, layout_)) {
+        for (const std::string& c : choices(what, layout_, triangles_)) {
           const bool selected = c == current;
           if (ImGui::Selectable(c.c_str(), selected) && !selected) set(what, c);
           if (selected) ImGui::SetItemDefaultFocus();
@@ -186,7 +186,7 @@ void Viewer::drawOverlay() {
     ImGui::Text("[L] leaf %d   [ ] depth %d", leafSize_, depth_);
     ImGui::Text("[,.] scale %.3f -> %dx%d", scale_, renderW_, renderH_);
     ImGui::Text("SAH %.2f  nodes %zu  leaves %zu  tree depth %u", b.sahCost, b.nodes, b.leaves, b.depth);
-    ImGui::Text("layout %s: %.1f bytes per triangle", layout_.c_str(),
+    ImGui::Text("layout %s, %s triangles: %.1f bytes per triangle", layout_.c_str(), triangles_.c_str(),
                 prepared_->soup.size() ? double(b.bytes) / double(prepared_->soup.size()) : 0.0);
     if (rayStats_.valid)
       ImGui::Text("per ray: %.1f node visits, %.1f triangle tests%s", rayStats_.visitsPerRay, rayStats_.testsPerRay,

@@ -9,6 +9,7 @@
 #include <cstdlib>
 
 #include "builders/builder.hpp"
+#include "layout/triangle_formats.hpp"
 #include "traversal/kernels.hpp"
 
 namespace bvhlab::viewer_detail {
@@ -23,7 +24,7 @@ double median(std::vector<double> v) {
 }
 
 // The values a named setting cycles through (keys, combos); empty for numeric settings.
-std::vector<std::string> choices(const std::string& what, const std::string& layout) {
+std::vector<std::string> choices(const std::string& what, const std::string& layout, const std::string& triangles) {
   std::vector<std::string> names;
   if (what == "builder")
     for (const BuilderInfo& b : builders()) names.push_back(b.name);
@@ -31,7 +32,12 @@ std::vector<std::string> choices(const std::string& what, const std::string& lay
     for (const KernelInfo& k : kernelsFor(layout)) names.push_back(k.name);
   if (what == "view") names = kViews;
   if (what == "aa") names = kAaModes;
-  if (what == "robust") names = robustnessNames();
+  if (what == "robust") {
+    // Only the variants the session's triangle format can run (precomputed: no watertight test).
+    const bool watertightOk = findTriangleFormat(triangles).watertight;
+    for (const std::string& n : robustnessNames())
+      if (watertightOk || parseRobustness(n).triangle != TriangleTest::Watertight) names.push_back(n);
+  }
   return names;
 }
 
@@ -42,7 +48,8 @@ std::string joined(const std::vector<std::string>& names) {
 }
 
 // "" when `value` is valid for the setting (one of scriptSettings()), else what is wrong.
-std::string settingError(const std::string& what, const std::string& value, const std::string& layout) {
+std::string settingError(const std::string& what, const std::string& value, const std::string& layout,
+                         const std::string& triangles) {
   if (what == "leaf_size") {
     std::optional<int> v = parseNumber<int>(value);
     return v && *v >= 1 && *v <= int(kMaxLeafSize) ? "" : "leaf_size must be in 1.." + std::to_string(kMaxLeafSize);
@@ -55,10 +62,15 @@ std::string settingError(const std::string& what, const std::string& value, cons
     std::optional<float> v = parseNumber<float>(value);
     return v && *v >= 0.05f && *v <= 1.0f ? "" : "scale must be in 0.05..1";
   }
-  const std::vector<std::string> names = choices(what, layout);
+  const std::vector<std::string> names = choices(what, layout, triangles);
   if (names.empty()) return "unknown setting '" + what + "' (" + joined(scriptSettings()) + ")";
-  if (std::find(names.begin(), names.end(), value) == names.end())
+  if (std::find(names.begin(), names.end(), value) == names.end()) {
+    const std::vector<std::string> all = robustnessNames();
+    if (what == "robust" && std::find(all.begin(), all.end(), value) != all.end())
+      return "robust '" + value + "' uses the watertight triangle test, which triangle format '" + triangles +
+             "' cannot run (valid: " + joined(names) + ")";
     return "unknown " + what + " '" + value + "' (valid: " + joined(names) + ")";
+  }
   return "";
 }
 

@@ -361,6 +361,50 @@ TEST(ViewCommand, LayoutOptionRefusesLikeRenderAndDrawsEveryLayoutLikeRender) {
   }
 }
 
+// `--triangles`: refused as `bvhlab render` refuses it (an unknown format; precomputed with the
+// default watertight test), every format's scripted frame equals the headless render with it, and a
+// script may not switch a precomputed session to a watertight variant (T skips those).
+TEST(ViewCommand, TrianglesOptionRefusesLikeRenderAndDrawsEveryFormatLikeRender) {
+  if (shell(std::string(BVHLAB_BINARY) + " view --help >/dev/null").rc != 0)
+    GTEST_SKIP() << "this bvhlab has no `view` subcommand";
+  for (const char* bad : {"--triangles quads", "--triangles precomputed"}) {
+    SCOPED_TRACE(bad);
+    Result v = shell("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(BVHLAB_BINARY) + " view " +
+                     cubeMesh().string() + " " + bad);
+    Result r = shell(std::string(BVHLAB_BINARY) + " render " + cubeMesh().string() + " " + bad + " -o " +
+                     (tempDir() / "refused.png").string());
+    EXPECT_NE(v.rc, 0);
+    EXPECT_NE(r.rc, 0);
+    // Both name the formats (unknown) or the watertight test (precomputed).
+    const char* says = std::string(bad).find("quads") != std::string::npos ? "indexed" : "watertight";
+    EXPECT_NE(v.err.find(says), std::string::npos) << v.err;
+    EXPECT_NE(r.err.find(says), std::string::npos) << r.err;
+  }
+
+  REQUIRE_VIEWER(prefix);
+  const fs::path dir = tempDir();
+  writeFile(dir / "pose.txt", std::string(kPoseLine));
+  for (const char* format : {"raw", "precomputed", "indexed"}) {
+    SCOPED_TRACE(format);
+    const std::string args = std::string("--triangles ") + format + " --robust fast";
+    const fs::path shot = dir / (std::string("view-") + format + ".png"), headless = dir / (std::string("render-") + format + ".png");
+    Result v = shell(view(*prefix, args + " --json --frames 2 --script " + (dir / "pose.txt").string() +
+                                       " --screenshot " + shot.string()));
+    ASSERT_EQ(v.rc, 0) << v.err;
+    const nlohmann::json j = nlohmann::json::parse(v.out);
+    EXPECT_EQ(j["triangle_format"], format);
+    EXPECT_GT(j["bytes_per_triangle"].get<double>(), 0.0);
+    Result r = renderHeadless(headless, args);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    expectSameImage(shot, headless);
+  }
+  writeFile(dir / "watertight.txt", std::string(kPoseLine) + "1 set robust watertight\n");
+  Result v = shell(view(*prefix, "--triangles precomputed --robust fast --frames 2 --script " +
+                                     (dir / "watertight.txt").string()));
+  EXPECT_NE(v.rc, 0);
+  EXPECT_NE(v.err.find("watertight.txt:2: robust 'watertight' uses the watertight triangle test, which triangle format 'precomputed' cannot run"), std::string::npos) << v.err;
+}
+
 TEST(ViewCommand, RecordedPathReplaysToSamePoses) {
   REQUIRE_VIEWER(prefix);
   fs::path dir = tempDir();
