@@ -202,6 +202,13 @@ TEST(LayoutKernels, EveryBuilderLayoutAndKernelFindTheBruteForceHits) {
   }
 }
 
+// The hard-case suite in watertight mode on bvh2-cb: no ray that must hit leaks, and every ray is
+// answered as v1's stack-ordered answers it on the same tree (expectHardCasesAnsweredAsV1,
+// layout_test_util.hpp; the wide layouts and cwbvh have the same test beside their packers).
+TEST(LayoutKernels, Bvh2cbHardCasesLeakNothingInWatertightMode) {
+  EXPECT_GT(expectHardCasesAnsweredAsV1("bvh2-cb"), 100u);
+}
+
 // The bvh2-cb GLSL kernel gives its C++ mirror's answer and counters per ray, closest and any hit,
 // on a builder's tree and on a tree whose root is a leaf; v1's stack-ordered alongside as a control.
 TEST(LayoutKernelsGlsl, EqualTheMirrorPerRay) {
