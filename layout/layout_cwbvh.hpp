@@ -35,8 +35,8 @@
 //   never miss a triangle because of the quantisation.
 // Node order: a node's inner children get consecutive indices when the node is written, then the
 // packer walks depth-first (first child first), so a subtree's nodes lie close together.
-// The ROOT NODE's own box is not stored (only its grid, which covers it); the kernel enters it without
-// a box test. A binary tree that is one leaf packs as one node with one leaf child.
+// The ROOT NODE's own box is not stored: the kernel tests the root's grid, p .. p + 255 scale, which
+// contains every child box (traversal/kernel_cwbvh_stack.glsl says why and what it measured). A binary tree that is one leaf packs as one node with one leaf child.
 //
 // TRIANGLE and ATTRIBUTE streams: the raw format (layout/layout.hpp), v1's triangles RE-ORDERED so each
 // node's leaf triangles are consecutive (node by node, in the packer's depth-first node order); sbvh's

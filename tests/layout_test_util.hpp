@@ -1,6 +1,7 @@
-// Helpers the layout tests share (test_layout_bvh2cb.cpp, test_layout_wide.cpp): the test meshes,
-// trees built from them (a single-leaf tree included), rays aimed at them, brute force with the
-// watertight test, and the GL context when one can be made.
+// Helpers the layout tests share (test_layout_bvh2cb.cpp, test_layout_wide.cpp, test_layout_cwbvh.cpp):
+// the test meshes, trees built from them (a single-leaf tree included), rays aimed at them, brute
+// force with the watertight test, the GL context when one can be made, and the per-ray comparison of
+// a GLSL kernel with its C++ mirror.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -10,11 +11,17 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
 #include "builders/builder.hpp"
+#include "datasets/hard_cases.hpp"
 #include "datasets/procedural.hpp"
 #include "datasets/scene_io.hpp"
 #include "layout/layout.hpp"
+#include "layout/layouts.hpp"
 #include "render/gl_context.hpp"
+#include "render/ray_tracer_gl.hpp"
+#include "traversal/kernels.hpp"
 #include "traversal/intersectors.hpp"
 #include "traversal/ray_batch.hpp"
 
@@ -145,6 +152,103 @@ inline std::unique_ptr<GlContext> contextOrNull() {
   } catch (const std::exception&) {
     return nullptr;
   }
+}
+
+// Triangle tests of closest-hit walks (watertight) of `kernel` ("" = the layout's default) over all rays.
+inline uint64_t closestTriangleTests(const PackedBvh& p, const std::string& kernel, const std::vector<BatchRay>& rays) {
+  const glsl::Storage s(p);
+  uint64_t tests = 0;
+  for (const BatchRay& r : rays) {
+    glsl::Counters c;
+    glsl::MeshHit hit{};
+    findKernel(p.layout, kernel).closest(Robustness::Watertight)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, hit, c);
+    tests += c.triTests;
+  }
+  return tests;
+}
+
+// The hard-case suite (datasets/hard_cases.hpp: shared edges and vertices, slab planes, far and scaled
+// copies) in watertight mode, on a sah-binned tree packed in `layout` and walked by its default
+// kernel: no ray that must hit leaks, and every ray is answered as v1's stack-ordered answers it on the
+// same tree (same hit or miss; t within nearlyEqual: where a ray meets a shared edge, the two
+// triangles' rounded t can differ by an ulp, and which one a walk keeps depends on its visit order,
+// since a box entered beyond the first t found is culled). Returns how many rays must hit.
+inline size_t expectHardCasesAnsweredAsV1(const std::string& layout) {
+  size_t mustHit = 0;
+  for (const hard::HardCase& hc : hard::makeHardCases()) {
+    SCOPED_TRACE(hc.name + " / " + layout);
+    Mesh mesh;
+    mesh.positions = hc.positions;
+    mesh.triangles = hc.triangles;
+    MeshSceneOptions mo;
+    mo.groundPlane = false;
+    const TriangleSoup soup = gatherTriangles(makeMeshScene(mesh, mo));
+    const Bvh bvh = build("sah-binned", soup);
+    const PackedBvh v1 = packBvh(bvh, soup), packed = findLayout(layout).pack(bvh, soup);
+    const glsl::Storage reference(v1), s(packed);
+    const KernelInfo& k = findKernel(layout, "");
+    int failures = 0;
+    for (size_t i = 0; i < hc.rays.size() && failures < 3; ++i) {
+      const hard::HardRay& r = hc.rays[i];
+      const glsl::Ray ray{r.origin, r.dir};
+      glsl::Counters c, cv1;
+      glsl::MeshHit hit{}, hitV1{};
+      const bool found = k.closest(Robustness::Watertight)(s, ray, r.tMin, r.tMax, hit, c);
+      const bool foundV1 =
+          findKernel("stack-ordered").closest(Robustness::Watertight)(reference, ray, r.tMin, r.tMax, hitV1, cv1);
+      mustHit += r.mustHit;
+      if ((r.mustHit && !found) || found != foundV1 || (found && !nearlyEqual(hit.t, hitV1.t)) || c.stackOverflow) {
+        ++failures;
+        ADD_FAILURE() << "ray " << i << (r.mustHit ? " (must hit)" : "") << ": " << found << " t " << hit.t << "; v1 "
+                      << foundV1 << " t " << hitV1.t;
+      }
+    }
+  }
+  return mustHit;
+}
+
+// The GLSL kernel k (in the compute shader of `bvhlab trace`, under a GL context) against its C++
+// mirror on every ray of `rays` over `packed`: the same answer, node visits, triangle tests and box
+// tests, no overflow, and for closest hits the same primitive with t within nearlyEqual. Reports the
+// first 3 differing rays as test failures; returns how many rays hit (so a caller can require enough).
+inline size_t expectGlslEqualsMirror(const PackedBvh& packed, const KernelInfo& k, const std::vector<BatchRay>& rays,
+                                     bool anyHit, Robustness robust, Storage storage = Storage::Tbo) {
+  RayTracerOptions o;
+  o.kernel = k.name;
+  o.robust = robust;
+  o.anyHit = anyHit;
+  o.storage = storage;
+  GlRayTracer gl(packed, o);
+  gl.setRays(rays);
+  std::vector<BatchHit> hits;
+  const std::vector<glm::uvec4> counts = gl.traceCounted(&hits);
+  const glsl::Storage s(packed);
+  int failures = 0;
+  size_t found = 0;
+  for (size_t i = 0; i < rays.size() && failures < 3; ++i) {
+    const BatchRay& r = rays[i];
+    glsl::Counters c;
+    glsl::MeshHit mh{};
+    bool hit;
+    uint32_t prim = BatchHit::kNoPrim, material, mesh;
+    if (anyHit) {
+      hit = k.any(robust)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, c);
+    } else {
+      hit = k.closest(robust)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, mh, c);
+      if (hit) glsl::loadTriangleIds(s, mh.tri, prim, material, mesh);
+    }
+    found += hit;
+    const bool same = hits[i].hit == hit && counts[i].x == c.nodeVisits && counts[i].y == c.triTests &&
+                      counts[i].z == 0u && counts[i].w == c.boxTests && !c.stackOverflow &&
+                      (anyHit || !hit || (hits[i].prim == prim && nearlyEqual(hits[i].t, mh.t)));
+    if (!same) {
+      ++failures;
+      ADD_FAILURE() << "ray " << i << ": GLSL " << hits[i].hit << " prim " << hits[i].prim << " visits " << counts[i].x
+                    << " tests " << counts[i].y << " boxes " << counts[i].w << "; mirror " << hit << " prim " << prim
+                    << " visits " << c.nodeVisits << " tests " << c.triTests << " boxes " << c.boxTests;
+    }
+  }
+  return found;
 }
 
 }  // namespace bvhlab::layouttest

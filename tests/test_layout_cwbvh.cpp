@@ -129,6 +129,8 @@ void checkPacked(const Bvh& bvh, const TriangleSoup& soup) {
     ASSERT_EQ(n.children, w.children.size());
     // The mirror decodes the same boxes as the tools' decoder.
     const glsl::CwNode mirror = glsl::loadCwNode(storage, it.node);
+    glsl::vec3 gridMin, gridMax;  // the box the kernel tests for the root: the node's whole grid
+    glsl::cwbvhGridBox(storage, it.node, gridMin, gridMax);
     Aabb frame;
     for (const WideChild& ch : w.children) frame.grow(c.binary.nodes[ch.binaryNode].bounds);
     for (int a = 0; a < 3; ++a) {
@@ -136,6 +138,8 @@ void checkPacked(const Bvh& bvh, const TriangleSoup& soup) {
       ASSERT_GE(n.exponent[a], 1u);
       ASSERT_LE(n.exponent[a], 254u);
       EXPECT_GE(cwbvhDecode(n.origin[a], 255, n.scale[a]), frame.max[a]) << "the grid reaches the node's max";
+      EXPECT_EQ(gridMin[a], n.origin[a]);
+      EXPECT_EQ(gridMax[a], cwbvhDecode(n.origin[a], 255, n.scale[a]));
       if (n.exponent[a] > 1) {
         EXPECT_LT(cwbvhDecode(n.origin[a], 255, n.scale[a] * 0.5f), frame.max[a]) << "a finer grid would have done";
       }
@@ -334,54 +338,14 @@ TEST(CwbvhKernels, NearestFirstCutsTheWork) {
   const TestMesh& m = testMeshes()[2];
   const Bvh bvh = build("sah-binned", m.soup);
   const std::vector<BatchRay> rays = testRays(m.soup, 800, 3);
-  const auto totalTests = [&](const PackedBvh& p, const std::string& kernel) {
-    const glsl::Storage s(p);
-    uint64_t tests = 0;
-    for (const BatchRay& r : rays) {
-      glsl::Counters c;
-      glsl::MeshHit hit{};
-      findKernel(p.layout, kernel).closest(Robustness::Watertight)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, hit, c);
-      tests += c.triTests;
-    }
-    return tests;
-  };
-  EXPECT_LT(double(totalTests(packCwbvh(bvh, m.soup), "")), 0.8 * double(totalTests(packBvh(bvh, m.soup), "stack-unordered")));
+  EXPECT_LT(double(closestTriangleTests(packCwbvh(bvh, m.soup), "", rays)),
+            0.8 * double(closestTriangleTests(packBvh(bvh, m.soup), "stack-unordered", rays)));
 }
 
 // The hard-case suite in watertight mode: no ray that must hit leaks, and every ray is answered as
-// v1's stack-ordered answers it on the same tree (t within nearlyEqual: at a shared edge the two
-// triangles' t can differ by an ulp, and which one a walk keeps depends on its order).
+// v1's stack-ordered answers it on the same tree (expectHardCasesAnsweredAsV1, layout_test_util.hpp).
 TEST(CwbvhKernels, HardCasesLeakNothingInWatertightMode) {
-  size_t mustHit = 0;
-  for (const hard::HardCase& hc : hard::makeHardCases()) {
-    SCOPED_TRACE(hc.name);
-    Mesh mesh;
-    mesh.positions = hc.positions;
-    mesh.triangles = hc.triangles;
-    MeshSceneOptions mo;
-    mo.groundPlane = false;
-    const TriangleSoup soup = gatherTriangles(makeMeshScene(mesh, mo));
-    const Bvh bvh = build("sah-binned", soup);
-    const PackedBvh v1 = packBvh(bvh, soup), packed = packCwbvh(bvh, soup);
-    const glsl::Storage reference(v1), s(packed);
-    const KernelInfo& k = findKernel(kLayoutCwbvh, "");
-    int failures = 0;
-    for (size_t i = 0; i < hc.rays.size() && failures < 3; ++i) {
-      const hard::HardRay& r = hc.rays[i];
-      const glsl::Ray ray{r.origin, r.dir};
-      glsl::Counters c, cv1;
-      glsl::MeshHit hit{}, hitV1{};
-      const bool found = k.closest(Robustness::Watertight)(s, ray, r.tMin, r.tMax, hit, c);
-      const bool foundV1 = findKernel("stack-ordered").closest(Robustness::Watertight)(reference, ray, r.tMin, r.tMax, hitV1, cv1);
-      mustHit += r.mustHit;
-      if ((r.mustHit && !found) || found != foundV1 || (found && !nearlyEqual(hit.t, hitV1.t)) || c.stackOverflow) {
-        ++failures;
-        ADD_FAILURE() << "ray " << i << (r.mustHit ? " (must hit)" : "") << ": " << found << " t " << hit.t << "; v1 "
-                      << foundV1 << " t " << hitV1.t;
-      }
-    }
-  }
-  EXPECT_GT(mustHit, 100u);
+  EXPECT_GT(expectHardCasesAnsweredAsV1(kLayoutCwbvh), 100u);
 }
 
 // The GLSL kernel gives its C++ mirror's answer and counters per ray (visits, triangle tests, box
@@ -419,42 +383,7 @@ TEST(CwbvhKernelsGlsl, EqualTheMirrorPerRay) {
         for (Robustness robust : {Robustness::Watertight, Robustness::Fast}) {
           if (robust == Robustness::Fast && !cs.fastToo) continue;
           SCOPED_TRACE(cs.name + " / " + k.name + (anyHit ? " any" : " closest") + " / " + robustnessName(robust));
-          RayTracerOptions o;
-          o.kernel = k.name;
-          o.robust = robust;
-          o.anyHit = anyHit;
-          o.storage = cs.storage;
-          GlRayTracer gl(cs.packed, o);
-          gl.setRays(cs.rays);
-          std::vector<BatchHit> hits;
-          const std::vector<glm::uvec4> counts = gl.traceCounted(&hits);
-          const glsl::Storage s(cs.packed);
-          int failures = 0;
-          size_t found = 0;
-          for (size_t i = 0; i < cs.rays.size() && failures < 3; ++i) {
-            const BatchRay& r = cs.rays[i];
-            glsl::Counters c;
-            glsl::MeshHit mh{};
-            bool hit;
-            uint32_t prim = BatchHit::kNoPrim, material, mesh;
-            if (anyHit) {
-              hit = k.any(robust)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, c);
-            } else {
-              hit = k.closest(robust)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, mh, c);
-              if (hit) glsl::loadTriangleIds(s, mh.tri, prim, material, mesh);
-            }
-            found += hit;
-            const bool same = hits[i].hit == hit && counts[i].x == c.nodeVisits && counts[i].y == c.triTests &&
-                              counts[i].z == 0u && counts[i].w == c.boxTests && !c.stackOverflow &&
-                              (anyHit || !hit || (hits[i].prim == prim && nearlyEqual(hits[i].t, mh.t)));
-            if (!same) {
-              ++failures;
-              ADD_FAILURE() << "ray " << i << ": GLSL " << hits[i].hit << " prim " << hits[i].prim << " visits "
-                            << counts[i].x << " tests " << counts[i].y << " boxes " << counts[i].w << "; mirror " << hit
-                            << " prim " << prim << " visits " << c.nodeVisits << " tests " << c.triTests << " boxes "
-                            << c.boxTests;
-            }
-          }
+          const size_t found = expectGlslEqualsMirror(cs.packed, k, cs.rays, anyHit, robust, cs.storage);
           if (!cs.fewHits) {
             EXPECT_GT(found, cs.rays.size() / 10) << "too few hits for the comparison to mean much";
           }

@@ -286,64 +286,17 @@ TEST(WideKernels, NearestFirstCutsTheWork) {
   const TestMesh& m = testMeshes()[2];
   const Bvh bvh = build("sah-binned", m.soup);
   const std::vector<BatchRay> rays = testRays(m.soup, 800, 3);
-  const auto totalTests = [&](const PackedBvh& p, const std::string& kernel) {
-    const glsl::Storage s(p);
-    uint64_t tests = 0;
-    for (const BatchRay& r : rays) {
-      glsl::Counters c;
-      glsl::MeshHit hit{};
-      findKernel(p.layout, kernel).closest(Robustness::Watertight)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, hit, c);
-      tests += c.triTests;
-    }
-    return tests;
-  };
-  const uint64_t unordered = totalTests(packBvh(bvh, m.soup), "stack-unordered");
+  const uint64_t unordered = closestTriangleTests(packBvh(bvh, m.soup), "stack-unordered", rays);
   for (const char* layout : {kLayoutBvh4, kLayoutBvh8}) {
-    const uint64_t ordered = totalTests(findLayout(layout).pack(bvh, m.soup), "");
+    const uint64_t ordered = closestTriangleTests(findLayout(layout).pack(bvh, m.soup), "", rays);
     EXPECT_LT(double(ordered), 0.8 * double(unordered)) << layout;
   }
 }
 
-// The hard-case suite (shared edges and vertices, slab planes, far and scaled copies) in watertight
-// mode: the wide kernels leak no ray that must hit, and answer every ray as v1's stack-ordered does on
-// the same tree (same hit or miss; t within nearlyEqual: where a ray meets a shared edge, the two
-// triangles' rounded t can differ by an ulp, and which one a walk keeps depends on its visit order,
-// since a box entered beyond the first t found is culled).
+// The hard-case suite in watertight mode: the wide kernels leak no ray that must hit, and answer every
+// ray as v1's stack-ordered does on the same tree (expectHardCasesAnsweredAsV1, layout_test_util.hpp).
 TEST(WideKernels, HardCasesLeakNothingInWatertightMode) {
-  size_t mustHit = 0;
-  for (const hard::HardCase& hc : hard::makeHardCases()) {
-    Mesh mesh;
-    mesh.positions = hc.positions;
-    mesh.triangles = hc.triangles;
-    MeshSceneOptions mo;
-    mo.groundPlane = false;
-    const TriangleSoup soup = gatherTriangles(makeMeshScene(mesh, mo));
-    const Bvh bvh = build("sah-binned", soup);
-    const PackedBvh v1 = packBvh(bvh, soup);
-    const glsl::Storage reference(v1);
-    for (const char* layout : {kLayoutBvh4, kLayoutBvh8}) {
-      SCOPED_TRACE(hc.name + " / " + layout);
-      const PackedBvh packed = findLayout(layout).pack(bvh, soup);
-      const glsl::Storage s(packed);
-      const KernelInfo& k = findKernel(layout, "");
-      int failures = 0;
-      for (size_t i = 0; i < hc.rays.size() && failures < 3; ++i) {
-        const hard::HardRay& r = hc.rays[i];
-        const glsl::Ray ray{r.origin, r.dir};
-        glsl::Counters c, cv1;
-        glsl::MeshHit hit{}, hitV1{};
-        const bool found = k.closest(Robustness::Watertight)(s, ray, r.tMin, r.tMax, hit, c);
-        const bool foundV1 = findKernel("stack-ordered").closest(Robustness::Watertight)(reference, ray, r.tMin, r.tMax, hitV1, cv1);
-        mustHit += r.mustHit;
-        if ((r.mustHit && !found) || found != foundV1 || (found && !nearlyEqual(hit.t, hitV1.t)) || c.stackOverflow) {
-          ++failures;
-          ADD_FAILURE() << "ray " << i << (r.mustHit ? " (must hit)" : "") << ": " << found << " t " << hit.t << "; v1 "
-                        << foundV1 << " t " << hitV1.t;
-        }
-      }
-    }
-  }
-  EXPECT_GT(mustHit, 100u);
+  for (const char* layout : {kLayoutBvh4, kLayoutBvh8}) EXPECT_GT(expectHardCasesAnsweredAsV1(layout), 100u) << layout;
 }
 
 // The GLSL kernels give their C++ mirror's answer and counters per ray (visits, triangle tests, box
@@ -375,41 +328,7 @@ TEST(WideKernelsGlsl, EqualTheMirrorPerRay) {
         for (Robustness robust : {Robustness::Watertight, Robustness::Fast}) {
           if (robust == Robustness::Fast && !cs.fastToo) continue;
           SCOPED_TRACE(cs.name + " / " + k.name + (anyHit ? " any" : " closest") + " / " + robustnessName(robust));
-          RayTracerOptions o;
-          o.kernel = k.name;
-          o.robust = robust;
-          o.anyHit = anyHit;
-          GlRayTracer gl(cs.packed, o);
-          gl.setRays(cs.rays);
-          std::vector<BatchHit> hits;
-          const std::vector<glm::uvec4> counts = gl.traceCounted(&hits);
-          const glsl::Storage s(cs.packed);
-          int failures = 0;
-          size_t found = 0;
-          for (size_t i = 0; i < cs.rays.size() && failures < 3; ++i) {
-            const BatchRay& r = cs.rays[i];
-            glsl::Counters c;
-            glsl::MeshHit mh{};
-            bool hit;
-            uint32_t prim = BatchHit::kNoPrim, material, mesh;
-            if (anyHit) {
-              hit = k.any(robust)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, c);
-            } else {
-              hit = k.closest(robust)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, mh, c);
-              if (hit) glsl::loadTriangleIds(s, mh.tri, prim, material, mesh);
-            }
-            found += hit;
-            const bool same = hits[i].hit == hit && counts[i].x == c.nodeVisits && counts[i].y == c.triTests &&
-                              counts[i].z == 0u && counts[i].w == c.boxTests && !c.stackOverflow &&
-                              (anyHit || !hit || (hits[i].prim == prim && nearlyEqual(hits[i].t, mh.t)));
-            if (!same) {
-              ++failures;
-              ADD_FAILURE() << "ray " << i << ": GLSL " << hits[i].hit << " prim " << hits[i].prim << " visits "
-                            << counts[i].x << " tests " << counts[i].y << " boxes " << counts[i].w << "; mirror " << hit
-                            << " prim " << prim << " visits " << c.nodeVisits << " tests " << c.triTests << " boxes "
-                            << c.boxTests;
-            }
-          }
+          const size_t found = expectGlslEqualsMirror(cs.packed, k, cs.rays, anyHit, robust);
           EXPECT_GT(found, cs.rays.size() / 10) << "too few hits for the comparison to mean much";
         }
 }

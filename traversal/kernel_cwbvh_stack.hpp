@@ -17,6 +17,11 @@ inline bool traverseCwbvh(const Storage& s, Ray ray, float tMin, float tMax, boo
   StackArray<float> stackEnter(s.stackSize);
   int sp = 0;
 
+  vec3 bmin, bmax;
+  float tEnter;
+  cwbvhGridBox(s, 0u, bmin, bmax);
+  c.boxTests++;
+  if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
   uint link = 0u;
   uint count = kCwbvhInner;
   while (true) {
@@ -40,7 +45,6 @@ inline bool traverseCwbvh(const Storage& s, Ray ray, float tMin, float tMax, boo
           childCount = meta;
           triOffset += meta;
         }
-        vec3 bmin, bmax;
         float enter;
         cwbvhChildBox(node, i, bmin, bmax);
         c.boxTests++;

@@ -32,6 +32,14 @@ CwNode loadCwNode(uint node) {
   return n;
 }
 
+// Node `node`'s whole grid, p .. p + 255 scale (only texel 0 fetched): it contains every child box the
+// node decodes (the packer chose e so that it reaches the node's max; decoding is monotone in q).
+void cwbvhGridBox(uint node, out vec3 bmin, out vec3 bmax) {
+  uvec4 t0 = fetchNode(5 * int(node));
+  bmin = uintBitsToFloat(t0.xyz);
+  bmax = bmin + vec3(255.0) * uintBitsToFloat(((uvec3(t0.w, t0.w >> 8, t0.w >> 16) & 0xFFu) << 23));
+}
+
 // Byte c (0..7) of an array of 8 bytes held in two uints, little-endian.
 uint cwbvhByte(uvec2 bytes, uint c) {
   return ((c < 4u ? bytes.x : bytes.y) >> (8u * (c & 3u))) & 0xFFu;

@@ -33,6 +33,12 @@ inline CwNode loadCwNode(const Storage& s, uint node) {
   return n;
 }
 
+inline void cwbvhGridBox(const Storage& s, uint node, vec3& bmin, vec3& bmax) {
+  uvec4 t0 = fetchNode(s, 5 * int(node));
+  bmin = uintBitsToFloat(uvec3(t0));
+  bmax = bmin + vec3(255.0f) * uintBitsToFloat(((uvec3(t0.w, t0.w >> 8, t0.w >> 16) & 0xFFu) << 23u));
+}
+
 inline uint cwbvhByte(uvec2 bytes, uint c) { return ((c < 4u ? bytes.x : bytes.y) >> (8u * (c & 3u))) & 0xFFu; }
 
 inline uint cwbvhMeta(const CwNode& n, uint c) { return cwbvhByte(n.meta, c); }
