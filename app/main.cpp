@@ -34,7 +34,7 @@ namespace {
 
 struct BuildCommand {
   std::string mesh, builder = "sah-binned", optimize, layout = kDefaultLayout, triangles = kDefaultTriangleFormat;
-  int leafSize = 4, bins = 0, plocRadius = 16;
+  int leafSize = 4, bins = 0, plocRadius = 16, mortonSizeBits = 0;
   float sbvhAlpha = 1e-5f;
   bool json = false;
 };
@@ -48,6 +48,7 @@ int buildCommand(const BuildCommand& c) {
   asRender.optimize = c.optimize;
   asRender.sbvhAlpha = c.sbvhAlpha;
   asRender.plocRadius = c.plocRadius;
+  asRender.mortonSizeBits = c.mortonSizeBits;
   OptionReview review;
   const BuildOptions options = renderBuildOptions(asRender, &review);
   const LayoutInfo& layout = findLayout(c.layout);
@@ -70,6 +71,8 @@ int buildCommand(const BuildCommand& c) {
                         {"optimize", c.optimize.empty() ? nlohmann::json() : nlohmann::json(c.optimize)},
                         {"leaf_size", stats.leafSize},  // what the leaves were limited to
                         {"leaf_size_requested", c.leafSize},
+                        {"ploc_radius", options.plocRadius},
+                        {"morton_size_bits", options.mortonSizeBits},
                         {"warnings", review.warnings},
                         {"primitives", stats.primitives},
                         {"references", stats.references},
@@ -136,6 +139,8 @@ int main(int argc, char** argv) {
   build->add_option("--optimize", bc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
   build->add_option("--sbvh-alpha", bc.sbvhAlpha, "sbvh: overlap threshold for spatial splits");
   build->add_option("--ploc-radius", bc.plocRadius, "ploc: nearest-neighbour search radius");
+  build->add_option("--morton-size-bits", bc.mortonSizeBits,
+                    "ploc, lbvh: primitive-size bits in the Morton codes, 0..9 (0 = position only)");
   build->add_flag("--json", bc.json, "print JSON");
 
   RunOptions ro;

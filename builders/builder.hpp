@@ -16,6 +16,7 @@ struct BuilderInfo {
   // largest leaf it builds (a larger --leaf-size is capped, with a warning).
   bool usesBins = false, usesSbvhAlpha = false, usesPlocRadius = false;
   uint32_t leafSizeCap = kMaxLeafSize;
+  bool usesMortonSizeBits = false;  // builds Morton codes (builders/morton.hpp)
 };
 
 const std::vector<BuilderInfo>& builders();
@@ -31,7 +32,8 @@ void validateBuildInput(const BuildInput& input, const BuildOptions& options);
 
 // What `builder` will do with `options`, known before anything is loaded: throws
 // std::invalid_argument (naming the flag) for values no builder accepts (unknown builder or pass,
-// leaf size outside 1..kMaxLeafSize, bins not 0 or 2..kMaxBins), and returns the leaf size the builder
+// leaf size outside 1..kMaxLeafSize, bins not 0 or 2..kMaxBins, Morton size bits above
+// kMaxMortonSizeBits), and returns the leaf size the builder
 // honours plus one warning per option it ignores or caps. Options equal to BuildOptions{}'s defaults
 // are taken as not set.
 struct OptionReview {

@@ -63,6 +63,10 @@ struct BuildOptions {
   float sbvhAlpha = 1e-5f;
   float sbvhReferenceBudget = 2.0f;
   uint32_t plocRadius = 16;  // ploc (Meister & Bittner 2018): nearest-neighbour search radius in Morton order
+  // ploc, lbvh: bits of each primitive's size (the square root of its box diagonal over the scene's)
+  // among the upper bits of its Morton code (Vinkler, Bittner & Havran 2017; builders/morton.hpp),
+  // 0..kMaxMortonSizeBits. 0 = plain position codes (measured: no setting helps on scanned meshes).
+  uint32_t mortonSizeBits = 0;
   // A post-pass after any builder: "" (none) or "reinsert" (Bittner et al. 2013).
   std::string optimize;
   double optimizeBudgetMs = 0.0;  // reinsert: stop after this long (0 = run to convergence)
@@ -97,6 +101,8 @@ struct BuildStats {
 };
 
 constexpr uint32_t kMaxLeafSize = 255;  // the packed node stores a leaf count in 8 bits
+// One size bit per 7 code bits (6 of position, builders/morton.hpp) in a 63-bit code: at most 9.
+constexpr uint32_t kMaxMortonSizeBits = 9;
 
 // SAH cost of a built tree with the given model (recomputed from the tree, not trusted from a builder).
 double sahCost(const Bvh& bvh, const CostModel& cost);

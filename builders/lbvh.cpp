@@ -1,12 +1,12 @@
 // LBVH (Lauterbach et al. 2009, "Fast BVH Construction on GPUs"; the tree Karras 2012 builds in
 // parallel): centroids quantised to a 2^21 grid over their bounds, interleaved into 63-bit Morton
-// codes, radix-sorted; each node splits its range where the highest differing code bit flips (equal
+// codes (with BuildOptions::mortonSizeBits, size bits among the upper ones: builders/morton.hpp),
+// radix-sorted; each node splits its range where the highest differing code bit flips (equal
 // codes: in the middle), down to single primitives. A bottom-up pass then refits the boxes and
 // collapses every subtree of at most maxLeafSize primitives whose SAH cost as one leaf is no higher
 // than as a subtree. Fast and SAH-blind above the leaves: the usual quality gap to SAH builders.
 #include <array>
 #include <bit>
-#include <cmath>
 #include <utility>
 #include <vector>
 
@@ -18,10 +18,7 @@ namespace bvhlab {
 
 namespace {
 
-constexpr int kBitsPerAxis = 21;  // 3 * 21 = 63 bits in a 64-bit code
-
 using detail::Keyed;
-using detail::spreadBits;
 
 // LSD radix sort on the code, 8 bits per pass; stable, so equal codes keep their input order.
 // Passes whose digit is the same for every key are skipped.
@@ -81,22 +78,9 @@ class MortonStepper {
 
 Bvh buildLbvh(const BuildInput& input, const BuildOptions& options) {
   const uint32_t n = uint32_t(input.boxes.size());
-  Aabb centroidBounds;
-  for (const glm::vec3& c : input.centroids) centroidBounds.grow(c);
-  // Grid scale per axis; a zero (or denormal, 2^21 / extent overflowing) extent maps to cell 0.
-  // Inputs are finite and c >= min, so every product below is finite and >= 0.
-  const float cells = float(1 << kBitsPerAxis);
-  glm::vec3 scale(0.0f);
-  for (int a = 0; a < 3; ++a) {
-    const float extent = centroidBounds.max[a] - centroidBounds.min[a];
-    const float s = cells / extent;
-    if (extent > 0.0f && std::isfinite(s)) scale[a] = s;
-  }
+  const detail::MortonEncoder encoder(input, options.mortonSizeBits);
   std::vector<Keyed> keys(n);
-  for (uint32_t i = 0; i < n; ++i) {
-    const glm::vec3 q = glm::min((input.centroids[i] - centroidBounds.min) * scale, glm::vec3(cells - 1.0f));
-    keys[i] = {spreadBits(uint64_t(q.x)) << 2 | spreadBits(uint64_t(q.y)) << 1 | spreadBits(uint64_t(q.z)), i};
-  }
+  for (uint32_t i = 0; i < n; ++i) keys[i] = {encoder.code(i), i};
   radixSort(keys);
 
   std::vector<BvhNode> full = detail::buildTopDown(Aabb{}, Task{0, 0, n}, detail::resolveThreads(options.threads),

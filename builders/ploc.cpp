@@ -1,10 +1,11 @@
 // PLOC (Meister & Bittner 2018, "Parallel Locally-Ordered Clustering for Bounding Volume Hierarchy
 // Construction", IEEE TVCG 24(3)): bottom-up agglomerative clustering along the Morton curve.
 //  1. Centroids quantised to a 2^21 grid over their bounds and interleaved into 63-bit Morton codes
-//     (as lbvh does), radix-sorted. Primitives with equal codes (coincident centroids to 2^-21 of the
-//     extent) cannot be told apart by position: each such run starts as one cluster, a balanced tree
-//     over the run (what lbvh does with equal codes; clustering nested boxes of one centre would
-//     chain them into a list).
+//     (as lbvh does; with BuildOptions::mortonSizeBits, size bits among the upper ones:
+//     builders/morton.hpp), radix-sorted. Primitives with equal codes (coincident centroids to 2^-21
+//     of the extent, fewer bits with size bits, and the same size class) cannot be told apart: each
+//     such run starts as one cluster, a balanced tree over the run (what lbvh does with equal codes;
+//     clustering nested boxes of one centre would chain them into a list).
 //  2. Repeat until one cluster is left: every cluster finds its nearest neighbour -- the one whose
 //     merged box has the smallest (half) area -- among the clusters within +-radius in the current
 //     order (BuildOptions::plocRadius, 1..1024); mutual nearest neighbours merge (the merged cluster
@@ -16,14 +17,14 @@
 // Threads: the passes work in fixed chunks of the order (never derived from the thread count) and
 // every cluster's neighbour is a function of the clusters alone, so the tree is the same for any
 // thread count. Quality, leaf 4, Ct = Ci = 1: 1.09x sah-binned's SAH on the bunny, elephant and
-// armadillo, 1.05x on makeLargeMesh(1M), 0.91x on random soups (tests/test_ploc.cpp).
+// armadillo, 1.05x on makeLargeMesh(1M), 0.91x on random soups (tests/test_ploc.cpp); Morton size bits
+// change that by -0.7..+1% (docs/builders.md).
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <barrier>
 #include <bit>
 #include <cstring>
-#include <cmath>
 #include <limits>
 #include <memory>
 #include <new>
@@ -53,7 +54,6 @@ namespace bvhlab {
 
 namespace {
 
-constexpr int kBitsPerAxis = 21;  // 3 * 21 = 63 bits in a 64-bit code
 // The CLI's range too (app/, render/, experiments/): the search costs O(radius) per cluster and pass.
 constexpr uint32_t kMaxRadius = 1024;
 // Clusters per job. Fixed (never derived from the thread count); chunks only split the work, no
@@ -65,7 +65,6 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 
 using detail::Keyed;
-using detail::spreadBits;
 
 // LSD radix sort on the code, 8 bits per pass; stable, so equal codes keep their input order (and
 // the order is unique: chunks and threads only split the work). Per pass, each chunk of kChunk keys
@@ -309,23 +308,10 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
   const uint32_t jobs = (n + kChunk - 1) / kChunk;
 
   // 1. Morton order.
-  Aabb centroidBounds;
-  for (const glm::vec3& c : input.centroids) centroidBounds.grow(c);
-  // Grid scale per axis; a zero (or denormal, 2^21 / extent overflowing) extent maps to cell 0.
-  // Inputs are finite and c >= min, so every product below is finite and >= 0.
-  const float cells = float(1 << kBitsPerAxis);
-  glm::vec3 scale(0.0f);
-  for (int a = 0; a < 3; ++a) {
-    const float extent = centroidBounds.max[a] - centroidBounds.min[a];
-    const float s = cells / extent;
-    if (extent > 0.0f && std::isfinite(s)) scale[a] = s;
-  }
+  const detail::MortonEncoder encoder(input, options.mortonSizeBits);
   std::vector<Keyed> keys(n);
   detail::runJobs(jobs, threads, [&](size_t job) {
-    for (uint32_t i = uint32_t(job) * kChunk, end = std::min(n, i + kChunk); i < end; ++i) {
-      const glm::vec3 q = glm::min((input.centroids[i] - centroidBounds.min) * scale, glm::vec3(cells - 1.0f));
-      keys[i] = {spreadBits(uint64_t(q.x)) << 2 | spreadBits(uint64_t(q.y)) << 1 | spreadBits(uint64_t(q.z)), i};
-    }
+    for (uint32_t i = uint32_t(job) * kChunk, end = std::min(n, i + kChunk); i < end; ++i) keys[i] = {encoder.code(i), i};
   });
   radixSort(keys, threads);
 

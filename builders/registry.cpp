@@ -33,9 +33,10 @@ const std::vector<BuilderInfo>& builders() {
       {"sah-sweep", "full-sweep SAH: exact best object split over centroids sorted on all axes", buildSahSweepBvh},
       {"sbvh", "SBVH: binned object + spatial splits (triangles clipped), alpha, reference budget, unsplitting", buildSbvh,
        /*usesBins=*/true, /*usesSbvhAlpha=*/true},
-      {"lbvh", "Morton-code radix tree (LBVH), SAH-collapsed leaves", buildLbvh},
+      {"lbvh", "Morton-code radix tree (LBVH), SAH-collapsed leaves", buildLbvh, false, false, false, kMaxLeafSize,
+       /*usesMortonSizeBits=*/true},
       {"ploc", "PLOC: bottom-up clustering in Morton order, neighbours within +-plocRadius, SAH-collapsed leaves",
-       buildPloc, false, false, /*usesPlocRadius=*/true},
+       buildPloc, false, false, /*usesPlocRadius=*/true, kMaxLeafSize, /*usesMortonSizeBits=*/true},
       // Embree's builder caps leaves at RTC_BUILD_MAX_PRIMITIVES_PER_LEAF (builders/embree.cpp).
       {"embree", "Embree 3 rtcBuildBVH, quality MEDIUM (the reference)", buildEmbreeBvh, false, false, false,
        kEmbreeMaxLeafSize},
@@ -117,6 +118,9 @@ OptionReview reviewBuildOptions(const std::string& builder, const BuildOptions& 
   if (options.bins == 1 || options.bins > kMaxBuildBins)
     throw std::invalid_argument("--bins must be 0 (the builder's default) or 2.." + std::to_string(kMaxBuildBins) +
                                 " (got " + std::to_string(options.bins) + ")");
+  if (options.mortonSizeBits > kMaxMortonSizeBits)
+    throw std::invalid_argument("--morton-size-bits must be in 0.." + std::to_string(kMaxMortonSizeBits) + " (got " +
+                                std::to_string(options.mortonSizeBits) + ")");
   OptionReview review;
   review.leafSize = std::min(options.maxLeafSize, info.leafSizeCap);
   const BuildOptions defaults;
@@ -130,6 +134,8 @@ OptionReview reviewBuildOptions(const std::string& builder, const BuildOptions& 
     review.warnings.push_back(info.name + " ignores --sbvh-alpha (only sbvh makes spatial splits)");
   if (options.plocRadius != defaults.plocRadius && !info.usesPlocRadius)
     review.warnings.push_back(info.name + " ignores --ploc-radius (only ploc clusters)");
+  if (options.mortonSizeBits != defaults.mortonSizeBits && !info.usesMortonSizeBits)
+    review.warnings.push_back(info.name + " ignores --morton-size-bits (only ploc and lbvh build Morton codes)");
   return review;
 }
 

@@ -240,7 +240,9 @@ class ConfigReader {
         if (!(a >= 0.0 && a <= 1.0)) fail(v.source(), sub, "must be in 0..1 (a fraction of the root's area)");
         value["sbvh_alpha"] = a;
       } else if (k == "ploc_radius") value["ploc_radius"] = integer(v, sub, 1, 1024);
-      else fail(k.source(), sub, "unknown key; a builder table has name, bins, optimize, sbvh_alpha, ploc_radius, label");
+      else if (k == "morton_size_bits") value["morton_size_bits"] = integer(v, sub, 0, kMaxMortonSizeBits);
+      else fail(k.source(), sub,
+                "unknown key; a builder table has name, bins, optimize, sbvh_alpha, ploc_radius, morton_size_bits, label");
     }
     if (!nameNode) fail(node.source(), key, "a builder table needs `name`");
     value["name"] = name;
@@ -249,6 +251,8 @@ class ConfigReader {
       if (value.contains("bins")) label += "[bins=" + std::to_string(value["bins"].get<int64_t>()) + "]";
       if (value.contains("sbvh_alpha")) label += "[alpha=" + value["sbvh_alpha"].dump() + "]";
       if (value.contains("ploc_radius")) label += "[radius=" + std::to_string(value["ploc_radius"].get<int64_t>()) + "]";
+      if (value.contains("morton_size_bits"))
+        label += "[size-bits=" + std::to_string(value["morton_size_bits"].get<int64_t>()) + "]";
       if (value.contains("optimize")) label += "+" + value["optimize"].get<std::string>();
     }
     return {label, value, {}};

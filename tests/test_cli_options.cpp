@@ -52,6 +52,30 @@ TEST(CliOptions, BadBinsAreRefusedBeforeTheMeshIsRead) {
   }
 }
 
+TEST(CliOptions, MortonSizeBitsAreRangeCheckedReportedAndWarnedAbout) {
+  // Out of range: refused before the mesh is read, naming the flag (build and render).
+  for (const char* bits : {"-1", "10"}) {
+    for (const std::string command : {"build --mesh", "render"}) {
+      Result r = run(command + " no_such_mesh.off --builder ploc --morton-size-bits " + bits);
+      EXPECT_NE(r.code, 0) << command << " " << bits;
+      EXPECT_NE(r.err.find("--morton-size-bits must be in 0..9"), std::string::npos) << bits << ": " << r.err;
+      EXPECT_EQ(r.err.find("no_such_mesh"), std::string::npos) << bits << ": " << r.err;
+    }
+  }
+  const fs::path mesh = gridMesh();
+  for (const std::string builder : {"ploc", "lbvh"}) {
+    Result r = run("build --mesh " + mesh.string() + " --builder " + builder + " --morton-size-bits 6 --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+    const json j = json::parse(r.out);
+    EXPECT_EQ(j["morton_size_bits"], 6);
+    EXPECT_EQ(j["ploc_radius"], 16);
+  }
+  Result r = run("build --mesh " + mesh.string() + " --builder sah-binned --morton-size-bits 3 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: sah-binned ignores --morton-size-bits"), std::string::npos) << r.err;
+}
+
 TEST(CliOptions, IgnoredBinsAndCappedLeavesWarnAndTheJsonSaysWhatWasUsed) {
   const fs::path mesh = gridMesh();
   Result r = run("build --mesh " + mesh.string() + " --builder median --bins 16 --json");
@@ -91,6 +115,12 @@ TEST(CliOptions, ReviewNamesTheOptionsEachBuilderIgnores) {
   o.plocRadius = 4;
   EXPECT_TRUE(bvhlab::reviewBuildOptions("sah-binned", bvhlab::BuildOptions{}).warnings.empty());
   EXPECT_EQ(bvhlab::reviewBuildOptions("median", o).warnings.size(), 3u);
+  o.mortonSizeBits = 3;  // read by ploc and lbvh only
+  EXPECT_EQ(bvhlab::reviewBuildOptions("median", o).warnings.size(), 4u);
+  EXPECT_EQ(bvhlab::reviewBuildOptions("lbvh", o).warnings.size(), 3u);  // bins, alpha, radius
+  o.mortonSizeBits = bvhlab::kMaxMortonSizeBits + 1;
+  EXPECT_THROW(bvhlab::reviewBuildOptions("ploc", o), std::invalid_argument);
+  o.mortonSizeBits = 0;
   EXPECT_EQ(bvhlab::reviewBuildOptions("sbvh", o).warnings.size(), 1u);        // ploc radius
   EXPECT_EQ(bvhlab::reviewBuildOptions("ploc", o).warnings.size(), 2u);        // bins, alpha
   EXPECT_EQ(bvhlab::reviewBuildOptions("sah-binned", o).warnings.size(), 2u);  // alpha, radius

@@ -18,6 +18,7 @@
 #include "builders/builder.hpp"
 #include "builders/collapse.hpp"
 #include "builders/test_inputs.hpp"
+#include "datasets/procedural.hpp"
 
 namespace bvhlab {
 namespace {
@@ -39,6 +40,25 @@ bool sameTree(const Bvh& a, const Bvh& b) {
       return false;
   }
   return true;
+}
+
+// FNV-1a over everything sameTree compares (node boxes' bit patterns, links, counts, primitive order):
+// a fingerprint of a tree to pin it across code changes.
+uint64_t treeHash(const Bvh& bvh) {
+  uint64_t h = 1469598103934665603ULL;
+  auto mix = [&h](uint32_t word) {
+    for (int b = 0; b < 4; ++b) h = (h ^ ((word >> (8 * b)) & 0xff)) * 1099511628211ULL;
+  };
+  for (const BvhNode& node : bvh.nodes) {
+    for (int a = 0; a < 3; ++a) mix(std::bit_cast<uint32_t>(node.bounds.min[a])), mix(std::bit_cast<uint32_t>(node.bounds.max[a]));
+    mix(node.count);
+    if (node.isLeaf())
+      mix(node.first);
+    else
+      mix(node.left), mix(node.right);
+  }
+  for (uint32_t p : bvh.primIndices) mix(p);
+  return h;
 }
 
 BuildOptions withRadius(uint32_t radius, uint32_t threads = 0, uint32_t leafSize = 4) {
@@ -82,10 +102,24 @@ Walk walk(const Bvh& bvh, size_t primitives) {
   return w;
 }
 
+// The size class builders/morton.hpp defines, the plain way: the square root of the box diagonal over
+// the scene's, times 2^s, rounded down, at most 2^s - 1 (0 for a scene of one point).
+std::vector<uint32_t> referenceSizeClasses(const PrimitiveSet& set, uint32_t sizeBits) {
+  auto diagonal = [](const Aabb& b) { return glm::length(glm::dvec3(b.max) - glm::dvec3(b.min)); };
+  Aabb scene;
+  for (const Aabb& b : set.boxes) scene.grow(b);
+  std::vector<uint32_t> classes(set.size(), 0);
+  const double top = double((1u << sizeBits) - 1);
+  for (size_t i = 0; i < set.size(); ++i)
+    if (sizeBits > 0 && diagonal(scene) > 0.0)
+      classes[i] = uint32_t(std::min(top, std::floor(std::sqrt(diagonal(set.boxes[i]) / diagonal(scene)) * (top + 1))));
+  return classes;
+}
+
 // PLOC as its comment in builders/ploc.cpp defines it, written the plain way (scalar, sequential,
-// every merged area computed from both ends): the builder's vectorised, chunked, threaded passes
-// must give exactly this tree.
-Bvh referencePloc(const PrimitiveSet& set, uint32_t radius, uint32_t leafSize) {
+// every merged area computed from both ends; the codes bit by bit, with the size bits of
+// builders/morton.hpp): the builder's vectorised, chunked, threaded passes must give exactly this tree.
+Bvh referencePloc(const PrimitiveSet& set, uint32_t radius, uint32_t leafSize, uint32_t sizeBits = 0) {
   const uint32_t n = uint32_t(set.size());
   Aabb bounds;
   for (const glm::vec3& c : set.centroids) bounds.grow(c);
@@ -95,15 +129,26 @@ Bvh referencePloc(const PrimitiveSet& set, uint32_t radius, uint32_t leafSize) {
     const float extent = bounds.max[a] - bounds.min[a];
     if (extent > 0.0f && std::isfinite(cells / extent)) scale[a] = cells / extent;
   }
-  auto spread = [](uint64_t v) {
-    uint64_t r = 0;
-    for (int b = 0; b < 21; ++b) r |= ((v >> b) & 1) << (3 * b);
-    return r;
-  };
+  const std::vector<uint32_t> sizeClass = referenceSizeClasses(set, sizeBits);
   std::vector<std::pair<uint64_t, uint32_t>> keys(n);
   for (uint32_t i = 0; i < n; ++i) {
     const glm::vec3 q = glm::min((set.centroids[i] - bounds.min) * scale, glm::vec3(cells - 1.0f));
-    keys[i] = {spread(uint64_t(q.x)) << 2 | spread(uint64_t(q.y)) << 1 | spread(uint64_t(q.z)), i};
+    const uint64_t cell[3] = {uint64_t(q.x), uint64_t(q.y), uint64_t(q.z)};
+    // 63 bits from the top: position bits x, y, z of bit 20, then of bit 19, ...; after every 6 of them
+    // the next size bit (most significant first) while there are size bits left; the position bits
+    // that do not fit are the lowest ones.
+    uint64_t code = 0;
+    uint32_t positionBits = 0, sizeBitsWritten = 0;
+    while (positionBits + sizeBitsWritten < 63) {
+      if (sizeBitsWritten < sizeBits && sizeBitsWritten < positionBits / 6) {
+        code = code << 1 | ((sizeClass[i] >> (sizeBits - 1 - sizeBitsWritten)) & 1);
+        ++sizeBitsWritten;
+      } else {
+        code = code << 1 | ((cell[positionBits % 3] >> (20 - positionBits / 3)) & 1);
+        ++positionBits;
+      }
+    }
+    keys[i] = {code, i};
   }
   std::stable_sort(keys.begin(), keys.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
 
@@ -175,6 +220,28 @@ TEST(Ploc, MatchesTheDefinition) {
       SCOPED_TRACE(set.name + " radius " + std::to_string(radius));
       EXPECT_TRUE(sameTree(buildBvh("ploc", set.input(), withRadius(radius, 2)), referencePloc(set, radius, 4)));
     }
+    for (uint32_t sizeBits : {1u, 5u, 9u}) {  // Morton size bits (builders/morton.hpp)
+      SCOPED_TRACE(set.name + " size bits " + std::to_string(sizeBits));
+      BuildOptions options = withRadius(16, 2);
+      options.mortonSizeBits = sizeBits;
+      EXPECT_TRUE(sameTree(buildBvh("ploc", set.input(), options), referencePloc(set, 16, 4, sizeBits)));
+    }
+  }
+}
+
+TEST(Ploc, DefaultCodesGiveTheTreesOfBeforeSizeBits) {
+  // Hashes of the trees ploc (radius 16) and lbvh built before Morton size bits existed (commit fd0daaa):
+  // mortonSizeBits = 0 must keep today's codes, so today's trees, bit for bit.
+  const struct {
+    PrimitiveSet set;
+    uint64_t ploc, lbvh;
+  } cases[] = {{testing::randomSoup(20000, 3), 0x2e75286c4eaed287, 0x4b136980f4f651f},
+                 {testing::sphereSoup(120, 90, 0.2f), 0x9a2d1e571b1ead78, 0x104c8c0f8cf3faad}};
+  for (const auto& c : cases) {
+    const uint64_t ploc = treeHash(buildBvh("ploc", c.set.input(), withRadius(16, 2)));
+    const uint64_t lbvh = treeHash(buildBvh("lbvh", c.set.input(), withRadius(16, 2)));
+    EXPECT_EQ(ploc, c.ploc) << c.set.name;
+    EXPECT_EQ(lbvh, c.lbvh) << c.set.name;
   }
 }
 
@@ -187,6 +254,13 @@ TEST(Ploc, SameTreeForAnyThreadCount) {
       for (uint32_t threads : {2u, 8u})
         EXPECT_TRUE(sameTree(one, buildBvh("ploc", set.input(), withRadius(radius, threads))))
             << "radius " << radius << ", " << threads << " threads";
+    }
+    BuildOptions sized = withRadius(16, 1);  // with Morton size bits
+    sized.mortonSizeBits = 6;
+    const Bvh one = buildBvh("ploc", set.input(), sized);
+    for (uint32_t threads : {2u, 8u}) {
+      sized.threads = threads;
+      EXPECT_TRUE(sameTree(one, buildBvh("ploc", set.input(), sized))) << "size bits 6, " << threads << " threads";
     }
   }
 }
@@ -333,6 +407,49 @@ double rayCost(const Bvh& bvh, const PrimitiveSet& set, const std::vector<glm::v
   return cost / double(origins.size());
 }
 
+// 20,000 rays from a sphere around the set towards points in its box.
+struct Rays {
+  std::vector<glm::vec3> origins, directions;
+};
+Rays measurementRays(const PrimitiveSet& set) {
+  Aabb bounds;
+  for (const Aabb& b : set.boxes) bounds.grow(b);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  Rays rays;
+  const glm::vec3 centre = 0.5f * (bounds.min + bounds.max);
+  const float radius = glm::length(bounds.max - bounds.min);
+  while (rays.origins.size() < 20000) {
+    const glm::vec3 w = glm::vec3(u(rng), u(rng), u(rng)) * 2.0f - 1.0f;
+    if (glm::length(w) > 1.0f || glm::length(w) < 1e-3f) continue;  // uniform directions, none near 0
+    const glm::vec3 from = centre + radius * glm::normalize(w);
+    const glm::vec3 to = bounds.min + glm::vec3(u(rng), u(rng), u(rng)) * (bounds.max - bounds.min);
+    rays.origins.push_back(from);
+    rays.directions.push_back(glm::normalize(to - from));
+  }
+  return rays;
+}
+
+// One table row: the builder with these options (one thread), 5 builds: SAH, ray cost, build CPU ms
+// median [min-max]; the SAH also as a multiple of `referenceSah` when that is given.
+double measureRow(const std::string& mesh, const PrimitiveSet& set, const Rays& rays, const std::string& builder,
+                  const std::string& setting, const BuildOptions& options, double referenceSah = 0.0) {
+  std::vector<double> ms;
+  Bvh bvh;
+  for (int k = 0; k < 5; ++k) {
+    const double c0 = threadCpuMs();
+    bvh = buildBvh(builder, set.input(), options);
+    ms.push_back(threadCpuMs() - c0);
+  }
+  std::sort(ms.begin(), ms.end());
+  const double sah = sahCost(bvh, options.cost);
+  std::printf("| %s | %s | %s | %.3f (%.3fx) | %.2f | %.1f [%.1f-%.1f] |\n", mesh.c_str(), builder.c_str(),
+              setting.c_str(), sah, referenceSah > 0.0 ? sah / referenceSah : 1.0,
+              rayCost(bvh, set, rays.origins, rays.directions), ms[2], ms[0], ms[4]);
+  std::fflush(stdout);
+  return sah;
+}
+
 TEST(PlocMeasure, DISABLED_RadiusCurve) {
   const char* only = std::getenv("PLOC_MESH");
   const std::filesystem::path dir = std::filesystem::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes";
@@ -340,38 +457,41 @@ TEST(PlocMeasure, DISABLED_RadiusCurve) {
     if (only && mesh != only) continue;
     const PrimitiveSet set = testing::loadTriangles(dir / (mesh + ".off"));
     if (set.size() == 0) continue;
-    Aabb bounds;
-    for (const Aabb& b : set.boxes) bounds.grow(b);
-    // 20,000 rays from a sphere around the mesh towards points in its box.
-    std::mt19937 rng(7);
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    std::vector<glm::vec3> origins, directions;
-    const glm::vec3 centre = 0.5f * (bounds.min + bounds.max);
-    const float radius = glm::length(bounds.max - bounds.min);
-    while (origins.size() < 20000) {
-      const glm::vec3 w = glm::vec3(u(rng), u(rng), u(rng)) * 2.0f - 1.0f;
-      if (glm::length(w) > 1.0f || glm::length(w) < 1e-3f) continue;  // uniform directions, none near 0
-      const glm::vec3 from = centre + radius * glm::normalize(w);
-      const glm::vec3 to = bounds.min + glm::vec3(u(rng), u(rng), u(rng)) * (bounds.max - bounds.min);
-      origins.push_back(from);
-      directions.push_back(glm::normalize(to - from));
+    const Rays rays = measurementRays(set);
+    const double reference = measureRow(mesh, set, rays, "sah-binned", "-", withRadius(16, 1));
+    for (uint32_t r : {1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u, 256u})
+      measureRow(mesh, set, rays, "ploc", "radius " + std::to_string(r), withRadius(r, 1), reference);
+  }
+}
+
+// ./tests/test_ploc --gtest_also_run_disabled_tests --gtest_filter='*DISABLED_SizeBitsCurve'
+// prints docs/builders.md's Morton size bits table: per mesh (PLOC_MESH as above; PLOC_LARGE=1 adds
+// makeLargeMesh(1M)), sah-binned, then ploc (radius 16) and lbvh with BuildOptions::mortonSizeBits
+// 0, 3, 6 and 9; leaf 4, one thread, as DISABLED_RadiusCurve.
+TEST(PlocMeasure, DISABLED_SizeBitsCurve) {
+  const char* only = std::getenv("PLOC_MESH");
+  const char* large = std::getenv("PLOC_LARGE");
+  const std::filesystem::path dir = std::filesystem::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes";
+  std::vector<std::string> meshes{"bunny00", "refined_elephant", "armadillo"};
+  if (large && std::string(large) == "1") meshes.push_back("large1M");
+  for (const std::string& mesh : meshes) {
+    if (only && mesh != only) continue;
+    PrimitiveSet set;
+    if (mesh == "large1M") {
+      const Mesh m = makeLargeMesh(1000000);
+      for (const glm::uvec3& t : m.triangles) set.addTriangle(m.positions[t.x], m.positions[t.y], m.positions[t.z]);
+    } else {
+      set = testing::loadTriangles(dir / (mesh + ".off"));
     }
-    std::vector<std::pair<std::string, uint32_t>> runs{{"sah-binned", 16}};
-    for (uint32_t r : {1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u, 256u}) runs.push_back({"ploc", r});
-    for (const auto& [builder, r] : runs) {
-      const BuildOptions options = withRadius(r, 1);
-      std::vector<double> ms;
-      Bvh bvh;
-      for (int k = 0; k < 5; ++k) {
-        const double c0 = threadCpuMs();
-        bvh = buildBvh(builder, set.input(), options);
-        ms.push_back(threadCpuMs() - c0);
+    if (set.size() == 0) continue;
+    const Rays rays = measurementRays(set);
+    const double reference = measureRow(mesh, set, rays, "sah-binned", "-", withRadius(16, 1));
+    for (const std::string builder : {"ploc", "lbvh"})
+      for (uint32_t sizeBits : {0u, 3u, 6u, 9u}) {
+        BuildOptions options = withRadius(16, 1);
+        options.mortonSizeBits = sizeBits;
+        measureRow(mesh, set, rays, builder, "size bits " + std::to_string(sizeBits), options, reference);
       }
-      std::sort(ms.begin(), ms.end());
-      std::printf("| %s | %s | %u | %.3f | %.2f | %.1f [%.1f-%.1f] |\n", mesh.c_str(), builder.c_str(), r,
-                  sahCost(bvh, options.cost), rayCost(bvh, set, origins, directions), ms[2], ms[0], ms[4]);
-      std::fflush(stdout);
-    }
   }
 }
 
