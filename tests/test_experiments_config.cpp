@@ -250,6 +250,28 @@ uber = true
   EXPECT_EQ(cfg.runs[0].axis("builder")->label, "sah-binned[bins=12]");
 }
 
+// A builder table's ploc_radius and morton_size_bits reach the render command line and the label, and
+// a value outside the flag's range is refused with the file, line and key.
+TEST_F(Experiments, PlocBuilderTableCarriesRadiusAndMortonSizeBits) {
+  writeText(root / "m.off", "OFF\n0 0 0\n");
+  const ExperimentConfig cfg = parse(R"(
+[axes]
+scenes = "m.off"
+builders = { name = "ploc", ploc_radius = 32, morton_size_bits = 6 }
+)");
+  ASSERT_EQ(cfg.runs.size(), 1u);
+  const std::string line = shellQuote(renderCommandLine("/bin/bvhlab", RunRequest{cfg.runs[0], root / "i.png", root / "v.png", "", ""}));
+  EXPECT_NE(line.find("--builder ploc --ploc-radius 32 --morton-size-bits 6"), std::string::npos) << line;
+  EXPECT_EQ(cfg.runs[0].axis("builder")->label, "ploc[radius=32][size-bits=6]");
+  try {
+    parse("[axes]\nscenes = 'm.off'\nbuilders = { name = 'ploc', morton_size_bits = 10 }\n");
+    ADD_FAILURE() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cfg.toml:3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("morton_size_bits"), std::string::npos) << e.what();
+  }
+}
+
 // [render] camera_path: resolved against the config's folder, validated at load, part of the key,
 // passed to the renderer as --camera-path.
 TEST_F(Experiments, CameraPathIsResolvedKeyedAndPassedToTheRenderer) {
