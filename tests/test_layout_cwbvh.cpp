@@ -6,7 +6,6 @@
 // kernel against its C++ mirror per ray (answer, visits, triangle tests, box tests).
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <map>
 #include <random>
 #include <stdexcept>
@@ -15,13 +14,12 @@
 
 #include <gtest/gtest.h>
 
-#include "datasets/hard_cases.hpp"
 #include "layout/collapse_v1.hpp"
 #include "layout/layout_cwbvh.hpp"
 #include "layout/layouts.hpp"
 #include "layout/triangle_formats.hpp"
 #include "layout_test_util.hpp"
-#include "render/ray_tracer_gl.hpp"
+#include "shaders/assemble.hpp"
 #include "traversal/kernels.hpp"
 #include "traversal/layout_cwbvh.hpp"
 

@@ -12,13 +12,11 @@
 
 #include <gtest/gtest.h>
 
-#include "datasets/hard_cases.hpp"
 #include "layout/collapse_wide.hpp"
 #include "layout/layout_bvh2cb.hpp"
 #include "layout/layout_wide.hpp"
 #include "layout/layouts.hpp"
 #include "layout_test_util.hpp"
-#include "render/ray_tracer_gl.hpp"
 #include "shaders/assemble.hpp"
 #include "traversal/kernels.hpp"
 
@@ -123,7 +121,9 @@ void checkCollapse(const Bvh& bvh, uint32_t width, uint32_t cap) {
             << "two children of one wide node overlap";
       sum += refs[c.binaryNode];
       if (c.leaf) {
-        if (!bvh.nodes[c.binaryNode].isLeaf()) EXPECT_LE(refs[c.binaryNode], cap) << "merged leaf over the cap";
+        if (!bvh.nodes[c.binaryNode].isLeaf()) {
+          EXPECT_LE(refs[c.binaryNode], cap) << "merged leaf over the cap";
+        }
       } else {
         ASSERT_LT(c.wideNode, wide.nodes.size());
         EXPECT_GT(c.wideNode, i) << "pre-order";
