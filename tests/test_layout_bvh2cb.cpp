@@ -209,7 +209,7 @@ TEST(LayoutKernels, Bvh2cbHardCasesLeakNothingInWatertightMode) {
   EXPECT_GT(expectHardCasesAnsweredAsV1("bvh2-cb"), 100u);
 }
 
-// The bvh2-cb GLSL kernel gives its C++ mirror's answer and counters per ray, closest and any hit,
+// The bvh2-cb GLSL kernel gives its C++ mirror's answer and counters (box tests too) per ray, closest and any hit,
 // on a builder's tree and on a tree whose root is a leaf; v1's stack-ordered alongside as a control.
 TEST(LayoutKernelsGlsl, EqualTheMirrorPerRay) {
   auto ctx = contextOrNull();
@@ -231,40 +231,8 @@ TEST(LayoutKernelsGlsl, EqualTheMirrorPerRay) {
       for (Robustness robust : {Robustness::Watertight, Robustness::Fast}) {
         if (cs.packed.layout == "v1" && robust == Robustness::Fast) continue;  // test_trace covers v1
         SCOPED_TRACE(cs.name + (anyHit ? " any" : " closest") + " / " + robustnessName(robust));
-        const KernelInfo& k = findKernel(cs.packed.layout, "");
-        RayTracerOptions o;
-        o.kernel = k.name;
-        o.robust = robust;
-        o.anyHit = anyHit;
-        GlRayTracer gl(cs.packed, o);
-        gl.setRays(cs.rays);
-        std::vector<BatchHit> hits;
-        const std::vector<glm::uvec4> counts = gl.traceCounted(&hits);
-        const glsl::Storage s(cs.packed);
-        int failures = 0;
-        size_t found = 0;
-        for (size_t i = 0; i < cs.rays.size() && failures < 3; ++i) {
-          const BatchRay& r = cs.rays[i];
-          glsl::Counters c;
-          glsl::MeshHit mh{};
-          bool hit;
-          uint32_t prim = BatchHit::kNoPrim, material, mesh;
-          if (anyHit) {
-            hit = k.any(robust)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, c);
-          } else {
-            hit = k.closest(robust)(s, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, mh, c);
-            if (hit) glsl::loadTriangleIds(s, mh.tri, prim, material, mesh);
-          }
-          found += hit;
-          const bool same = hits[i].hit == hit && counts[i].x == c.nodeVisits && counts[i].y == c.triTests &&
-                            counts[i].z == 0u && (anyHit || !hit || (hits[i].prim == prim && nearlyEqual(hits[i].t, mh.t)));
-          if (!same) {
-            ++failures;
-            ADD_FAILURE() << "ray " << i << ": GLSL " << hits[i].hit << " prim " << hits[i].prim << " visits "
-                          << counts[i].x << " tests " << counts[i].y << "; mirror " << hit << " prim " << prim
-                          << " visits " << c.nodeVisits << " tests " << c.triTests;
-          }
-        }
+        // expectGlslEqualsMirror (layout_test_util.hpp): answer, visits, triangle and box tests per ray.
+        const size_t found = expectGlslEqualsMirror(cs.packed, findKernel(cs.packed.layout, ""), cs.rays, anyHit, robust);
         EXPECT_GT(found, cs.rays.size() / 10) << "too few hits for the comparison to mean much";
       }
 }
