@@ -209,7 +209,8 @@ int main(int argc, char** argv) {
   hardCmd->add_option("--json", hc.json, "write the results as JSON here ('-' = stdout)");
   hardCmd->add_flag("--gpu", hc.gpu, "also count the GLSL kernel's leaks (camera inside closed meshes)");
   hardCmd->add_option("--backend", hc.backend, "osmesa | egl (with --gpu)");
-  hardCmd->add_option("--kernel", hc.kernel, "traversal kernel");
+  hardCmd->add_option("--layout", hc.layout, "texture layout the cases' trees are packed in (see `bvhlab layouts`)");
+  hardCmd->add_option("--kernel", hc.kernel, "traversal kernel of that layout (default: the layout's)");
   hardCmd->add_option("--builder", hc.builder, "BVH builder");
   auto* listBuilders = app.add_subcommand("builders", "list the BVH builders");
   auto* listKernels = app.add_subcommand("kernels", "list the traversal kernels (and the layout each walks)");

@@ -13,6 +13,7 @@
 #include "builders/builder.hpp"
 #include "datasets/cgal_oracle.hpp"
 #include "layout/layout.hpp"
+#include "layout/layouts.hpp"
 #include "render/gl_context.hpp"
 #include "render/gpu_renderer.hpp"
 #include "shaders/tracer.hpp"
@@ -99,9 +100,11 @@ nlohmann::json HardCaseCounts::toJson() const {
 // ---- the suite ------------------------------------------------------------------------------------
 
 struct HardCaseSuite::Impl {
+  std::string layout;
   const KernelInfo* kernel = nullptr;
   std::vector<hard::HardCase> cases;
-  std::vector<PackedBvh> packed;
+  std::vector<PackedBvh> packed;  // in `layout`, what the kernel walks
+  std::vector<PackedBvh> v1;      // the same trees in v1: their nodes are the boxes the NaN count tests
   std::vector<std::vector<oracle::ExactFirstHit>> exact;  // per case, per ray; empty for far/scaled copies
   // NaN entry distances per box test and case (the only knob they depend on), computed when asked.
   mutable std::optional<std::vector<size_t>> nanEntries[2];
@@ -112,12 +115,12 @@ struct HardCaseSuite::Impl {
     slot.emplace();
     for (size_t i = 0; i < cases.size(); ++i) {
       size_t nans = 0;
-      const uint32_t nodes = uint32_t(packed[i].nodes.size() / kNodeTexels);
+      const uint32_t nodes = uint32_t(v1[i].nodes.size() / kNodeTexels);
       for (const hard::HardRay& r : cases[i].rays) {
         const vec3 invDir = box == BoxTest::Robust ? glsl::robust::rayInverseDirection(r.dir)
                                                    : glsl::rayInverseDirection(r.dir);
         for (uint32_t n = 0; n < nodes; ++n) {
-          const NodeRecord node = unpackNode(packed[i], n);
+          const NodeRecord node = unpackNode(v1[i], n);
           float tEnter;
           if (box == BoxTest::Robust)
             glsl::robust::intersectAabb(r.origin, invDir, node.bmin, node.bmax, r.tMin, r.tMax, tEnter);
@@ -132,15 +135,20 @@ struct HardCaseSuite::Impl {
   }
 };
 
-HardCaseSuite::HardCaseSuite(const std::string& kernel, const std::string& builder) : impl_(std::make_unique<Impl>()) {
-  impl_->kernel = &findKernel(kernel);
+HardCaseSuite::HardCaseSuite(const std::string& layout, const std::string& kernel, const std::string& builder)
+    : impl_(std::make_unique<Impl>()) {
+  const LayoutInfo& l = findLayout(layout);  // an unknown layout or a kernel of another one fails here
+  impl_->layout = l.name;
+  impl_->kernel = &findKernel(l.name, kernel);
   findBuilder(builder);  // an unknown name fails here, naming the valid ones
   impl_->cases = hard::makeHardCases();
   for (const hard::HardCase& c : impl_->cases) {
     const TriangleSoup soup = gatherTriangles(meshScene(c));
     const std::vector<Aabb> boxes = triangleBoxes(soup);
     const std::vector<vec3> centroids = triangleCentroids(soup);
-    impl_->packed.push_back(packBvh(buildBvh(builder, BuildInput{boxes, centroids}, BuildOptions{}), soup));
+    const Bvh bvh = buildBvh(builder, BuildInput{boxes, centroids}, BuildOptions{});
+    impl_->v1.push_back(packBvh(bvh, soup));
+    impl_->packed.push_back(l.name == "v1" ? impl_->v1.back() : l.pack(bvh, soup));
     std::vector<oracle::ExactFirstHit> answers;
     if (!c.farOrScaled)  // the oracle runs at unit scale; the copies repeat the same rays
       for (const hard::HardRay& r : c.rays)
@@ -150,6 +158,9 @@ HardCaseSuite::HardCaseSuite(const std::string& kernel, const std::string& build
 }
 
 HardCaseSuite::~HardCaseSuite() = default;
+
+const std::string& HardCaseSuite::layout() const { return impl_->layout; }
+const std::string& HardCaseSuite::kernel() const { return impl_->kernel->name; }
 
 const std::vector<hard::HardCase>& HardCaseSuite::cases() const { return impl_->cases; }
 
@@ -230,7 +241,7 @@ std::vector<HardCaseCounts> HardCaseSuite::evaluate(Robustness variant) const {
     const glsl::Storage storage(packed, stackSizeFor(packed));
     HardCaseCounts n;
     n.name = c.name;
-    n.boxTests = c.rays.size() * (packed.nodes.size() / kNodeTexels);
+    n.boxTests = c.rays.size() * (s.v1[i].nodes.size() / kNodeTexels);
     n.nanBoxEntries = nans[i];
     for (size_t k = 0; k < c.rays.size(); ++k) {
       const hard::HardRay& r = c.rays[k];
@@ -315,17 +326,19 @@ std::vector<InsideView> insideViews() {
   return out;
 }
 
-std::unique_ptr<PreparedScene> prepareInsideView(const InsideView& view, const std::string& builder) {
+std::unique_ptr<PreparedScene> prepareInsideView(const InsideView& view, const std::string& builder,
+                                                 const std::string& layout) {
   Scene s = meshScene(view.mesh);
   s.camera = view.camera;
-  return prepareScene(std::move(s), builder, BuildOptions{});
+  return prepareScene(std::move(s), builder, BuildOptions{}, layout);
 }
 
 GpuLeakCounts gpuLeaks(const PreparedScene& p, const std::string& name, Robustness variant, const std::string& kernel) {
   ShaderOptions o;
   o.view = View::PrimId;
   o.countStats = true;
-  o.kernel = findKernel(kernel).name;
+  o.layout = p.packed.layout;
+  o.kernel = findKernel(p.packed.layout, kernel).name;
   o.robust = variant;
   o.bvhStackSize = stackSizeFor(p.packed);
   FrameOptions f;
@@ -356,10 +369,10 @@ std::string cell(const nlohmann::json& n) { return std::to_string(n.get<size_t>(
 
 void printTable(std::FILE* out, const nlohmann::json& report) {
   const bool gpu = report["gpu"].get<bool>();
-  std::fprintf(out, "hard cases: %zu cases, %zu rays (%zu must hit); kernel %s, builder %s\n",
+  std::fprintf(out, "hard cases: %zu cases, %zu rays (%zu must hit); layout %s, kernel %s, builder %s\n",
                report["suite"]["cases"].get<size_t>(), report["suite"]["rays"].get<size_t>(),
-               report["suite"]["must_hit"].get<size_t>(), report["kernel"].get<std::string>().c_str(),
-               report["builder"].get<std::string>().c_str());
+               report["suite"]["must_hit"].get<size_t>(), report["layout"].get<std::string>().c_str(),
+               report["kernel"].get<std::string>().c_str(), report["builder"].get<std::string>().c_str());
   std::fprintf(out, "oracle (unit-scale cases): %zu rays, %zu ties, %zu decisive hit/miss, %zu decided first hits "
                "(%zu clear of edges)\n",
                report["suite"]["oracle_rays"].get<size_t>(), report["suite"]["oracle_ties"].get<size_t>(),
@@ -404,10 +417,11 @@ int runHardCases(const HardCasesCommand& cmd) {
   const Backend backend = parseBackend(cmd.backend);
 
   const auto setupStart = std::chrono::steady_clock::now();
-  const HardCaseSuite suite(cmd.kernel, cmd.builder);
+  const HardCaseSuite suite(cmd.layout, cmd.kernel, cmd.builder);
   nlohmann::json report;
   report["command"] = "hard-cases";
-  report["kernel"] = cmd.kernel;
+  report["layout"] = suite.layout();
+  report["kernel"] = suite.kernel();
   report["builder"] = cmd.builder;
   report["suite"] = suite.summaryJson();
   report["gpu"] = cmd.gpu;
@@ -420,7 +434,7 @@ int runHardCases(const HardCasesCommand& cmd) {
     report["renderer"] = context->renderer();
     size_t rays = 0;
     for (const InsideView& v : insideViews()) {
-      views.emplace_back(v.name, prepareInsideView(v, cmd.builder));
+      views.emplace_back(v.name, prepareInsideView(v, cmd.builder, suite.layout()));
       rays += size_t(kInsideViewSize) * kInsideViewSize;
     }
     report["gpu_rays"] = rays;
@@ -452,7 +466,7 @@ int runHardCases(const HardCasesCommand& cmd) {
       GpuLeakCounts sum;
       nlohmann::json perView = nlohmann::json::array();
       for (const auto& [name, scene] : views) {
-        const GpuLeakCounts n = gpuLeaks(*scene, name, variant, cmd.kernel);
+        const GpuLeakCounts n = gpuLeaks(*scene, name, variant, suite.kernel());
         sum.rays += n.rays;
         sum.leaks += n.leaks;
         sum.mirrorIdMismatch += n.mirrorIdMismatch;

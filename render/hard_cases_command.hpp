@@ -13,6 +13,9 @@
 //     and a straight-through ray (offset to the outside, must hit nothing): a self-hit is the reflected
 //     ray hitting its own triangle or the outgoing one hitting anything; a lost ray is a reflected ray
 //     that hits nothing (the offset pushed its origin out of the mesh);
+//   - with --layout: every count above through a kernel of that layout (the trees packed in it); the
+//     NaN and box-test counts stay per node of the binary tree (v1), what the box test sees whatever
+//     the node format;
 //   - with --gpu: leaks of the GLSL kernel, a camera inside closed tessellated meshes (unit scale, far,
 //     tiny, huge) in the primid view, each pixel a must-hit ray, plus how many pixels' hit ids differ
 //     from the C++ mirror's.
@@ -37,7 +40,8 @@ struct HardCasesCommand {
   std::string json;                 // write the JSON object here; "-" = stdout; "" = no JSON
   bool gpu = false;                 // also count the GLSL kernel's leaks (needs a GL context)
   std::string backend = "osmesa";   // osmesa | egl, for --gpu
-  std::string kernel = "stack-ordered";
+  std::string layout = "v1";         // texture layout the cases' trees are packed in (layout/layouts.hpp)
+  std::string kernel;                // "" = the layout's default kernel
   std::string builder = "sah-binned";
 };
 
@@ -64,7 +68,10 @@ struct HardCaseCounts {
 // The suite with a BVH per case and the oracle's answers, computed once and shared by every variant.
 class HardCaseSuite {
  public:
-  HardCaseSuite(const std::string& kernel, const std::string& builder);
+  // `kernel` "" = the layout's default; a kernel of another layout is refused (traversal/kernels.hpp).
+  HardCaseSuite(const std::string& layout, const std::string& kernel, const std::string& builder);
+  const std::string& layout() const;
+  const std::string& kernel() const;  // the resolved name
   ~HardCaseSuite();
   // One entry per case, in makeHardCases() order.
   std::vector<HardCaseCounts> evaluate(Robustness variant) const;
@@ -87,7 +94,8 @@ struct InsideView {
 // angles); and the cube seen from its exact centre through the middle of a face with a 90 degree
 // field of view, where kInsideViewSize = 3 * 53 puts pixel centres on the quads' edges and diagonals.
 std::vector<InsideView> insideViews();
-std::unique_ptr<PreparedScene> prepareInsideView(const InsideView& view, const std::string& builder);
+std::unique_ptr<PreparedScene> prepareInsideView(const InsideView& view, const std::string& builder,
+                                                 const std::string& layout = "v1");
 constexpr int kInsideViewSize = 159;  // pixels per side: 25,281 must-hit rays per view
 
 struct GpuLeakCounts {
@@ -95,8 +103,8 @@ struct GpuLeakCounts {
   size_t rays = 0, leaks = 0;
   size_t mirrorIdMismatch = 0;  // pixels whose hit id differs from the C++ mirror's (same variant)
 };
-// Renders `scene` (a prepared inside view) in the primid view with the GLSL kernel and the mirror.
-// Needs a current GL context.
+// Renders `scene` (a prepared inside view, in any layout) in the primid view with the GLSL kernel and
+// the mirror; `kernel` must walk the scene's layout. Needs a current GL context.
 GpuLeakCounts gpuLeaks(const PreparedScene& scene, const std::string& name, Robustness variant,
                        const std::string& kernel);
 

@@ -18,6 +18,7 @@
 #include "datasets/hard_cases.hpp"
 #include "experiments/process.hpp"
 #include "layout/layout.hpp"
+#include "layout/layouts.hpp"
 #include "render/hard_cases_command.hpp"
 #include "shaders/assemble.hpp"
 #include "shaders/offset_ulp.hpp"
@@ -492,6 +493,32 @@ TEST(Variants, HardCasesCommandWritesItsJson) {
   const ProcessResult bad = runProcess({BVHLAB_BINARY, "hard-cases", "--robust", "tri+nope"});
   EXPECT_FALSE(bad.ok());
   EXPECT_NE(bad.err.find("box+ulp"), std::string::npos) << bad.err;  // the error lists the valid names
+  EXPECT_EQ(j["layout"], "v1");
+  EXPECT_EQ(j["kernel"], "stack-ordered");
+}
+
+// `bvhlab hard-cases --layout`: the suite's trees packed in another layout and walked by its kernel;
+// watertight leaks nothing and agrees with the oracle there too; a kernel of another layout is refused
+// naming the layout's own.
+TEST(Variants, HardCasesCommandRunsEveryLayout) {
+  for (const LayoutInfo& l : layouts()) {
+    SCOPED_TRACE(l.name);
+    const ProcessResult p =
+        runProcess({BVHLAB_BINARY, "hard-cases", "--layout", l.name, "--robust", "watertight", "--json", "-"});
+    ASSERT_TRUE(p.ok()) << p.status() << "\n" << p.err;
+    const nlohmann::json j = nlohmann::json::parse(p.out);
+    EXPECT_EQ(j["layout"], l.name);
+    EXPECT_EQ(j["kernel"], l.defaultKernel);
+    const nlohmann::json& total = j["variants"][0]["total"];
+    EXPECT_GT(total["must_hit"].get<size_t>(), 100u);
+    EXPECT_EQ(total["leaks"], 0);
+    EXPECT_EQ(total["oracle_hit_disagree"], 0);
+    EXPECT_EQ(total["oracle_first_clear_disagree"], 0);
+    EXPECT_EQ(total["nonfinite_hits"], 0);
+  }
+  const ProcessResult bad = runProcess({BVHLAB_BINARY, "hard-cases", "--layout", "bvh2-cb", "--kernel", "stackless"});
+  EXPECT_FALSE(bad.ok());
+  EXPECT_NE(bad.err.find("bvh2cb-stack-ordered"), std::string::npos) << bad.err;
 }
 
 // ---- the GLSL ------------------------------------------------------------------------------------
