@@ -126,7 +126,7 @@ const std::vector<std::string>& resultColumns() {
       "build_ms", "sah_cost", "epo", "tree_hash", "references", "sah_before_optimize", "optimize_ms", "nodes",
       "leaves", "bvh_depth",
       "bytes", "bytes_per_triangle", "triangles", "node_visits_per_ray", "node_visits_p95", "triangle_tests_per_ray",
-      "triangle_tests_p95", "ray_cost", "mesh_rays", "effective_depth", "image_mae", "image_psnr", "image_error_note",
+      "triangle_tests_p95", "box_tests_per_ray", "box_tests_p95", "ray_cost", "mesh_rays", "effective_depth", "image_mae", "image_psnr", "image_error_note",
       "image", "visits_image",
       // trace runs (rays axis): the batch, Embree on the same rays, agreement
       "rays", "mrays_per_s", "embree_ms", "embree_mrays_per_s", "ratio_to_embree", "ratio_ci_low", "ratio_ci_high",

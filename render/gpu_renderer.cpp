@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <initializer_list>
+#include <iterator>
 #include <stdexcept>
 
 #include <glad/gl.h>
@@ -110,8 +111,8 @@ GpuRenderer::~GpuRenderer() {
   glDeleteProgram(program_);
   glDeleteVertexArrays(1, &vao_);
   glDeleteFramebuffers(1, &fbo_);
-  GLuint textures[] = {colorTex_, statsTex_, streams_[0], streams_[1], streams_[2], streams_[3], texArray_, worldTex_};
-  glDeleteTextures(8, textures);
+  GLuint textures[] = {colorTex_, statsTex_, boxTestsTex_, streams_[0], streams_[1], streams_[2], streams_[3], texArray_, worldTex_};
+  glDeleteTextures(GLsizei(std::size(textures)), textures);
   glDeleteBuffers(4, streamBuffers_);
   glDeleteBuffers(1, &ubo_);
 }
@@ -233,8 +234,11 @@ void GpuRenderer::createFramebuffer() {
     glCreateTextures(GL_TEXTURE_2D, 1, &statsTex_);
     glTextureStorage2D(statsTex_, 1, GL_RGBA32UI, frame_.width, frame_.height);
     glNamedFramebufferTexture(fbo_, GL_COLOR_ATTACHMENT1, statsTex_, 0);
-    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-    glNamedFramebufferDrawBuffers(fbo_, 2, bufs);
+    glCreateTextures(GL_TEXTURE_2D, 1, &boxTestsTex_);
+    glTextureStorage2D(boxTestsTex_, 1, GL_R32UI, frame_.width, frame_.height);
+    glNamedFramebufferTexture(fbo_, GL_COLOR_ATTACHMENT2, boxTestsTex_, 0);
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glNamedFramebufferDrawBuffers(fbo_, 3, bufs);
   } else {
     glNamedFramebufferDrawBuffer(fbo_, GL_COLOR_ATTACHMENT0);
   }
@@ -279,6 +283,16 @@ std::vector<glm::uvec4> GpuRenderer::readStats() const {
   glReadBuffer(GL_COLOR_ATTACHMENT1);
   glReadPixels(0, 0, frame_.width, frame_.height, GL_RGBA_INTEGER, GL_UNSIGNED_INT, px.data());
   checkGl("readStats");
+  return px;
+}
+
+std::vector<uint32_t> GpuRenderer::readBoxTests() const {
+  if (!options_.countStats) throw std::logic_error("readBoxTests needs a renderer built with countStats");
+  std::vector<uint32_t> px(size_t(frame_.width) * frame_.height);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
+  glReadBuffer(GL_COLOR_ATTACHMENT2);
+  glReadPixels(0, 0, frame_.width, frame_.height, GL_RED_INTEGER, GL_UNSIGNED_INT, px.data());
+  checkGl("readBoxTests");
   return px;
 }
 

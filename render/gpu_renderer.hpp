@@ -48,6 +48,7 @@ class GpuRenderer {
   double drawFrame();  // draws one frame, waits for it (glFinish), returns wall-clock ms
   std::vector<uint8_t> readColor() const;      // RGBA8, rows bottom-up
   std::vector<glm::uvec4> readStats() const;   // needs ShaderOptions::countStats
+  std::vector<uint32_t> readBoxTests() const;  // per pixel, main.glsl's o_boxTests; needs countStats
   const AssembledShader& shader() const { return shader_; }
   unsigned colorTexture() const { return colorTex_; }  // RGBA8 result, for post passes and viewers
   void setCamera(const Camera& camera);
@@ -61,7 +62,7 @@ class GpuRenderer {
   ShaderOptions options_;
   FrameOptions frame_;
   AssembledShader shader_;
-  unsigned program_ = 0, vao_ = 0, fbo_ = 0, colorTex_ = 0, statsTex_ = 0, ubo_ = 0;
+  unsigned program_ = 0, vao_ = 0, fbo_ = 0, colorTex_ = 0, statsTex_ = 0, boxTestsTex_ = 0, ubo_ = 0;
   unsigned streams_[4] = {0, 0, 0, 0}, streamBuffers_[4] = {0, 0, 0, 0};  // node, triangle, attribute, vertex
   unsigned texArray_ = 0, worldTex_ = 0;
 };

@@ -218,7 +218,7 @@ json measureGroup(const json& spec) {
       const bool wantStats = e->cmd.json || e->cmd.view == "visits" || !e->cmd.visitsOutput.empty();
       e->job->finish(wantStats);
       json r = finishRender(e->cmd, e->setup, *e->prepared, e->job->frameOptions(), std::move(e->job->image),
-                            e->job->stats, e->times, renderer, false);
+                            e->job->stats, e->job->boxTests, e->times, renderer, false);
       r["session"] = session;
       r["rounds"] = rounds;
       const uint64_t overflows = stackOverflowPixels(e->job->stats);

@@ -19,6 +19,7 @@ int runRender(const RenderCommand& cmd) {
   FrameTimes times;
   std::vector<uint8_t> image;
   std::vector<glm::uvec4> stats;
+  std::vector<uint32_t> boxTests;
   std::string renderer;
   FrameOptions fo;
   if (cmd.cpu) {
@@ -32,6 +33,7 @@ int runRender(const RenderCommand& cmd) {
     ReferenceImage ref = renderReference(prepared->scene, prepared->data, prepared->packed, so, fo);
     image = std::move(ref.rgba);
     stats = std::move(ref.stats);
+    boxTests = std::move(ref.boxTests);
     times.ms.push_back(ref.ms);
     renderer = "bvhlab C++ mirror";
   } else {
@@ -48,9 +50,11 @@ int runRender(const RenderCommand& cmd) {
     job.finish(wantStats);
     image = std::move(job.image);
     stats = std::move(job.stats);
+    boxTests = std::move(job.boxTests);
   }
 
-  const nlohmann::json out = finishRender(cmd, setup, *prepared, fo, std::move(image), stats, times, renderer, cmd.cpu);
+  const nlohmann::json out = finishRender(cmd, setup, *prepared, fo, std::move(image), stats, boxTests, times, renderer,
+                                            cmd.cpu);
   if (cmd.json) std::cout << out.dump() << std::endl;
   // Say what was written: on stdout for a person, on stderr when stdout carries the JSON.
   std::ostream& say = cmd.json ? std::cerr : std::cout;

@@ -170,6 +170,7 @@ void GpuJob::finish(bool wantStats) {
     GpuRenderer gpu(*prepared_, counted, fo);
     gpu.drawFrame();
     stats = gpu.readStats();
+    boxTests = gpu.readBoxTests();
   }
 }
 
@@ -181,21 +182,26 @@ uint64_t stackOverflowPixels(const std::vector<glm::uvec4>& stats) {
 
 nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, const PreparedScene& prepared,
                             const FrameOptions& fo, std::vector<uint8_t> image, const std::vector<glm::uvec4>& stats,
-                            const FrameTimes& times, const std::string& renderer, bool cpu) {
+                            const std::vector<uint32_t>& boxTests, const FrameTimes& times, const std::string& renderer,
+                            bool cpu) {
   const ShaderOptions& so = setup.shader;
   // Per-ray statistics: totals over the frame divided by rays traced into the mesh; p95 over pixels
   // of each pixel's own per-ray mean.
-  uint64_t visits = 0, tests = 0, rays = 0, nonfinite = 0;
-  std::vector<double> pixelVisits, pixelTests;
-  for (const glm::uvec4& p : stats) {
+  uint64_t visits = 0, tests = 0, boxes = 0, rays = 0, nonfinite = 0;
+  std::vector<double> pixelVisits, pixelTests, pixelBoxes;
+  for (size_t i = 0; i < stats.size(); ++i) {
+    const glm::uvec4& p = stats[i];
     const uint32_t r = p.z & 0x7FFFFFFFu;
+    const uint32_t b = i < boxTests.size() ? boxTests[i] : 0u;
     nonfinite += (p.w >> 31);  // radiance NaN or infinite before tone mapping (main.glsl's nonFinite)
     visits += p.x;
     tests += p.y;
+    boxes += b;
     rays += r;
     if (r > 0) {
       pixelVisits.push_back(double(p.x) / r);
       pixelTests.push_back(double(p.y) / r);
+      pixelBoxes.push_back(double(b) / r);
     }
   }
   const bool visitsView = cmd.view == "visits";
@@ -274,11 +280,14 @@ nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, 
   const double testsPerRay = rays ? double(tests) / double(rays) : 0.0;
   out["node_visits_per_ray"] = visitsPerRay;
   out["triangle_tests_per_ray"] = testsPerRay;
+  // A wide node visit tests several boxes (cwbvh, bvh4, bvh8), so visits alone undercount their work.
+  out["box_tests_per_ray"] = rays ? double(boxes) / double(rays) : 0.0;
   // The clock-free cost of the traced rays under the builders' own cost model (Ct, Ci).
   const CostModel cost = setup.build.cost;
   out["ray_cost"] = cost.traversalCost * visitsPerRay + cost.intersectionCost * testsPerRay;
   out["node_visits_p95"] = percentile(pixelVisits, 0.95);
   out["triangle_tests_p95"] = percentile(pixelTests, 0.95);
+  out["box_tests_p95"] = percentile(pixelBoxes, 0.95);
   out["stack_overflow_pixels"] = stackOverflowPixels(stats);
   out["nonfinite_pixels"] = nonfinite;
   return out;

@@ -61,6 +61,7 @@ class GpuJob {
   const FrameOptions& frameOptions() const { return frame_; }
   std::vector<uint8_t> image;     // RGBA8, rows bottom-up (after finish)
   std::vector<glm::uvec4> stats;  // per pixel (after finish(true))
+  std::vector<uint32_t> boxTests;  // per pixel, ray-box tests (after finish(true))
 
  private:
   std::shared_ptr<const PreparedScene> prepared_;
@@ -80,10 +81,11 @@ struct FrameTimes {
 
 // Writes the image and heatmap the command asks for and returns `render --json`'s object (keys:
 // README "Using it"; frame_ms with its 95% interval, counts per ray, tree_hash, epo, ray_cost).
-// `stats` empty = no counts (the --cpu path passes the mirror's).
+// `stats` empty = no counts (the --cpu path passes the mirror's); `boxTests` per pixel beside them.
 nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, const PreparedScene& prepared,
                             const FrameOptions& frame, std::vector<uint8_t> image,
-                            const std::vector<glm::uvec4>& stats, const FrameTimes& times,
+                            const std::vector<glm::uvec4>& stats, const std::vector<uint32_t>& boxTests,
+                            const FrameTimes& times,
                             const std::string& renderer, bool cpu);
 
 // Pixels whose traversal stack overflowed (main.glsl's stats z bit 31): a render with any is an error.

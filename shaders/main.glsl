@@ -19,6 +19,8 @@ layout(location = 0) out vec4 o_color;
 // x node visits, y triangle tests, z mesh rays | stack-overflow bit 31,
 // w primary id + 1 (debug views; 0 = miss or shaded view) | non-finite bit 31 (see nonFinite)
 layout(location = 1) out uvec4 o_stats;
+// ray-box tests (g_boxTests) of the pixel's rays: a wide node visit tests several boxes
+layout(location = 2) out uint o_boxTests;
 #endif
 
 Ray cameraRay(vec2 pixel) {
@@ -98,5 +100,6 @@ void main() {
 #ifdef COUNT_STATS
   o_stats = uvec4(g_nodeVisits, g_triTests, g_meshRays | (g_stackOverflow ? 0x80000000u : 0u),
                   uint(primaryId + 1) | (nonFiniteValue ? 0x80000000u : 0u));
+  o_boxTests = g_boxTests;
 #endif
 }

@@ -383,9 +383,10 @@ struct Tracer {
     return Ray{cam.eye, normalize(cam.forward + ndc.x * cam.right + ndc.y * cam.up)};
   }
 
-  // One pixel (main.glsl's main): the colour written to o_color; fills `stats` like o_stats.
+  // One pixel (main.glsl's main): the colour written to o_color; fills `stats` like o_stats and
+  // `boxTests` like o_boxTests.
   vec3 renderPixel(const CameraBasis& cam, vec2 resolution, vec2 fragCoord, float exposure, float sceneRadius,
-                   uvec4& stats) {
+                   uvec4& stats, uint32_t& boxTests) {
     counters = Counters{};
     Ray ray = cameraRay(cam, resolution, fragCoord);
     int primaryId = -1;
@@ -423,6 +424,7 @@ struct Tracer {
     stats = uvec4(counters.nodeVisits, counters.triTests,
                   counters.meshRays | (counters.stackOverflow ? 0x80000000u : 0u),
                   uint32_t(primaryId + 1) | (nonFiniteValue ? 0x80000000u : 0u));
+    boxTests = counters.boxTests;
     return color;
   }
 };
@@ -446,6 +448,7 @@ ReferenceImage renderReference(const Scene& scene, const SceneData& data, const 
   img.height = frame.height;
   img.rgba.resize(size_t(frame.width) * frame.height * 4);
   img.stats.resize(size_t(frame.width) * frame.height);
+  img.boxTests.resize(size_t(frame.width) * frame.height);
   CameraBasis cam = cameraBasis(frame.camera, frame.width, frame.height);
   const KernelInfo& kernel = findKernel(options.kernel);
 
@@ -458,7 +461,8 @@ ReferenceImage renderReference(const Scene& scene, const SceneData& data, const 
         // gl_FragCoord.xy: pixel centres at +0.5
         vec2 fragCoord(float(x) + 0.5f, float(y) + 0.5f);
         size_t i = size_t(y) * frame.width + x;
-        vec3 c = tr.renderPixel(cam, resolution, fragCoord, frame.exposure, data.sceneRadius, img.stats[i]);
+        vec3 c = tr.renderPixel(cam, resolution, fragCoord, frame.exposure, data.sceneRadius, img.stats[i],
+                                 img.boxTests[i]);
         // Float -> UNORM8 conversion as GL specifies it: round(clamp(c) * 255).
         for (int k = 0; k < 3; ++k) img.rgba[4 * i + k] = uint8_t(std::lround(clamp(c[k], 0.0f, 1.0f) * 255.0f));
         img.rgba[4 * i + 3] = 255;

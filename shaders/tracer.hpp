@@ -17,6 +17,7 @@ struct ReferenceImage {
   int width = 0, height = 0;
   std::vector<uint8_t> rgba;       // RGBA8 bottom-up, as glReadPixels returns it
   std::vector<glm::uvec4> stats;   // as the COUNT_STATS render target
+  std::vector<uint32_t> boxTests;  // as its box-test target (o_boxTests)
   double ms = 0.0;
 };
 

@@ -69,6 +69,7 @@ struct Rendered {
   std::vector<uint8_t> rgba;
   std::vector<glm::uvec4> stats;
   std::string source;
+  std::vector<uint32_t> boxTests;  // per pixel, with countStats
 };
 
 inline FrameOptions smallFrame(const Scene& s, int width, int height) {
@@ -84,8 +85,8 @@ inline Rendered renderGpu(const PreparedScene& p, const ShaderOptions& o, const 
   glContext();
   GpuRenderer r(p, o, f);
   r.drawFrame();
-  Rendered out{r.readColor(), {}, r.shader().source};
-  if (o.countStats) out.stats = r.readStats();
+  Rendered out{r.readColor(), {}, r.shader().source, {}};
+  if (o.countStats) out.stats = r.readStats(), out.boxTests = r.readBoxTests();
   return out;
 }
 

@@ -53,7 +53,7 @@ TEST(Cli, RenderJsonHasTheContractKeys) {
   for (const char* key : {"frame_ms", "frame_ms_min", "frames", "width", "height", "depth", "backend", "renderer",
                           "builder", "kernel", "leaf_size", "build_ms", "sah_cost", "node_visits_per_ray",
                           "triangle_tests_per_ray", "mesh_rays", "ray_cost", "nodes", "leaves", "triangles",
-                          "node_visits_p95", "triangle_tests_p95"})
+                          "node_visits_p95", "triangle_tests_p95", "box_tests_per_ray", "box_tests_p95"})
     ASSERT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["frames"], 2);
   EXPECT_EQ(j["width"], kW);
@@ -76,6 +76,10 @@ TEST(Cli, RenderJsonHasTheContractKeys) {
   EXPECT_NEAR(j["ray_cost"].get<double>(), visits + tests, 1e-9 * (visits + tests)) << "Ct = Ci = 1";
   EXPECT_GT(j["node_visits_p95"].get<double>(), 0.0);
   EXPECT_GT(j["triangle_tests_p95"].get<double>(), 0.0);
+  // v1's stack-ordered tests the boxes of the nodes it meets: at least one per ray, at most two per visit.
+  const double boxes = j["box_tests_per_ray"].get<double>();
+  EXPECT_GE(boxes, 1.0);
+  EXPECT_LE(boxes, 2.0 * visits);
   EXPECT_EQ(j["stack_overflow_pixels"].get<int>(), 0);
   EXPECT_EQ(j["nonfinite_pixels"].get<int>(), 0);
   std::printf("[ measured ] %d-triangle height field: %g nodes, %g leaves, %g mesh rays, %.2f node visits and %.2f"
