@@ -70,9 +70,17 @@ inline PrimitiveSet randomSoup(size_t count, uint32_t seed = 1) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), signedUnit(-1.0f, 1.0f);
   for (size_t i = 0; i < count; ++i) {
-    const glm::vec3 c(unit(rng), unit(rng), unit(rng));
+    // The draws are sequenced explicitly, z first: the order of function arguments is unspecified
+    // (GCC evaluated glm::vec3(unit(rng), unit(rng), unit(rng)) right to left, Clang left to right), and
+    // the same seed must give the same soup, so the same tree hashes, under every compiler (the
+    // sanitizer build is Clang's). z, y, x keeps the soups the GCC build always made.
+    auto draw3 = [&](std::uniform_real_distribution<float>& d) {
+      const float z = d(rng), y = d(rng), x = d(rng);
+      return glm::vec3(x, y, z);
+    };
+    const glm::vec3 c = draw3(unit);
     const float size = 0.002f * std::pow(100.0f, unit(rng));
-    auto corner = [&] { return c + size * glm::vec3(signedUnit(rng), signedUnit(rng), signedUnit(rng)); };
+    auto corner = [&] { return c + size * draw3(signedUnit); };
     const glm::vec3 a = corner(), b = corner(), d = corner();
     set.addTriangle(a, b, d);
   }

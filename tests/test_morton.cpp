@@ -12,6 +12,7 @@
 #include "builders/builder.hpp"
 #include "builders/morton.hpp"
 #include "builders/test_inputs.hpp"
+#include "builder_test_util.hpp"
 
 namespace bvhlab {
 namespace {
@@ -152,17 +153,6 @@ TEST(MortonCodes, BadSizeBitsIsAnInvalidArgument) {
   EXPECT_EQ(reviewBuildOptions("sah-binned", options).warnings.size(), 1u);  // ignores it, says so
 }
 
-bool sameTree(const Bvh& a, const Bvh& b) {
-  if (a.nodes.size() != b.nodes.size() || a.primIndices != b.primIndices) return false;
-  for (size_t i = 0; i < a.nodes.size(); ++i) {
-    const BvhNode &x = a.nodes[i], &y = b.nodes[i];
-    if (x.bounds.min != y.bounds.min || x.bounds.max != y.bounds.max || x.count != y.count ||
-        (x.isLeaf() ? x.first != y.first : (x.left != y.left || x.right != y.right)))
-      return false;
-  }
-  return true;
-}
-
 TEST(MortonCodes, LbvhWithSizeBitsIsOneTreeForAnyThreadCountAndChangesTheTree) {
   const PrimitiveSet set = testing::randomSoup(30000, 7);
   BuildOptions options;
@@ -175,10 +165,10 @@ TEST(MortonCodes, LbvhWithSizeBitsIsOneTreeForAnyThreadCountAndChangesTheTree) {
   for (uint32_t i = 0; i < sorted.size(); ++i) ASSERT_EQ(sorted[i], i);
   for (uint32_t threads : {2u, 8u}) {
     options.threads = threads;
-    EXPECT_TRUE(sameTree(one, buildBvh("lbvh", set.input(), options))) << threads << " threads";
+    EXPECT_TRUE(testing::identical(one, buildBvh("lbvh", set.input(), options))) << threads << " threads";
   }
   options.mortonSizeBits = 0;
-  EXPECT_FALSE(sameTree(one, buildBvh("lbvh", set.input(), options)));  // the option is not ignored
+  EXPECT_FALSE(testing::identical(one, buildBvh("lbvh", set.input(), options)));  // the option is not ignored
 }
 
 }  // namespace

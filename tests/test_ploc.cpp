@@ -18,6 +18,7 @@
 #include "builders/builder.hpp"
 #include "builders/collapse.hpp"
 #include "builders/test_inputs.hpp"
+#include "builder_test_util.hpp"
 #include "datasets/procedural.hpp"
 
 namespace bvhlab {
@@ -31,19 +32,8 @@ double threadCpuMs() {
   return 1e3 * double(t.tv_sec) + 1e-6 * double(t.tv_nsec);
 }
 
-bool sameTree(const Bvh& a, const Bvh& b) {
-  if (a.nodes.size() != b.nodes.size() || a.primIndices != b.primIndices) return false;
-  for (size_t i = 0; i < a.nodes.size(); ++i) {
-    const BvhNode &x = a.nodes[i], &y = b.nodes[i];
-    if (x.bounds.min != y.bounds.min || x.bounds.max != y.bounds.max || x.count != y.count ||
-        (x.isLeaf() ? x.first != y.first : (x.left != y.left || x.right != y.right)))
-      return false;
-  }
-  return true;
-}
-
-// FNV-1a over everything sameTree compares (node boxes' bit patterns, links, counts, primitive order):
-// a fingerprint of a tree to pin it across code changes.
+// FNV-1a over everything testing::identical compares (node boxes' bit patterns, links, counts,
+// primitive order): a fingerprint of a tree to pin it across code changes.
 uint64_t treeHash(const Bvh& bvh) {
   uint64_t h = 1469598103934665603ULL;
   auto mix = [&h](uint32_t word) {
@@ -218,13 +208,13 @@ TEST(Ploc, MatchesTheDefinition) {
   for (const PrimitiveSet& set : {testing::randomSoup(40000, 6), testing::sphereSoup(120, 90, 0.2f), zeros, equalCodes}) {
     for (uint32_t radius : {1u, 3u, 16u, 37u}) {
       SCOPED_TRACE(set.name + " radius " + std::to_string(radius));
-      EXPECT_TRUE(sameTree(buildBvh("ploc", set.input(), withRadius(radius, 2)), referencePloc(set, radius, 4)));
+      EXPECT_TRUE(testing::identical(buildBvh("ploc", set.input(), withRadius(radius, 2)), referencePloc(set, radius, 4)));
     }
     for (uint32_t sizeBits : {1u, 5u, 9u}) {  // Morton size bits (builders/morton.hpp)
       SCOPED_TRACE(set.name + " size bits " + std::to_string(sizeBits));
       BuildOptions options = withRadius(16, 2);
       options.mortonSizeBits = sizeBits;
-      EXPECT_TRUE(sameTree(buildBvh("ploc", set.input(), options), referencePloc(set, 16, 4, sizeBits)));
+      EXPECT_TRUE(testing::identical(buildBvh("ploc", set.input(), options), referencePloc(set, 16, 4, sizeBits)));
     }
   }
 }
@@ -252,7 +242,7 @@ TEST(Ploc, SameTreeForAnyThreadCount) {
     for (uint32_t radius : {1u, 16u, 100u}) {
       const Bvh one = buildBvh("ploc", set.input(), withRadius(radius, 1));
       for (uint32_t threads : {2u, 8u})
-        EXPECT_TRUE(sameTree(one, buildBvh("ploc", set.input(), withRadius(radius, threads))))
+        EXPECT_TRUE(testing::identical(one, buildBvh("ploc", set.input(), withRadius(radius, threads))))
             << "radius " << radius << ", " << threads << " threads";
     }
     BuildOptions sized = withRadius(16, 1);  // with Morton size bits
@@ -260,7 +250,7 @@ TEST(Ploc, SameTreeForAnyThreadCount) {
     const Bvh one = buildBvh("ploc", set.input(), sized);
     for (uint32_t threads : {2u, 8u}) {
       sized.threads = threads;
-      EXPECT_TRUE(sameTree(one, buildBvh("ploc", set.input(), sized))) << "size bits 6, " << threads << " threads";
+      EXPECT_TRUE(testing::identical(one, buildBvh("ploc", set.input(), sized))) << "size bits 6, " << threads << " threads";
     }
   }
 }
