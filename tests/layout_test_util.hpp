@@ -167,6 +167,32 @@ inline uint64_t closestTriangleTests(const PackedBvh& p, const std::string& kern
   return tests;
 }
 
+// The mirror of kernel k under `robust` over `packed` against brute force's `expected` answers to
+// `rays`: the same closest t (another triangle only at the same t), the same any-hit answer, no stack
+// overflow at the layout's bound. Reports the first 3 differing rays as test failures.
+inline void expectBruteForceHits(const PackedBvh& packed, const KernelInfo& k, Robustness robust,
+                                 const std::vector<BatchRay>& rays, const std::vector<BatchHit>& expected) {
+  const glsl::Storage s(packed);
+  int failures = 0;
+  for (size_t i = 0; i < rays.size() && failures < 3; ++i) {
+    const BatchRay& r = rays[i];
+    glsl::Counters c;
+    glsl::MeshHit hit{};
+    const glsl::Ray ray{r.origin, r.dir};
+    const bool found = k.closest(robust)(s, ray, r.tMin, r.tMax, hit, c);
+    const bool any = k.any(robust)(s, ray, r.tMin, r.tMax, c);
+    uint32_t prim = BatchHit::kNoPrim, material, mesh;
+    if (found) glsl::loadTriangleIds(s, hit.tri, prim, material, mesh);
+    const bool same = found == expected[i].hit && any == expected[i].hit && !c.stackOverflow &&
+                      (!found || hit.t == expected[i].t);
+    if (!same) {
+      ++failures;
+      ADD_FAILURE() << "ray " << i << ": kernel " << found << "/" << any << " prim " << prim << " t " << hit.t
+                    << "; brute force " << expected[i].hit << " prim " << expected[i].prim << " t " << expected[i].t;
+    }
+  }
+}
+
 // The hard-case suite (datasets/hard_cases.hpp: shared edges and vertices, slab planes, far and scaled
 // copies) in watertight mode, on a sah-binned tree packed in `layout` and walked by its default
 // kernel: no ray that must hit leaks, and every ray is answered as v1's stack-ordered answers it on the

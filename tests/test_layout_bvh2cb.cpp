@@ -177,26 +177,7 @@ TEST(LayoutKernels, EveryBuilderLayoutAndKernelFindTheBruteForceHits) {
         const PackedBvh packed = l.pack(bvh, m.soup);
         for (const KernelInfo& k : kernelsFor(l.name)) {
           SCOPED_TRACE(m.name + " / " + builder + " / " + l.name + " / " + k.name);
-          const glsl::Storage s(packed);
-          int failures = 0;
-          for (size_t i = 0; i < rays.size() && failures < 3; ++i) {
-            const BatchRay& r = rays[i];
-            glsl::Counters c;
-            glsl::MeshHit hit{};
-            const glsl::Ray ray{r.origin, r.dir};
-            const bool found = k.closest(Robustness::Watertight)(s, ray, r.tMin, r.tMax, hit, c);
-            const bool any = k.any(Robustness::Watertight)(s, ray, r.tMin, r.tMax, c);
-            uint32_t prim = BatchHit::kNoPrim, material, mesh;
-            if (found) glsl::loadTriangleIds(s, hit.tri, prim, material, mesh);
-            const bool same = found == expected[i].hit && any == expected[i].hit && !c.stackOverflow &&
-                              (!found || hit.t == expected[i].t);
-            if (!same) {
-              ++failures;
-              ADD_FAILURE() << "ray " << i << ": kernel " << found << "/" << any << " prim " << prim << " t " << hit.t
-                            << "; brute force " << expected[i].hit << " prim " << expected[i].prim << " t "
-                            << expected[i].t;
-            }
-          }
+          expectBruteForceHits(packed, k, Robustness::Watertight, rays, expected);
         }
       }
   }

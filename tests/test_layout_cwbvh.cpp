@@ -305,26 +305,12 @@ TEST(CwbvhKernels, EveryBuilderFindsTheBruteForceHits) {
     }
     for (const BuilderInfo& b : builders()) {
       const PackedBvh packed = packCwbvh(build(b.name, *soup), *soup);
-      const glsl::Storage s(packed);
       for (const KernelInfo& k : kernelsFor(kLayoutCwbvh))
         for (const Robustness& robust : pairs) {
           if (robust.box == BoxTest::Slab && name == "far-1e6") continue;
           SCOPED_TRACE(name + " / " + b.name + " / " + k.name + " / " + robustnessName(robust));
-          const std::vector<BatchHit>& expected = robust.triangle == TriangleTest::Watertight ? expectedWt : expectedMt;
-          int failures = 0;
-          for (size_t i = 0; i < rays.size() && failures < 3; ++i) {
-            const BatchRay& r = rays[i];
-            glsl::Counters c;
-            glsl::MeshHit hit{};
-            const glsl::Ray ray{r.origin, r.dir};
-            const bool found = k.closest(robust)(s, ray, r.tMin, r.tMax, hit, c);
-            const bool any = k.any(robust)(s, ray, r.tMin, r.tMax, c);
-            if (found != expected[i].hit || any != expected[i].hit || c.stackOverflow || (found && hit.t != expected[i].t)) {
-              ++failures;
-              ADD_FAILURE() << "ray " << i << ": kernel " << found << "/" << any << " t " << hit.t << "; brute force "
-                            << expected[i].hit << " t " << expected[i].t;
-            }
-          }
+          expectBruteForceHits(packed, k, robust, rays,
+                               robust.triangle == TriangleTest::Watertight ? expectedWt : expectedMt);
         }
     }
   }

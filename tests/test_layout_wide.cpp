@@ -256,23 +256,7 @@ TEST(WideKernels, EveryBuilderFindsTheBruteForceHits) {
         const PackedBvh packed = findLayout(layout).pack(bvh, m.soup);
         for (const KernelInfo& k : kernelsFor(layout)) {
           SCOPED_TRACE(m.name + " / " + b.name + " / " + layout + " / " + k.name);
-          const glsl::Storage s(packed);
-          int failures = 0;
-          for (size_t i = 0; i < rays.size() && failures < 3; ++i) {
-            const BatchRay& r = rays[i];
-            glsl::Counters c;
-            glsl::MeshHit hit{};
-            const glsl::Ray ray{r.origin, r.dir};
-            const bool found = k.closest(Robustness::Watertight)(s, ray, r.tMin, r.tMax, hit, c);
-            const bool any = k.any(Robustness::Watertight)(s, ray, r.tMin, r.tMax, c);
-            const bool same = found == expected[i].hit && any == expected[i].hit && !c.stackOverflow &&
-                              (!found || hit.t == expected[i].t);
-            if (!same) {
-              ++failures;
-              ADD_FAILURE() << "ray " << i << ": kernel " << found << "/" << any << " t " << hit.t << "; brute force "
-                            << expected[i].hit << " t " << expected[i].t;
-            }
-          }
+          expectBruteForceHits(packed, k, Robustness::Watertight, rays, expected);
         }
       }
     }

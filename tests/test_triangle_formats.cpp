@@ -310,21 +310,7 @@ TEST(TriangleFormatKernels, EveryFormatLayoutAndKernelFindTheBruteForceHits) {
           }
           for (const KernelInfo& k : kernelsFor(l.name)) {
             SCOPED_TRACE(m.name + " / " + l.name + " / " + f.name + " / " + k.name + " / " + robustnessName(robust));
-            int failures = 0;
-            for (size_t i = 0; i < rays.size() && failures < 3; ++i) {
-              const BatchRay& r = rays[i];
-              glsl::Counters c;
-              glsl::MeshHit hit{};
-              const glsl::Ray ray{r.origin, r.dir};
-              const bool found = k.closest(robust)(s, ray, r.tMin, r.tMax, hit, c);
-              const bool any = k.any(robust)(s, ray, r.tMin, r.tMax, c);
-              if (found != expected[i].hit || any != expected[i].hit || c.stackOverflow ||
-                  (found && hit.t != expected[i].t)) {
-                ++failures;
-                ADD_FAILURE() << "ray " << i << ": kernel " << found << "/" << any << " t " << hit.t << "; brute force "
-                              << expected[i].hit << " t " << expected[i].t;
-              }
-            }
+            expectBruteForceHits(p, k, robust, rays, expected);
           }
         }
       }
