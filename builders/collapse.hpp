@@ -10,7 +10,6 @@
 // same for any thread count.
 #pragma once
 #include <cstdint>
-#include <span>
 #include <utility>
 #include <vector>
 
@@ -40,12 +39,17 @@ inline CollapseInfo collapseInnerInfo(const BvhNode& node, const CollapseInfo& l
   return {collapse ? asLeaf : asTree, count, collapse ? 0 : 1 + l.inner + r.inner};
 }
 
-// The collapsed tree from `full` and every node's CollapseInfo.
-inline Bvh emitCollapsed(std::span<const BvhNode> full, std::span<const CollapseInfo> info, unsigned threads) {
+// The collapsed tree from the full tree's nodes and their CollapseInfo, given by index (nodeAt(i),
+// infoAt(i); a builder may keep both in one record, so that a node's one cache line serves both).
+template <class NodeAt, class InfoAt>
+Bvh emitCollapsed(NodeAt nodeAt, InfoAt infoAt, unsigned threads) {
   Bvh bvh;
-  bvh.nodes.resize(1 + 2 * size_t(info[0].inner));
-  bvh.primIndices.resize(info[0].count);
-  bvh.nodes[0] = {full[0].bounds};
+  const size_t nodeCount = 1 + 2 * size_t(infoAt(0).inner);
+  bvh.nodes.reserve(nodeCount);
+  adviseHugePages(bvh.nodes.data(), nodeCount * sizeof(BvhNode));  // before the first touch (as buildTopDown)
+  bvh.nodes.resize(nodeCount);
+  bvh.primIndices.resize(infoAt(0).count);
+  bvh.nodes[0] = {nodeAt(0).bounds};
 
   // A walk from `from` (written at `to`) that appends children at `next` and primitives at `prim`.
   struct Walk {
@@ -59,13 +63,13 @@ inline Bvh emitCollapsed(std::span<const BvhNode> full, std::span<const Collapse
     while (!stack.empty()) {
       auto [from, to] = stack.back();
       stack.pop_back();
-      const CollapseInfo& node = info[from];
+      const CollapseInfo& node = infoAt(from);
       if (node.collapse()) {  // its primitives, left to right
         bvh.nodes[to].first = w.prim;
         bvh.nodes[to].count = node.count;
         leafStack.assign(1, from);
         while (!leafStack.empty()) {
-          const BvhNode& sub = full[leafStack.back()];
+          const BvhNode& sub = nodeAt(leafStack.back());
           leafStack.pop_back();
           if (sub.isLeaf()) {
             bvh.primIndices[w.prim++] = sub.first;
@@ -82,19 +86,19 @@ inline Bvh emitCollapsed(std::span<const BvhNode> full, std::span<const Collapse
         w.prim += node.count;
         continue;
       }
-      const BvhNode& source = full[from];
+      const BvhNode& source = nodeAt(from);
       const uint32_t left = w.next;
       w.next += 2;
       bvh.nodes[to].left = left;
       bvh.nodes[to].right = left + 1;
-      bvh.nodes[left] = {full[source.left].bounds};
-      bvh.nodes[left + 1] = {full[source.right].bounds};
+      bvh.nodes[left] = {nodeAt(source.left).bounds};
+      bvh.nodes[left + 1] = {nodeAt(source.right).bounds};
       stack.push_back({source.right, left + 1});
       stack.push_back({source.left, left});
     }
   };
   const Walk root{0, 0, 1, 0};
-  const uint32_t n = info[0].count;
+  const uint32_t n = infoAt(0).count;
   if (n < kParallelMinInput) {  // as buildTopDown: thresholds from the input size only
     walk(root, 0, nullptr);
     return bvh;
@@ -113,7 +117,8 @@ inline Bvh collapseLeavesBySah(const std::vector<BvhNode>& full, const BuildOpti
     info[i] = node.isLeaf() ? collapseLeafInfo(node, options)
                             : collapseInnerInfo(node, info[node.left], info[node.right], options);
   }
-  return emitCollapsed(full, info, threads);
+  return emitCollapsed([&](uint32_t i) -> const BvhNode& { return full[i]; },
+                       [&](uint32_t i) -> const CollapseInfo& { return info[i]; }, threads);
 }
 
 }  // namespace bvhlab::detail

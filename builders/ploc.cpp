@@ -102,22 +102,29 @@ void radixSort(std::vector<Keyed>& keys, unsigned threads) {
 // search reads whole vectors around any cluster without bounds checks: such a box's union
 // with any box spans FLT_MAX - -FLT_MAX, which overflows to +inf on every axis, so its merged area
 // is +inf (inf * inf and inf + inf, never inf - inf or 0 * inf: no NaN) and never beats a finite
-// one. Entries between are left uninitialised: every pass writes what it reads.
+// one. Entries between are left uninitialised: every pass writes what it reads. All arrays of one
+// Clusters live in one block (a ScratchArray: 2 MiB-aligned and advised for huge pages from 2 MiB on,
+// so that a build's fresh block does not take a page fault per 4 KiB: measured in docs/builders.md).
 struct Clusters {
   static constexpr float kHuge = std::numeric_limits<float>::max();
-  std::unique_ptr<float[]> storage[6];
+  static_assert(alignof(detail::CollapseInfo) <= 16 && sizeof(detail::CollapseInfo) % 4 == 0);
+  size_t boxStride;  // floats per box array, pads included, a multiple of 4
+  std::unique_ptr<detail::ScratchArray<float>> storage;  // (a pointer, so Clusters swap)
   float* box[6];
-  std::unique_ptr<uint32_t[]> node;
-  std::unique_ptr<detail::CollapseInfo[]> info;  // the node's (read here rather than from the tree)
+  uint32_t* node;
+  detail::CollapseInfo* info;  // the node's (read here rather than from the tree)
   uint32_t pad;
-  Clusters(uint32_t capacity, uint32_t padding) : pad(padding) {
+  Clusters(uint32_t capacity, uint32_t padding)
+      : boxStride((capacity + 2 * size_t(padding) + 3) & ~size_t(3)),
+        storage(std::make_unique<detail::ScratchArray<float>>(6 * boxStride + (capacity + 3) / 4 * 4 +
+                                                              capacity * (sizeof(detail::CollapseInfo) / 4))),
+        pad(padding) {
     for (int a = 0; a < 6; ++a) {
-      storage[a].reset(new float[capacity + 2 * size_t(pad)]);  // 16-byte aligned (malloc), so box[a] too
-      box[a] = storage[a].get() + pad;
+      box[a] = storage->data() + a * boxStride + pad;  // 16-byte aligned: the block is, pad is a multiple of 4
       std::fill_n(box[a] - pad, pad, a < 3 ? -kHuge : kHuge);
     }
-    node.reset(new uint32_t[capacity]);
-    info.reset(new detail::CollapseInfo[capacity]);
+    node = reinterpret_cast<uint32_t*>(storage->data() + 6 * boxStride);
+    info = reinterpret_cast<detail::CollapseInfo*>(storage->data() + 6 * boxStride + (capacity + 3) / 4 * 4);
   }
   void padAfter(uint32_t m) {
     for (int a = 0; a < 6; ++a) std::fill_n(box[a] + m, pad, a < 3 ? -kHuge : kHuge);
@@ -149,10 +156,16 @@ uint64_t candidateKey(float area, uint32_t x, uint32_t j) {
   return uint64_t(std::bit_cast<uint32_t>(area + 0.0f)) << 32 | tieKey(x, j);
 }
 
-// Frees what ::operator new allocated (BvhNode is trivially destructible: nothing to destroy).
-static_assert(std::is_trivially_destructible_v<BvhNode>);
+// A node of the full tree and its collapse entry, in one 64-byte cache line: the emission walks the
+// tree depth-first, far from the order the nodes were made in, and reads both (one miss, not two).
+struct alignas(64) FullNode {
+  BvhNode node;
+  detail::CollapseInfo info;
+};
+// Frees what ::operator new allocated (FullNode is trivially destructible: nothing to destroy).
+static_assert(std::is_trivially_destructible_v<FullNode>);
 struct FreeStorage {
-  void operator()(BvhNode* p) const { ::operator delete(p); }
+  void operator()(FullNode* p) const { ::operator delete(p, std::align_val_t(alignof(FullNode))); }
 };
 
 // Scratch for one search job: the ring of recent forward areas (vector path), the nearest neighbours.
@@ -321,12 +334,13 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
   // Storage only: each node is constructed once, when it is made (and first touched by the thread
   // that makes it), instead of being initialised first and then overwritten.
   const size_t nodes = 2 * size_t(n) - 1;
-  std::unique_ptr<BvhNode[], FreeStorage> full(static_cast<BvhNode*>(::operator new(nodes * sizeof(BvhNode))));
-  std::unique_ptr<detail::CollapseInfo[]> info(new detail::CollapseInfo[nodes]);
+  std::unique_ptr<FullNode[], FreeStorage> full(
+      static_cast<FullNode*>(::operator new(nodes * sizeof(FullNode), std::align_val_t(alignof(FullNode)))));
+  detail::adviseHugePages(full.get(), nodes * sizeof(FullNode));  // fresh memory: fewer page faults
   auto makeInner = [&](uint32_t index, uint32_t left, uint32_t right, const Aabb& box, const detail::CollapseInfo& l,
                        const detail::CollapseInfo& r) -> const detail::CollapseInfo& {
-    const BvhNode& node = *new (&full[index]) BvhNode{box, left, right, 0, 0};
-    return info[index] = detail::collapseInnerInfo(node, l, r, options);
+    const BvhNode& node = *new (&full[index].node) BvhNode{box, left, right, 0, 0};
+    return full[index].info = detail::collapseInnerInfo(node, l, r, options);
   };
   auto chunkOf = [&](size_t job, uint32_t size) {
     const uint32_t a = uint32_t(job) * kChunk;
@@ -346,8 +360,8 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
     const auto [a, b] = chunkOf(job, n);
     uint32_t runs = 0, inner = 0;
     for (uint32_t k = a; k < b; ++k) {
-      const BvhNode& leaf = *new (&full[n - 1 + k]) BvhNode{input.boxes[keys[k].id], 0, 0, keys[k].id, 1};
-      info[n - 1 + k] = detail::collapseLeafInfo(leaf, options);
+      const BvhNode& leaf = *new (&full[n - 1 + k].node) BvhNode{input.boxes[keys[k].id], 0, 0, keys[k].id, 1};
+      full[n - 1 + k].info = detail::collapseLeafInfo(leaf, options);
       if (runStart(k)) ++runs, inner += runEnd(k) - k - 1;
     }
     outputs[job] = runs, merges[job] = inner;
@@ -376,15 +390,15 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
       while (level.size() > 1) {  // pair neighbours level by level: depth ceil(log2 run)
         size_t w = 0;
         for (size_t p = 0; p + 1 < level.size(); p += 2) {
-          Aabb box = full[level[p]].bounds;
-          box.grow(full[level[p + 1]].bounds);
-          makeInner(--node, level[p], level[p + 1], box, info[level[p]], info[level[p + 1]]);
+          Aabb box = full[level[p]].node.bounds;
+          box.grow(full[level[p + 1]].node.bounds);
+          makeInner(--node, level[p], level[p + 1], box, full[level[p]].info, full[level[p + 1]].info);
           level[w++] = node;
         }
         if (level.size() % 2) level[w++] = level.back();
         level.resize(w);
       }
-      clusters.set(out++, full[level[0]].bounds, level[0], info[level[0]]);
+      clusters.set(out++, full[level[0]].node.bounds, level[0], full[level[0]].info);
     }
   });
 
@@ -474,7 +488,8 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
   }
 
   // 3. Leaves.
-  return detail::emitCollapsed({full.get(), nodes}, {info.get(), nodes}, threads);
+  return detail::emitCollapsed([&](uint32_t i) -> const BvhNode& { return full[i].node; },
+                               [&](uint32_t i) -> const detail::CollapseInfo& { return full[i].info; }, threads);
 }
 
 }  // namespace bvhlab
