@@ -7,11 +7,15 @@
 // wall), so there is no 1-thread embree-raw row; the registered `embree` and `embree-low` builders
 // ignore BuildOptions::threads (Embree's own pool), so their two rows are the same configuration.
 //
-// Every benchmark runs --reps repetitions (default 5; ->Repetitions(n)->ReportAggregatesOnly()), in
+// Every benchmark runs --reps repetitions (default 7; ->Repetitions(n)), in
 // random interleaving order unless --benchmark_enable_random_interleaving is given, and the
 // figures are the MEDIAN over the repetitions (with min and max, ->ComputeStatistics). The end of
 // the output is a table per mesh: median time with 1 and 2 threads, SAH and the ratios against
-// embree-raw with 2 threads, then the sah-binned target line (1 thread vs embree-raw with 2 threads).
+// embree-raw with 2 threads, and each builder's time against sah-binned's at the same thread count
+// as a paired ratio with its 95% interval (render/frame_stats.hpp pairedRatio: repetition r of every
+// benchmark runs in round r of the interleaving, so the r-th times of two builders are a pair; the
+// interval needs 6 or more repetitions, hence the default of 7); then the sah-binned target line
+// (1 thread vs embree-raw with 2 threads), paired the same way.
 //
 // --curve runs the accuracy curve of sah-binned's bin count instead (issue 15: what accuracy costs in
 // time): bins in kCurveBins on the bunny, the elephant, the armadillo and makeLargeMesh(1M), 1 and 2
@@ -32,6 +36,8 @@
 #include <map>
 #include <set>
 #include <new>
+#include <optional>
+#include <span>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -43,6 +49,7 @@
 #include "builders/epo.hpp"
 #include "builders/test_inputs.hpp"
 #include "datasets/procedural.hpp"
+#include "render/frame_stats.hpp"
 
 namespace {
 
@@ -362,9 +369,12 @@ class RatioReporter : public benchmark::ConsoleReporter {
  public:
   explicit RatioReporter(bool curve) : curve_(curve) {}
   void ReportRuns(const std::vector<Run>& runs) override {
-    ConsoleReporter::ReportRuns(runs);
+    std::vector<Run> aggregates;  // the console shows these; the repetitions feed the paired ratios
+    for (const Run& run : runs)
+      if (run.run_type == Run::RT_Aggregate) aggregates.push_back(run);
+    ConsoleReporter::ReportRuns(aggregates);
     for (const Run& run : runs) {
-      if (run.error_occurred || run.run_type != Run::RT_Aggregate) continue;
+      if (run.error_occurred) continue;
       // Names are "builder/mesh/threads:N" (run_name.str(): without the aggregate's suffix).
       const std::string name = run.run_name.str();
       const size_t a = name.find('/'), b = name.find("/threads:");
@@ -372,6 +382,13 @@ class RatioReporter : public benchmark::ConsoleReporter {
       Result& r = results_[{name.substr(a + 1, b - a - 1), name.substr(0, a)}];
       const int threads = std::atoi(name.c_str() + b + 9) == 1 ? 0 : 1;
       const double t = run.GetAdjustedRealTime(), cpu = run.GetAdjustedCPUTime();
+      if (run.run_type == Run::RT_Iteration) {  // one repetition: its time at its round
+        if (run.repetition_index < 0) continue;
+        std::vector<double>& rounds = r.rounds[threads];
+        if (rounds.size() <= size_t(run.repetition_index)) rounds.resize(size_t(run.repetition_index) + 1, NAN);
+        rounds[size_t(run.repetition_index)] = t;
+        continue;
+      }
       auto counter = [&run](const char* name) {
         const auto it = run.counters.find(name);
         return it == run.counters.end() ? 0.0 : double(it->second);
@@ -394,9 +411,10 @@ class RatioReporter : public benchmark::ConsoleReporter {
       if (key.first != mesh) {
         mesh = key.first;
         std::printf("\n%s: median of the repetitions [min, max], ms; ratios against embree-raw with 2 threads\n", mesh.c_str());
-        std::printf("%-14s %26s %26s %9s %9s %9s %9s\n", "builder", "1 thread", "2 threads", "x t(1)", "x t(2)", "SAH",
-                    "x SAH");
+        std::printf("%-14s %26s %26s %9s %9s %9s %9s %24s %24s\n", "builder", "1 thread", "2 threads", "x t(1)", "x t(2)", "SAH",
+                    "x SAH", "x sah-binned t(1) [95%]", "x sah-binned t(2) [95%]");
       }
+      const Result* binned = find(mesh, "sah-binned");
       const Result* ref = find(mesh, "embree-raw");
       auto cell = [](const Result& x, int k) {
         char buf[64];
@@ -407,16 +425,19 @@ class RatioReporter : public benchmark::ConsoleReporter {
         return std::string(buf);
       };
       auto ratio = [&](double x) { return ref && ref->time[1] > 0 && x > 0 ? x / ref->time[1] : NAN; };
-      std::printf("%-14s %26s %26s %9.3f %9.3f %9.3f %9.4f\n", key.second.c_str(), cell(r, 0).c_str(), cell(r, 1).c_str(),
-                  ratio(r.time[0]), ratio(r.time[1]), r.sah, ref && ref->sah > 0 ? r.sah / ref->sah : NAN);
+      auto versusBinned = [&](int k) { return binned && key.second != "sah-binned" ? paired(r.rounds[k], binned->rounds[k]) : "-"; };
+      std::printf("%-14s %26s %26s %9.3f %9.3f %9.3f %9.4f %24s %24s\n", key.second.c_str(), cell(r, 0).c_str(), cell(r, 1).c_str(),
+                  ratio(r.time[0]), ratio(r.time[1]), r.sah, ref && ref->sah > 0 ? r.sah / ref->sah : NAN,
+                  versusBinned(0).c_str(), versusBinned(1).c_str());
     }
     std::printf("\nTarget (issue 15): sah-binned with 1 thread <= 0.5x embree-raw (MEDIUM) with 2 threads, SAH <= 1.01x\n");
     for (const auto& [key, r] : results_) {
       if (key.second != "sah-binned") continue;
       const Result* ref = find(key.first, "embree-raw");
       if (!ref || ref->time[1] <= 0 || r.time[0] <= 0) continue;
-      std::printf("  %-10s sah-binned(1 thread) / embree-raw(2 threads) = %.3f   SAH ratio = %.4f\n", key.first.c_str(),
-                  r.time[0] / ref->time[1], ref->sah > 0 ? r.sah / ref->sah : NAN);
+      std::printf("  %-10s sah-binned(1 thread) / embree-raw(2 threads) = %.3f (ratio of medians); paired %s   SAH ratio = %.4f\n",
+                  key.first.c_str(), r.time[0] / ref->time[1], paired(r.rounds[0], ref->rounds[1]).c_str(),
+                  ref->sah > 0 ? r.sah / ref->sah : NAN);
     }
   }
 
@@ -425,7 +446,18 @@ class RatioReporter : public benchmark::ConsoleReporter {
     double time[2] = {0, 0}, low[2] = {0, 0}, high[2] = {0, 0};  // [1 thread, 2 threads], wall ms
     double cpu[2] = {0, 0}, cpuLow[2] = {0, 0}, cpuHigh[2] = {0, 0};  // process CPU ms (--curve)
     double sah = 0, epo = 0, rayCost = 0;
+    std::vector<double> rounds[2];  // wall ms of each repetition, by round (NaN: none that round)
   };
+
+  // a / b over the rounds both ran: the median per-round ratio and its 95% interval, or why not.
+  static std::string paired(const std::vector<double>& a, const std::vector<double>& b) {
+    const size_t n = std::min(a.size(), b.size());
+    const std::optional<Interval> q = pairedRatio(std::span(a.data(), n), std::span(b.data(), n));
+    if (!q) return n ? "- (< 6 rounds)" : "-";
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.3f [%.3f, %.3f]", q->estimate, q->low, q->high);
+    return buf;
+  }
 
   // Ratios of medians, with the range [min / ref max, max / ref min] over the repetitions beside them.
   static std::string ratio(double median, double low, double high, double refMedian, double refLow, double refHigh) {
@@ -475,7 +507,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
 int main(int argc, char** argv) {
   // Our own flag, and random interleaving by default (a shared machine drifts; interleaved
   // repetitions see the same drift).
-  int reps = 5;
+  int reps = 7;  // 6 or more for a 95% interval of a median (paired ratios)
   bool interleaving = false, curve = false;
   std::vector<char*> args;
   for (int i = 0; i < argc; ++i) {
@@ -497,7 +529,8 @@ int main(int argc, char** argv) {
   auto minimum = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
   auto maximum = [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); };
   auto configure = [&](benchmark::internal::Benchmark* b) {
-    b->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(0.2)->Repetitions(reps)->ReportAggregatesOnly(true);
+    // Every repetition reaches the reporter (the paired ratios need them); it shows the aggregates only.
+    b->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(0.2)->Repetitions(reps)->ReportAggregatesOnly(false);
     b->ComputeStatistics("min", minimum)->ComputeStatistics("max", maximum);
   };
   const std::vector<std::pair<std::string, MeshFn>> curveMeshes = {
