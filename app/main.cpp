@@ -35,6 +35,7 @@ namespace {
 struct BuildCommand {
   std::string mesh, builder = "sah-binned", optimize, layout = kDefaultLayout, triangles = kDefaultTriangleFormat;
   int leafSize = 4, bins = 0, plocRadius = 16, mortonSizeBits = 0;
+  std::string mortonGrid = "cube";
   float sbvhAlpha = 1e-5f;
   bool json = false;
 };
@@ -49,6 +50,7 @@ int buildCommand(const BuildCommand& c) {
   asRender.sbvhAlpha = c.sbvhAlpha;
   asRender.plocRadius = c.plocRadius;
   asRender.mortonSizeBits = c.mortonSizeBits;
+  asRender.mortonGrid = c.mortonGrid;
   OptionReview review;
   const BuildOptions options = renderBuildOptions(asRender, &review);
   const LayoutInfo& layout = findLayout(c.layout);
@@ -73,6 +75,7 @@ int buildCommand(const BuildCommand& c) {
                         {"leaf_size_requested", c.leafSize},
                         {"ploc_radius", options.plocRadius},
                         {"morton_size_bits", options.mortonSizeBits},
+                        {"morton_grid", mortonGridName(options.mortonGrid)},
                         {"warnings", review.warnings},
                         {"primitives", stats.primitives},
                         {"references", stats.references},
@@ -141,6 +144,8 @@ int main(int argc, char** argv) {
   build->add_option("--ploc-radius", bc.plocRadius, "ploc: nearest-neighbour search radius");
   build->add_option("--morton-size-bits", bc.mortonSizeBits,
                     "ploc, lbvh: primitive-size bits in the Morton codes, 0..9 (0 = position only)");
+  build->add_option("--morton-grid", bc.mortonGrid,
+                    "ploc, lbvh: the Morton codes' grid: cube (one cell size on every axis) | axes (each axis over its own extent)");
   build->add_flag("--json", bc.json, "print JSON");
 
   RunOptions ro;

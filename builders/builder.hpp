@@ -16,7 +16,7 @@ struct BuilderInfo {
   // largest leaf it builds (a larger --leaf-size is capped, with a warning).
   bool usesBins = false, usesSbvhAlpha = false, usesPlocRadius = false;
   uint32_t leafSizeCap = kMaxLeafSize;
-  bool usesMortonSizeBits = false;  // builds Morton codes (builders/morton.hpp)
+  bool usesMortonSizeBits = false;  // builds Morton codes (builders/morton.hpp): reads mortonSizeBits and mortonGrid
 };
 
 const std::vector<BuilderInfo>& builders();
@@ -43,6 +43,12 @@ struct OptionReview {
 OptionReview reviewBuildOptions(const std::string& builder, const BuildOptions& options);
 constexpr uint32_t kMaxBuildBins = 256;  // sah-binned and sbvh store a bin index in one byte
 constexpr uint32_t kEmbreeMaxLeafSize = 32;  // RTC_BUILD_MAX_PRIMITIVES_PER_LEAF (checked in builders/embree.cpp)
+
+// BuildOptions::mortonGrid by name ("cube", "axes"), and back; parseMortonGrid throws
+// std::invalid_argument naming the valid names.
+const std::vector<std::string>& mortonGridNames();
+MortonGrid parseMortonGrid(const std::string& name);
+const std::string& mortonGridName(MortonGrid grid);
 
 // The post-passes BuildOptions::optimize accepts (besides "" = none).
 const std::vector<std::string>& optimizePasses();

@@ -78,7 +78,7 @@ class MortonStepper {
 
 Bvh buildLbvh(const BuildInput& input, const BuildOptions& options) {
   const uint32_t n = uint32_t(input.boxes.size());
-  const detail::MortonEncoder encoder(input, options.mortonSizeBits);
+  const detail::MortonEncoder encoder(input, options.mortonSizeBits, options.mortonGrid);
   std::vector<Keyed> keys(n);
   for (uint32_t i = 0; i < n; ++i) keys[i] = {encoder.code(i), i};
   radixSort(keys);

@@ -20,7 +20,7 @@ double diagonal(const Aabb& box) {
 
 }  // namespace
 
-MortonEncoder::MortonEncoder(const BuildInput& input, uint32_t sizeBits)
+MortonEncoder::MortonEncoder(const BuildInput& input, uint32_t sizeBits, MortonGrid grid)
     : centroids_(input.centroids), boxes_(input.boxes), sizeBits_(sizeBits) {
   if (sizeBits > kMaxMortonSizeBits)
     throw std::invalid_argument("Morton codes: mortonSizeBits " + std::to_string(sizeBits) + " is outside 0.." +
@@ -28,13 +28,17 @@ MortonEncoder::MortonEncoder(const BuildInput& input, uint32_t sizeBits)
   Aabb centroidBounds;
   for (const glm::vec3& c : input.centroids) centroidBounds.grow(c);
   min_ = centroidBounds.min;
-  // Grid scale per axis; a zero (or denormal, 2^21 / extent overflowing) extent maps to cell 0.
-  // Inputs are finite and c >= min, so every product in code() is finite and >= 0.
+  // Grid scale per axis: 2^21 cells over the longest extent (Cube) or over the axis's own (Axes). A
+  // zero (or denormal, 2^21 / extent overflowing) extent maps to cell 0. Inputs are finite and
+  // c >= min, so every product in code() is finite and >= 0; with Cube a shorter axis only reaches
+  // cells below 2^21 * its extent / the longest (code() clamps the top cell either way).
   const float cells = float(1 << kMortonBitsPerAxis);
+  const glm::vec3 extents = centroidBounds.max - centroidBounds.min;
+  const float longest = std::max({extents.x, extents.y, extents.z});
   for (int a = 0; a < 3; ++a) {
-    const float extent = centroidBounds.max[a] - centroidBounds.min[a];
+    const float extent = grid == MortonGrid::Cube ? longest : extents[a];
     const float s = cells / extent;
-    if (extent > 0.0f && std::isfinite(s)) scale_[a] = s;
+    if (extents[a] > 0.0f && std::isfinite(s)) scale_[a] = s;
   }
   if (sizeBits == 0) return;
   Aabb scene;

@@ -321,7 +321,7 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
   const uint32_t jobs = (n + kChunk - 1) / kChunk;
 
   // 1. Morton order.
-  const detail::MortonEncoder encoder(input, options.mortonSizeBits);
+  const detail::MortonEncoder encoder(input, options.mortonSizeBits, options.mortonGrid);
   std::vector<Keyed> keys(n);
   detail::runJobs(jobs, threads, [&](size_t job) {
     for (uint32_t i = uint32_t(job) * kChunk, end = std::min(n, i + kChunk); i < end; ++i) keys[i] = {encoder.code(i), i};

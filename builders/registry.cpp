@@ -136,8 +136,24 @@ OptionReview reviewBuildOptions(const std::string& builder, const BuildOptions& 
     review.warnings.push_back(info.name + " ignores --ploc-radius (only ploc clusters)");
   if (options.mortonSizeBits != defaults.mortonSizeBits && !info.usesMortonSizeBits)
     review.warnings.push_back(info.name + " ignores --morton-size-bits (only ploc and lbvh build Morton codes)");
+  if (options.mortonGrid != defaults.mortonGrid && !info.usesMortonSizeBits)
+    review.warnings.push_back(info.name + " ignores --morton-grid (only ploc and lbvh build Morton codes)");
   return review;
 }
+
+const std::vector<std::string>& mortonGridNames() {
+  static const std::vector<std::string> names = {"cube", "axes"};  // in MortonGrid's order
+  return names;
+}
+
+MortonGrid parseMortonGrid(const std::string& name) {
+  const std::vector<std::string>& names = mortonGridNames();
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return MortonGrid(i);
+  throw std::invalid_argument("unknown --morton-grid '" + name + "'; valid: cube, axes");
+}
+
+const std::string& mortonGridName(MortonGrid grid) { return mortonGridNames().at(size_t(grid)); }
 
 const std::vector<std::string>& optimizePasses() {
   static const std::vector<std::string> names = {"reinsert"};

@@ -241,8 +241,10 @@ class ConfigReader {
         value["sbvh_alpha"] = a;
       } else if (k == "ploc_radius") value["ploc_radius"] = integer(v, sub, 1, 1024);
       else if (k == "morton_size_bits") value["morton_size_bits"] = integer(v, sub, 0, kMaxMortonSizeBits);
+      else if (k == "morton_grid") value["morton_grid"] = oneOf(v, sub, mortonGridNames(), "Morton grid");
       else fail(k.source(), sub,
-                "unknown key; a builder table has name, bins, optimize, sbvh_alpha, ploc_radius, morton_size_bits, label");
+                "unknown key; a builder table has name, bins, optimize, sbvh_alpha, ploc_radius, morton_size_bits, "
+                "morton_grid, label");
     }
     if (!nameNode) fail(node.source(), key, "a builder table needs `name`");
     value["name"] = name;
@@ -253,6 +255,7 @@ class ConfigReader {
       if (value.contains("ploc_radius")) label += "[radius=" + std::to_string(value["ploc_radius"].get<int64_t>()) + "]";
       if (value.contains("morton_size_bits"))
         label += "[size-bits=" + std::to_string(value["morton_size_bits"].get<int64_t>()) + "]";
+      if (value.contains("morton_grid")) label += "[grid=" + value["morton_grid"].get<std::string>() + "]";
       if (value.contains("optimize")) label += "+" + value["optimize"].get<std::string>();
     }
     return {label, value, {}};

@@ -105,6 +105,8 @@ std::vector<std::string> renderCommandLine(const fs::path& binary, const RunRequ
         argv.insert(argv.end(), {"--ploc-radius", scalarFlag(value.value["ploc_radius"])});
       if (value.value.contains("morton_size_bits"))
         argv.insert(argv.end(), {"--morton-size-bits", scalarFlag(value.value["morton_size_bits"])});
+      if (value.value.contains("morton_grid"))
+        argv.insert(argv.end(), {"--morton-grid", scalarFlag(value.value["morton_grid"])});
     } else if (name == "uber") {
       if (value.value.get<bool>()) argv.push_back("--uber");
     } else {

@@ -41,6 +41,8 @@ void addTreeOptions(CLI::App& app, RenderCommand& rc) {
   app.add_option("--ploc-radius", rc.plocRadius, "ploc: nearest-neighbour search radius");
   app.add_option("--morton-size-bits", rc.mortonSizeBits,
                  "ploc, lbvh: primitive-size bits in the Morton codes, 0..9 (0 = position only)");
+  app.add_option("--morton-grid", rc.mortonGrid,
+                 "ploc, lbvh: the Morton codes' grid: cube (one cell size on every axis) | axes (each axis over its own extent)");
   app.add_option("--storage", rc.storage, "tbo | tex2d");
 }
 

@@ -27,6 +27,7 @@ struct RenderCommand {
   float sbvhAlpha = 1e-5f; // sbvh: spatial splits only where object-split children overlap more than this
   int plocRadius = 16;     // ploc: nearest-neighbour search radius
   int mortonSizeBits = 0;  // ploc, lbvh: primitive-size bits in the Morton codes (builders/morton.hpp)
+  std::string mortonGrid = "cube";  // ploc, lbvh: the Morton codes' grid, cube | axes (BuildOptions::mortonGrid)
   std::string storage = "tbo";
   std::string branching = "full";
   std::optional<glm::dvec3> eye, target;  // world coordinates (a far scene is stored relative to its origin)

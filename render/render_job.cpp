@@ -47,6 +47,7 @@ BuildOptions renderBuildOptions(const RenderCommand& cmd, OptionReview* review) 
   b.sbvhAlpha = cmd.sbvhAlpha;
   b.plocRadius = uint32_t(cmd.plocRadius);
   b.mortonSizeBits = uint32_t(cmd.mortonSizeBits);
+  b.mortonGrid = parseMortonGrid(cmd.mortonGrid);
   OptionReview r = reviewBuildOptions(cmd.builder, b);  // bad values throw before the input is read
   if (review) *review = std::move(r);
   return b;
@@ -122,7 +123,7 @@ std::string treeKey(const RenderCommand& c) {
     key += text;
   };
   for (const std::string& f : {c.input, c.layout, c.triangles, c.builder, std::to_string(c.leafSize), std::to_string(c.bins), c.optimize,
-                               std::to_string(c.sbvhAlpha), std::to_string(c.plocRadius), std::to_string(c.mortonSizeBits), c.cameraPath})
+                               std::to_string(c.sbvhAlpha), std::to_string(c.plocRadius), std::to_string(c.mortonSizeBits), c.mortonGrid, c.cameraPath})
     field(f);
   for (const auto& v : {c.width, c.height, c.depth}) field(v ? std::to_string(*v) : "-");
   for (const auto& v : {c.eye, c.target}) field(v ? vecText(*v) : "-");

@@ -76,6 +76,29 @@ TEST(CliOptions, MortonSizeBitsAreRangeCheckedReportedAndWarnedAbout) {
   EXPECT_NE(r.err.find("warning: sah-binned ignores --morton-size-bits"), std::string::npos) << r.err;
 }
 
+TEST(CliOptions, MortonGridIsCheckedReportedAndWarnedAbout) {
+  // An unknown grid: refused before the mesh is read, naming the flag and the valid names.
+  for (const std::string command : {"build --mesh", "render"}) {
+    Result r = run(command + " no_such_mesh.off --builder lbvh --morton-grid square");
+    EXPECT_NE(r.code, 0) << command;
+    EXPECT_NE(r.err.find("unknown --morton-grid 'square'; valid: cube, axes"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("no_such_mesh"), std::string::npos) << r.err;
+  }
+  const fs::path mesh = gridMesh();
+  for (const std::string grid : {"cube", "axes"}) {
+    Result r = run("build --mesh " + mesh.string() + " --builder lbvh --morton-grid " + grid + " --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+    EXPECT_EQ(json::parse(r.out)["morton_grid"], grid);
+  }
+  Result r = run("build --mesh " + mesh.string() + " --json");  // the default
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out)["morton_grid"], "cube");
+  r = run("build --mesh " + mesh.string() + " --builder median --morton-grid axes --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: median ignores --morton-grid"), std::string::npos) << r.err;
+}
+
 TEST(CliOptions, IgnoredBinsAndCappedLeavesWarnAndTheJsonSaysWhatWasUsed) {
   const fs::path mesh = gridMesh();
   Result r = run("build --mesh " + mesh.string() + " --builder median --bins 16 --json");

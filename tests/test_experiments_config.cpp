@@ -272,6 +272,30 @@ builders = { name = "ploc", ploc_radius = 32, morton_size_bits = 6 }
   }
 }
 
+// A builder table's morton_grid reaches the render command line and the label; an unknown grid is
+// refused with the file, line, key and the valid names.
+TEST_F(Experiments, BuilderTableCarriesTheMortonGrid) {
+  writeText(root / "m.off", "OFF\n0 0 0\n");
+  const ExperimentConfig cfg = parse(R"(
+[axes]
+scenes = "m.off"
+builders = [{ name = "ploc", morton_grid = "axes" }, "ploc"]
+)");
+  ASSERT_EQ(cfg.runs.size(), 2u);
+  const std::string line = shellQuote(renderCommandLine("/bin/bvhlab", RunRequest{cfg.runs[0], root / "i.png", root / "v.png", "", ""}));
+  EXPECT_NE(line.find("--builder ploc --morton-grid axes"), std::string::npos) << line;
+  EXPECT_EQ(cfg.runs[0].axis("builder")->label, "ploc[grid=axes]");
+  EXPECT_EQ(cfg.runs[1].axis("builder")->label, "ploc");
+  try {
+    parse("[axes]\nscenes = 'm.off'\nbuilders = { name = 'ploc', morton_grid = 'square' }\n");
+    ADD_FAILURE() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cfg.toml:3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("morton_grid"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("axes"), std::string::npos) << e.what();
+  }
+}
+
 // [render] camera_path: resolved against the config's folder, validated at load, part of the key,
 // passed to the renderer as --camera-path.
 TEST_F(Experiments, CameraPathIsResolvedKeyedAndPassedToTheRenderer) {

@@ -45,9 +45,59 @@ TEST(MortonCodes, NoSizeBitsAreThePlainCodes) {
   std::vector<glm::uvec3> cells(2000);
   for (glm::uvec3& c : cells) c = {coordinate(rng), coordinate(rng), coordinate(rng)};
   const PrimitiveSet set = gridPoints(cells);
-  const MortonEncoder encoder(set.input(), 0);
+  const MortonEncoder encoder(set.input(), 0, MortonGrid::Cube);
   for (size_t i = 0; i < cells.size(); ++i)
     ASSERT_EQ(encoder.code(uint32_t(i + 2)), plainCode(cells[i].x, cells[i].y, cells[i].z)) << i;
+}
+
+TEST(MortonCodes, CubeGridGivesEveryAxisTheCellsOfTheLongestExtent) {
+  // Centroid bounds [0, 2^21] x [0, 2^18] x [0, 2^20]: the cube grid's cell is 1 on every axis, the
+  // per-axis grid's is 1, 1/8 and 1/2 (powers of two, so both codes are exact).
+  const float top = float(1 << 21);
+  const glm::vec3 corner(top, top / 8.0f, top / 2.0f);
+  std::mt19937 rng(6);
+  std::uniform_int_distribution<uint32_t> coordinate(0, (1u << 21) - 1);
+  PrimitiveSet set;
+  for (const glm::vec3 c : {glm::vec3(0.0f), corner}) set.addBox(cube(c, 0.25f), c);
+  std::vector<glm::uvec3> cells(2000);
+  for (glm::uvec3& c : cells) {
+    c = {coordinate(rng), coordinate(rng) / 8u, coordinate(rng) / 2u};
+    set.addBox(cube(glm::vec3(c), 0.25f), glm::vec3(c));
+  }
+  const MortonEncoder cubeGrid(set.input(), 0, MortonGrid::Cube), axesGrid(set.input(), 0, MortonGrid::Axes);
+  for (size_t i = 0; i < cells.size(); ++i) {
+    const glm::uvec3 c = cells[i];
+    ASSERT_EQ(cubeGrid.code(uint32_t(i + 2)), plainCode(c.x, c.y, c.z)) << i;
+    ASSERT_EQ(axesGrid.code(uint32_t(i + 2)), plainCode(c.x, c.y * 8u, c.z * 2u)) << i;
+  }
+  // The corner: the longest axis's top cell is clamped on both grids, the short axes reach it only on Axes.
+  const uint32_t last = (1u << 21) - 1;
+  EXPECT_EQ(cubeGrid.code(1), plainCode(last, 1u << 18, 1u << 20));
+  EXPECT_EQ(axesGrid.code(1), plainCode(last, last, last));
+}
+
+TEST(MortonCodes, TheGridIsAnOptionOfLbvhAndPlocOnly) {
+  PrimitiveSet flat;  // a long, flat strip of triangles: the two grids order it differently
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 4000; ++i) {
+    const glm::vec3 p(100.0f * u(rng), 0.5f * u(rng), 10.0f * u(rng));
+    flat.addTriangle(p, p + glm::vec3(0.3f, 0.01f, 0.0f), p + glm::vec3(0.0f, 0.02f, 0.3f));
+  }
+  BuildOptions axes;
+  axes.mortonGrid = MortonGrid::Axes;
+  for (const char* builder : {"lbvh", "ploc"}) {
+    EXPECT_FALSE(testing::identical(buildBvh(builder, flat.input(), BuildOptions{}), buildBvh(builder, flat.input(), axes)))
+        << builder;  // the option is not ignored
+    EXPECT_TRUE(reviewBuildOptions(builder, axes).warnings.empty()) << builder;
+  }
+  const OptionReview binned = reviewBuildOptions("sah-binned", axes);
+  ASSERT_EQ(binned.warnings.size(), 1u);
+  EXPECT_NE(binned.warnings[0].find("ignores --morton-grid"), std::string::npos) << binned.warnings[0];
+  EXPECT_EQ(parseMortonGrid("cube"), MortonGrid::Cube);
+  EXPECT_EQ(parseMortonGrid("axes"), MortonGrid::Axes);
+  EXPECT_EQ(mortonGridName(MortonGrid::Axes), "axes");
+  EXPECT_THROW(parseMortonGrid("square"), std::invalid_argument);
 }
 
 TEST(MortonCodes, SizeBitsGoAfterEverySixPositionBits) {
@@ -85,7 +135,7 @@ TEST(MortonCodes, MonotoneInPositionForEqualSizes) {
   set.addBox(cube(glm::vec3(5.0f), 100.0f), glm::vec3(5.0f));  // a larger box: the classes span a range
   for (uint32_t s : {1u, 3u, 6u, 9u}) {
     SCOPED_TRACE("size bits " + std::to_string(s));
-    const MortonEncoder encoder(set.input(), s);
+    const MortonEncoder encoder(set.input(), s, MortonGrid::Cube);
     auto code = [&](size_t i) { return encoder.code(uint32_t(i + 2)); };
     auto plain = [&](size_t i) { return plainCode(cells[i].x, cells[i].y, cells[i].z) >> s; };
     for (size_t i = 1; i < 900; ++i) {
@@ -102,9 +152,9 @@ TEST(MortonCodes, SizeBitsSeparateABigAndASmallPrimitiveAtOneCentroid) {
   set.addBox(cube(centre, 0.4f), centre);      // larger than any triangle of the soup
   set.addBox(cube(centre, 1e-6f), centre);     // smaller than any
   const uint32_t big = uint32_t(set.size() - 2), small = big + 1;
-  EXPECT_EQ(MortonEncoder(set.input(), 0).code(big), MortonEncoder(set.input(), 0).code(small));
+  EXPECT_EQ(MortonEncoder(set.input(), 0, MortonGrid::Cube).code(big), MortonEncoder(set.input(), 0, MortonGrid::Cube).code(small));
   for (uint32_t s = 1; s <= kMaxMortonSizeBits; ++s) {
-    const MortonEncoder encoder(set.input(), s);
+    const MortonEncoder encoder(set.input(), s, MortonGrid::Cube);
     EXPECT_EQ(encoder.sizeClass(set.boxes[small]), 0u) << s;
     EXPECT_GT(encoder.code(big), encoder.code(small)) << s;
     // The big box's diagonal is over a quarter of the scene's: the top size bit (bit 56, below the 6
@@ -123,13 +173,13 @@ TEST(MortonCodes, SizeClassesAreEqualStepsOfTheSquareRootOfTheRelativeDiagonal) 
     uint32_t sizeClass;
   } cases[] = {{16.0f, 3}, {0.0f, 0}, {0.9375f, 0}, {1.0f, 1}, {3.9f, 1}, {4.0f, 2}, {8.9f, 2}, {9.0f, 3}, {15.0f, 3}};
   for (const auto& c : cases) set.addBox({glm::vec3(0.0f), glm::vec3(c.diagonal, 0.0f, 0.0f)}, glm::vec3(0.0f));
-  const MortonEncoder encoder(set.input(), 2);
+  const MortonEncoder encoder(set.input(), 2, MortonGrid::Cube);
   for (size_t k = 0; k < set.size(); ++k) EXPECT_EQ(encoder.sizeClass(set.boxes[k]), cases[k].sizeClass) << k;
-  EXPECT_EQ(MortonEncoder(set.input(), 0).sizeClass(set.boxes[0]), 0u);  // no size bits: one class
+  EXPECT_EQ(MortonEncoder(set.input(), 0, MortonGrid::Cube).sizeClass(set.boxes[0]), 0u);  // no size bits: one class
   // A scene of one point: every box in class 0.
   PrimitiveSet point;
   for (int k = 0; k < 4; ++k) point.addBox({glm::vec3(1.0f), glm::vec3(1.0f)}, glm::vec3(1.0f));
-  EXPECT_EQ(MortonEncoder(point.input(), 9).sizeClass(point.boxes[0]), 0u);
+  EXPECT_EQ(MortonEncoder(point.input(), 9, MortonGrid::Cube).sizeClass(point.boxes[0]), 0u);
 }
 
 TEST(MortonCodes, BadSizeBitsIsAnInvalidArgument) {

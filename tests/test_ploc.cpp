@@ -107,17 +107,22 @@ std::vector<uint32_t> referenceSizeClasses(const PrimitiveSet& set, uint32_t siz
 }
 
 // PLOC as its comment in builders/ploc.cpp defines it, written the plain way (scalar, sequential,
-// every merged area computed from both ends; the codes bit by bit, with the size bits of
+// every merged area computed from both ends; the codes bit by bit, with the grid and the size bits of
 // builders/morton.hpp): the builder's vectorised, chunked, threaded passes must give exactly this tree.
-Bvh referencePloc(const PrimitiveSet& set, uint32_t radius, uint32_t leafSize, uint32_t sizeBits = 0) {
+Bvh referencePloc(const PrimitiveSet& set, uint32_t radius, uint32_t leafSize, uint32_t sizeBits = 0,
+                  MortonGrid grid = MortonGrid::Cube) {
   const uint32_t n = uint32_t(set.size());
   Aabb bounds;
   for (const glm::vec3& c : set.centroids) bounds.grow(c);
   const float cells = float(1 << 21);
+  // Cube: 2^21 cells over the longest centroid extent on every axis; Axes: over each axis's own.
+  float longest = 0.0f;
+  for (int a = 0; a < 3; ++a) longest = std::max(longest, bounds.max[a] - bounds.min[a]);
   glm::vec3 scale(0.0f);
   for (int a = 0; a < 3; ++a) {
     const float extent = bounds.max[a] - bounds.min[a];
-    if (extent > 0.0f && std::isfinite(cells / extent)) scale[a] = cells / extent;
+    const float over = grid == MortonGrid::Cube ? longest : extent;
+    if (extent > 0.0f && std::isfinite(cells / over)) scale[a] = cells / over;
   }
   const std::vector<uint32_t> sizeClass = referenceSizeClasses(set, sizeBits);
   std::vector<std::pair<uint64_t, uint32_t>> keys(n);
@@ -216,20 +221,31 @@ TEST(Ploc, MatchesTheDefinition) {
       options.mortonSizeBits = sizeBits;
       EXPECT_TRUE(testing::identical(buildBvh("ploc", set.input(), options), referencePloc(set, 16, 4, sizeBits)));
     }
+    for (uint32_t sizeBits : {0u, 5u}) {  // the per-axis grid
+      SCOPED_TRACE(set.name + " axes grid, size bits " + std::to_string(sizeBits));
+      BuildOptions options = withRadius(16, 2);
+      options.mortonSizeBits = sizeBits;
+      options.mortonGrid = MortonGrid::Axes;
+      EXPECT_TRUE(testing::identical(buildBvh("ploc", set.input(), options),
+                                     referencePloc(set, 16, 4, sizeBits, MortonGrid::Axes)));
+    }
   }
 }
 
-TEST(Ploc, DefaultCodesGiveTheTreesOfBeforeSizeBits) {
-  // Hashes of the trees ploc (radius 16) and lbvh built before Morton size bits existed (commit fd0daaa):
-  // mortonSizeBits = 0 must keep today's codes, so today's trees, bit for bit.
+TEST(Ploc, AxesGridWithoutSizeBitsGivesTheTreesOfBeforeSizeBits) {
+  // Hashes of the trees ploc (radius 16) and lbvh built before Morton size bits existed (commit fd0daaa),
+  // when the codes were always on the per-axis grid: mortonSizeBits = 0 with MortonGrid::Axes must
+  // keep those codes, so those trees, bit for bit.
   const struct {
     PrimitiveSet set;
     uint64_t ploc, lbvh;
   } cases[] = {{testing::randomSoup(20000, 3), 0x2e75286c4eaed287, 0x4b136980f4f651f},
                  {testing::sphereSoup(120, 90, 0.2f), 0x9a2d1e571b1ead78, 0x104c8c0f8cf3faad}};
   for (const auto& c : cases) {
-    const uint64_t ploc = treeHash(buildBvh("ploc", c.set.input(), withRadius(16, 2)));
-    const uint64_t lbvh = treeHash(buildBvh("lbvh", c.set.input(), withRadius(16, 2)));
+    BuildOptions axes = withRadius(16, 2);
+    axes.mortonGrid = MortonGrid::Axes;
+    const uint64_t ploc = treeHash(buildBvh("ploc", c.set.input(), axes));
+    const uint64_t lbvh = treeHash(buildBvh("lbvh", c.set.input(), axes));
     EXPECT_EQ(ploc, c.ploc) << c.set.name;
     EXPECT_EQ(lbvh, c.lbvh) << c.set.name;
   }
