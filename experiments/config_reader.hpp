@@ -26,7 +26,7 @@ namespace bvhlab::config_detail {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-const std::vector<std::string> kStorages = {"tbo", "tex2d"};
+const std::vector<std::string> kStorages = {"tbo", "tex2d", "ssbo"};
 // "smaa" is SMAA with --smaa-preset (high by default); "smaa-PRESET" names the preset in the axis.
 const std::vector<std::string> kAntialiasing = {"none",        "smaa",      "smaa-low", "smaa-medium",
                                                 "smaa-high",   "smaa-ultra", "ssaa4",   "ssaa16"};

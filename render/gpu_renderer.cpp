@@ -60,7 +60,17 @@ unsigned uploadBvhStream(const std::vector<glm::uvec4>& texels, Storage storage,
   const glm::uvec4* data = texels.empty() ? &kDummy : texels.data();
   const GLsizeiptr count = texels.empty() ? 1 : static_cast<GLsizeiptr>(texels.size());
   GLuint tex = 0;
-  if (storage == Storage::Tbo) {
+  if (storage == Storage::Ssbo) {
+    GLint64 maxBytes = 0;
+    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &maxBytes);
+    const GLint64 bytes = GLint64(count) * GLint64(sizeof(glm::uvec4));
+    if (bytes > maxBytes)
+      throw std::runtime_error(std::string(name) + " stream has " + std::to_string(bytes) +
+                               " bytes, above GL_MAX_SHADER_STORAGE_BLOCK_SIZE = " + std::to_string(maxBytes) +
+                               " (try --storage tbo or tex2d)");
+    glCreateBuffers(1, buffer);
+    glNamedBufferStorage(*buffer, count * sizeof(glm::uvec4), data, 0);
+  } else if (storage == Storage::Tbo) {
     GLint maxTexels = 0;
     glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &maxTexels);
     if (count > maxTexels)
@@ -90,6 +100,10 @@ unsigned uploadBvhStream(const std::vector<glm::uvec4>& texels, Storage storage,
   }
   checkGl(name);
   return tex;
+}
+
+void bindBvhStorageBuffers(const unsigned buffers[4]) {
+  for (GLuint k = 0; k < 4; ++k) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kFirstStreamBinding + k, buffers[k]);
 }
 
 unsigned compileComputeProgram(const AssembledShader& shader) {
@@ -252,10 +266,14 @@ double GpuRenderer::drawFrame() {
   glViewport(0, 0, frame_.width, frame_.height);
   glUseProgram(program_);
   glBindBufferBase(GL_UNIFORM_BUFFER, 0, ubo_);
-  glBindTextureUnit(kUnitNodes, streams_[0]);
-  glBindTextureUnit(kUnitTriangles, streams_[1]);
-  glBindTextureUnit(kUnitAttributes, streams_[2]);
-  glBindTextureUnit(kUnitVertices, streams_[3]);
+  if (options_.storage == Storage::Ssbo) {
+    bindBvhStorageBuffers(streamBuffers_);
+  } else {
+    glBindTextureUnit(kUnitNodes, streams_[0]);
+    glBindTextureUnit(kUnitTriangles, streams_[1]);
+    glBindTextureUnit(kUnitAttributes, streams_[2]);
+    glBindTextureUnit(kUnitVertices, streams_[3]);
+  }
   glBindTextureUnit(kUnitTextures, texArray_);
   glBindTextureUnit(kUnitWorld, worldTex_);
   glBindVertexArray(vao_);

@@ -27,9 +27,13 @@ unsigned compileFullscreenProgram(const AssembledShader& shader);
 unsigned compileComputeProgram(const AssembledShader& shader);
 
 // One packed-BVH stream as a texture of the storage kind (a texture buffer or a 2D texture, the
-// layout's STORAGE kinds); for tbo, *buffer gets the buffer behind it. An empty stream uploads one
-// zero texel. Throws std::runtime_error naming the stream when it exceeds the kind's limit.
+// layout's STORAGE kinds; 0 for ssbo, which reads the buffer itself); for tbo and ssbo, *buffer gets
+// the buffer. An empty stream uploads one zero texel. Throws std::runtime_error naming the stream when it exceeds the kind's limit.
 unsigned uploadBvhStream(const std::vector<glm::uvec4>& texels, Storage storage, const char* name, unsigned* buffer);
+// Storage::Ssbo: the node, triangle, attribute and vertex streams' buffers bound as shader storage
+// buffers kFirstStreamBinding.. (traversal/storage_ssbo.glsl's bindings).
+constexpr unsigned kFirstStreamBinding = 4;
+void bindBvhStorageBuffers(const unsigned buffers[4]);
 
 // Decoding of the statistics target (main.glsl's o_stats; the C++ mirror fills the same layout):
 // x node visits, y triangle tests, z mesh rays | stack-overflow bit 31, w primary id + 1 | non-finite bit 31.

@@ -79,7 +79,10 @@ double GlRayTracer::dispatch(unsigned program) {
   const auto start = std::chrono::steady_clock::now();
   glUseProgram(program);
   glUniform1i(glGetUniformLocation(program, "u_count"), GLint(count_));
-  for (GLuint unit = 0; unit < 4; ++unit) glBindTextureUnit(unit, streams_[unit]);
+  if (options_.storage == Storage::Ssbo)
+    bindBvhStorageBuffers(streamBuffers_);
+  else
+    for (GLuint unit = 0; unit < 4; ++unit) glBindTextureUnit(unit, streams_[unit]);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, rayBuffer_);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, resultBuffer_);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, countBuffer_);

@@ -43,7 +43,7 @@ void addTreeOptions(CLI::App& app, RenderCommand& rc) {
                  "ploc, lbvh: primitive-size bits in the Morton codes, 0..9 (0 = position only)");
   app.add_option("--morton-grid", rc.mortonGrid,
                  "ploc, lbvh: the Morton codes' grid: cube (one cell size on every axis) | axes (each axis over its own extent)");
-  app.add_option("--storage", rc.storage, "tbo | tex2d");
+  app.add_option("--storage", rc.storage, "tbo | tex2d | ssbo");
 }
 
 void addRenderOptions(CLI::App& app, RenderCommand& rc, RenderCliText& text) {

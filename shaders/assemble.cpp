@@ -25,14 +25,18 @@ Branching parseBranching(const std::string& s) {
 Storage parseStorage(const std::string& s) {
   if (s == "tbo") return Storage::Tbo;
   if (s == "tex2d") return Storage::Tex2D;
-  throw std::invalid_argument("unknown storage '" + s + "' (valid: tbo, tex2d)");
+  if (s == "ssbo") return Storage::Ssbo;
+  throw std::invalid_argument("unknown storage '" + s + "' (valid: tbo, tex2d, ssbo)");
 }
 const char* viewName(View v) {
   static const char* names[] = {"shaded", "normal", "depth", "primid"};
   return names[static_cast<int>(v)];
 }
 const char* branchingName(Branching b) { return b == Branching::Full ? "full" : "report"; }
-const char* storageName(Storage s) { return s == Storage::Tbo ? "tbo" : "tex2d"; }
+const char* storageName(Storage s) { return s == Storage::Tbo ? "tbo" : s == Storage::Tex2D ? "tex2d" : "ssbo"; }
+const char* storageModule(Storage s) {
+  return s == Storage::Tbo ? "storage_tbo.glsl" : s == Storage::Tex2D ? "storage_tex2d.glsl" : "storage_ssbo.glsl";
+}
 
 SceneFeatures analyzeScene(const Scene& scene) {
   SceneFeatures f;
@@ -141,7 +145,7 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   a.module("common.glsl");
   if (mesh) {
     if (uber) a.raw("<uber>", "uniform int u_meshPresent;\n");
-    a.module(o.storage == Storage::Tbo ? "storage_tbo.glsl" : "storage_tex2d.glsl");
+    a.module(storageModule(o.storage));
     for (const std::string& m : findLayout(o.layout).glslModules) a.module(m);
     // The robustness knobs (traversal/robustness.hpp): each test is a drop-in module.
     a.module(o.robust.box == BoxTest::Robust ? "ray_box_robust.glsl" : "ray_box.glsl");
@@ -178,7 +182,7 @@ AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Ro
   Assembler a;
   a.raw("<defines>", d.str());
   a.module("common.glsl");
-  a.module(storage == Storage::Tbo ? "storage_tbo.glsl" : "storage_tex2d.glsl");
+  a.module(storageModule(storage));
   for (const std::string& m : findLayout(layout).glslModules) a.module(m);
   a.module(robust.box == BoxTest::Robust ? "ray_box_robust.glsl" : "ray_box.glsl");
   a.module(robust.triangle == TriangleTest::Watertight ? "ray_triangle_watertight.glsl" : "ray_triangle.glsl");

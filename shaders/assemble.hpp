@@ -13,7 +13,7 @@ namespace bvhlab {
 
 enum class View { Shaded, Normal, Depth, PrimId };
 enum class Branching { Full, Report };  // full: trace both Fresnel branches; report: Algorithm 1's compromise
-enum class Storage { Tbo, Tex2D };
+enum class Storage { Tbo, Tex2D, Ssbo };
 
 View parseView(const std::string&);
 Branching parseBranching(const std::string&);
@@ -21,6 +21,8 @@ Storage parseStorage(const std::string&);
 const char* viewName(View);
 const char* branchingName(Branching);
 const char* storageName(Storage);
+// The GLSL module that defines fetchNode/fetchTriangle/fetchAttribute/fetchVertex for a storage kind.
+const char* storageModule(Storage);
 
 // What a scene needs simulated.
 struct SceneFeatures {

@@ -16,6 +16,7 @@ std::vector<Combo> combos() {
   for (const BuilderInfo& b : builders())
     for (const KernelInfo& k : kernels()) out.push_back({b.name, k.name, Storage::Tbo});
   for (const KernelInfo& k : kernels()) out.push_back({"sah-binned", k.name, Storage::Tex2D});
+  for (const KernelInfo& k : kernels()) out.push_back({"sah-binned", k.name, Storage::Ssbo});
   return out;
 }
 

@@ -201,10 +201,12 @@ TEST(LayoutKernelsGlsl, EqualTheMirrorPerRay) {
     std::string name;
     PackedBvh packed;
     std::vector<BatchRay> rays;
+    Storage storage = Storage::Tbo;
   };
   std::vector<Case> cases;
   const Bvh tree = build("sah-binned", m.soup);
   cases.push_back({"soup/bvh2-cb", packBvh2cb(tree, m.soup), testRays(m.soup, 1200, 11)});
+  cases.push_back({"soup/bvh2-cb/ssbo", packBvh2cb(tree, m.soup), testRays(m.soup, 1200, 11), Storage::Ssbo});
   cases.push_back({"soup/v1", packBvh(tree, m.soup), testRays(m.soup, 1200, 11)});
   cases.push_back({"single-leaf/bvh2-cb", packBvh2cb(singleLeaf(few), few), testRays(few, 400, 12)});
   for (const Case& cs : cases)
@@ -213,7 +215,8 @@ TEST(LayoutKernelsGlsl, EqualTheMirrorPerRay) {
         if (cs.packed.layout == "v1" && robust == Robustness::Fast) continue;  // test_trace covers v1
         SCOPED_TRACE(cs.name + (anyHit ? " any" : " closest") + " / " + robustnessName(robust));
         // expectGlslEqualsMirror (layout_test_util.hpp): answer, visits, triangle and box tests per ray.
-        const size_t found = expectGlslEqualsMirror(cs.packed, findKernel(cs.packed.layout, ""), cs.rays, anyHit, robust);
+        const size_t found =
+            expectGlslEqualsMirror(cs.packed, findKernel(cs.packed.layout, ""), cs.rays, anyHit, robust, cs.storage);
         EXPECT_GT(found, cs.rays.size() / 10) << "too few hits for the comparison to mean much";
       }
 }

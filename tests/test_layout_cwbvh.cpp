@@ -357,6 +357,7 @@ TEST(CwbvhKernelsGlsl, EqualTheMirrorPerRay) {
   PackedBvh indexed = packCwbvh(tree, m.soup);
   packTriangles(indexed, m.soup, "indexed");
   cases.push_back({"soup-indexed", indexed, rays, false, Storage::Tbo});
+  cases.push_back({"soup-indexed-ssbo", indexed, rays, false, Storage::Ssbo});  // all four streams as storage buffers
   for (const HardInput& h : hardInputs())
     cases.push_back({h.name, packCwbvh(build("sah-binned", h.soup), h.soup), testRays(h.soup, 400, 13), false, Storage::Tbo,
                      h.fewHits});

@@ -142,6 +142,30 @@ TEST(Traversal, StackBoundsAreExactAndOverflowIsReported) {
   EXPECT_THROW(glsl::Storage(packed, 0), std::invalid_argument);
 }
 
+// A node stream of zeros (what llvmpipe hands a fragment shader's helper invocations from a storage
+// buffer) ends every v1 kernel's walk when the ray misses the zero box: the stack kernels pop an
+// empty stack, the stackless one meets an escape link that does not move forward. Before the
+// stackless kernel checked that, its walk never ended (node 0's escape link is node 0).
+TEST(Kernels, ARecordOfZerosEndsTheWalk) {
+  const TriangleSoup soup = soupOf({sphereMesh(16, 32, 1.0f)});
+  PackedBvh packed = packBvh(buildBvh("sah-binned", BuildInput{triangleBoxes(soup), triangleCentroids(soup)}, BuildOptions{}), soup);
+  std::fill(packed.nodes.begin(), packed.nodes.end(), glm::uvec4(0u));
+  for (const glm::vec3 origin : {glm::vec3(1.0f, 0.0f, 5.0f), glm::vec3(-3.0f, 2.0f, 0.5f)}) {
+    const Ray ray{origin, glm::vec3(0.0f, 0.0f, -1.0f)};  // misses the point box at the origin
+    for (const KernelInfo& k : kernels()) {
+      SCOPED_TRACE(k.name);
+      Counters c;
+      MeshHit hit;
+      k.traceClosest(glsl::Storage(packed), ray, 0.0f, glsl::INF, hit, c);
+      // At most the root and its two child records (stack-unordered loads both before it tests them).
+      EXPECT_LE(c.nodeVisits, 3u) << "the walk went on over records of zeros";
+      Counters any;
+      k.traceAny(glsl::Storage(packed), ray, 0.0f, glsl::INF, any);
+      EXPECT_LE(any.nodeVisits, 3u);
+    }
+  }
+}
+
 TEST(RayBox, InverseDirectionIsFiniteAndSlabsNeverSeeNan) {
   for (float d : {0.0f, -0.0f, 1e-40f, -1e-40f, 1e-31f}) {
     const glm::vec3 inv = glsl::rayInverseDirection(glm::vec3(d, 1.0f, -2.0f));
@@ -254,7 +278,7 @@ void main() {
                    uint(any) + (g_stackOverflow ? 2u : 0u) + floatBitsToUint(normal.x + uv.y));
 }
 )";
-  for (const char* storage : {"storage_tbo.glsl", "storage_tex2d.glsl"})
+  for (const char* storage : {"storage_tbo.glsl", "storage_tex2d.glsl", "storage_ssbo.glsl"})
     for (const KernelInfo& k : kernels()) {
       std::string source = "#version 450 core\n#define BVH_STACK_SIZE 7\n";
       for (const std::string& module : {std::string("common.glsl"), std::string(storage), std::string("layout.glsl"),

@@ -23,6 +23,7 @@
 #include "datasets/mesh_io.hpp"
 #include "layout/layout.hpp"
 #include "render/gl_context.hpp"
+#include "render/gpu_renderer.hpp"
 #include "shaders/assemble.hpp"
 #include "traversal/kernels.hpp"
 #include "traversal/ray_box.hpp"
@@ -63,16 +64,17 @@ void main() {
 )";
 
 
-// The three streams as GL textures of one storage kind, bound to units 0..2.
+// The three streams in one storage kind: textures bound to units 0..2, or (ssbo) buffers bound to
+// shader storage bindings kFirstStreamBinding.. (traversal/storage_ssbo.glsl).
 struct GlStreams {
   std::vector<GLuint> buffers, textures;
 
-  GlStreams(const PackedBvh& p, bool tex2d) {
+  GlStreams(const PackedBvh& p, Storage storage) {
     const std::vector<glm::uvec4>* streams[3] = {&p.nodes, &p.triangles, &p.attributes};
     for (GLuint unit = 0; unit < 3; ++unit) {
       const std::vector<glm::uvec4>& texels = *streams[unit];
       GLuint tex = 0;
-      if (tex2d) {
+      if (storage == Storage::Tex2D) {
         const GLsizei w = GLsizei(kTex2DWidth), h = GLsizei((texels.size() + kTex2DWidth - 1) / kTex2DWidth);
         std::vector<glm::uvec4> padded(size_t(w) * size_t(h), glm::uvec4(0));
         std::copy(texels.begin(), texels.end(), padded.begin());
@@ -85,9 +87,13 @@ struct GlStreams {
         GLuint buf = 0;
         glCreateBuffers(1, &buf);
         glNamedBufferData(buf, GLsizeiptr(texels.size() * sizeof(glm::uvec4)), texels.data(), GL_STATIC_DRAW);
+        buffers.push_back(buf);
+        if (storage == Storage::Ssbo) {
+          glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kFirstStreamBinding + unit, buf);
+          continue;
+        }
         glCreateTextures(GL_TEXTURE_BUFFER, 1, &tex);
         glTextureBuffer(tex, GL_RGBA32UI, buf);
-        buffers.push_back(buf);
       }
       glBindTextureUnit(unit, tex);
       textures.push_back(tex);
@@ -109,12 +115,12 @@ struct GpuRun {
 
 // The kernel over one storage kind, compiled once per (kernel, storage, stack size): llvmpipe
 // compiles a kernel in ~0.5 s without its disk cache.
-GLuint crossCheckProgram(const KernelInfo& kernel, bool tex2d, int stackSize) {
+GLuint crossCheckProgram(const KernelInfo& kernel, Storage storage, int stackSize) {
   static std::map<std::string, GLuint> programs;
-  const std::string key = kernel.name + (tex2d ? "/tex2d/" : "/tbo/") + std::to_string(stackSize);
+  const std::string key = kernel.name + "/" + storageName(storage) + "/" + std::to_string(stackSize);
   if (auto it = programs.find(key); it != programs.end()) return it->second;
   std::string source = "#version 450 core\n#define BVH_STACK_SIZE " + std::to_string(stackSize) + "\n";
-  for (const std::string& module : {std::string("common.glsl"), std::string(tex2d ? "storage_tex2d.glsl" : "storage_tbo.glsl"),
+  for (const std::string& module : {std::string("common.glsl"), std::string(storageModule(storage)),
                                     std::string("layout.glsl"), std::string("ray_box.glsl"),
                                     std::string("ray_triangle.glsl"), std::string("triangles_raw.glsl"),
                                     kernel.glslFile})
@@ -122,10 +128,10 @@ GLuint crossCheckProgram(const KernelInfo& kernel, bool tex2d, int stackSize) {
   return programs[key] = compileCompute(source + kCrossCheckMain);
 }
 
-std::vector<GpuRun> traceOnGl(const KernelInfo& kernel, bool tex2d, const PackedBvh& packed, int stackSize,
+std::vector<GpuRun> traceOnGl(const KernelInfo& kernel, Storage storage, const PackedBvh& packed, int stackSize,
                               const std::vector<RayQuery>& rays) {
-  const GLuint program = crossCheckProgram(kernel, tex2d, stackSize);
-  const GlStreams streams(packed, tex2d);
+  const GLuint program = crossCheckProgram(kernel, storage, stackSize);
+  const GlStreams streams(packed, storage);
   std::vector<glm::vec4> in;
   for (const RayQuery& q : rays) {
     in.emplace_back(q.ray.origin, q.tMin);
@@ -205,9 +211,9 @@ TEST(TraversalGlsl, GpuAgreesWithTheMirror) {
     const SceneRays& scene = scenes[s];
     for (const Tree& tree : trees[s])
       for (const KernelInfo& k : kernels())
-        for (bool tex2d : {false, true}) {
-          SCOPED_TRACE(scene.name + " / " + tree.name + " / " + k.name + (tex2d ? " / tex2d" : " / tbo"));
-          const std::vector<GpuRun> gpu = traceOnGl(k, tex2d, tree.packed, stackSize, scene.rays);
+        for (Storage storage : {Storage::Tbo, Storage::Tex2D, Storage::Ssbo}) {
+          SCOPED_TRACE(scene.name + " / " + tree.name + " / " + k.name + " / " + storageName(storage));
+          const std::vector<GpuRun> gpu = traceOnGl(k, storage, tree.packed, stackSize, scene.rays);
           int failures = 0;
           for (size_t i = 0; i < scene.rays.size(); ++i) {
             const KernelRun cpu = runKernel(k, glsl::Storage(tree.packed, stackSize), scene.rays[i]);

@@ -1,7 +1,8 @@
 // kernel_stackless.glsl — no stack: nodes are visited in the stream's depth-first order. A node
 // whose box the ray meets continues to its first child (node + 1) if it is inner; a leaf, after its
 // triangles, and a node whose box is missed continue at their escape link (layout/layout.hpp).
-// Every step moves to a higher node index, so the walk ends after at most one visit per node.
+// Every step moves to a higher node index, so the walk ends after at most one visit per node (a
+// record that would not move forward ends it).
 // C++ mirror: kernel_stackless.hpp.
 //
 // Counters: g_nodeVisits += 1 per node record fetched (loadNode), i.e. per node the walk reaches;
@@ -20,6 +21,11 @@ bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit
     loadNode(int(node), bmin, bmax, a, escape, count);
     g_boxTests++;
     if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
+      // A valid tree's escape link points past its node (every step moves to a higher index); a
+      // record whose link does not ends the walk instead of looping. In a fragment shader llvmpipe
+      // hands helper invocations zeros from storage buffers (--storage ssbo; docs/layouts.md), and a
+      // record of zeros would spin until the driver's loop limit cut the whole quad short.
+      if (escape <= node) break;
       node = escape;
       continue;
     }
@@ -37,6 +43,7 @@ bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit
         if (anyHit) return true;
       }
     }
+    if (escape <= node) break;
     node = escape;
   }
   return hit.tri >= 0;

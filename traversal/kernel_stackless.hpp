@@ -20,6 +20,11 @@ inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax,
     loadNode(s, int(node), bmin, bmax, a, escape, count);
     c.boxTests++;
     if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
+      // A valid tree's escape link points past its node (every step moves to a higher index); a
+      // record whose link does not ends the walk instead of looping. In a fragment shader llvmpipe
+      // hands helper invocations zeros from storage buffers (--storage ssbo; docs/layouts.md), and a
+      // record of zeros would spin until the driver's loop limit cut the whole quad short.
+      if (escape <= node) break;
       node = escape;
       continue;
     }
@@ -37,6 +42,7 @@ inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax,
         if (anyHit) return true;
       }
     }
+    if (escape <= node) break;
     node = escape;
   }
   return hit.tri >= 0;

@@ -56,7 +56,7 @@
 #include "datasets/mesh_io.hpp"
 #include "datasets/procedural.hpp"
 #include "layout/layout.hpp"
-#include "render/frame_stats.hpp"
+#include "experiments/bench/builders_report.hpp"
 
 namespace {
 
@@ -259,8 +259,6 @@ void buildWith(benchmark::State& state, std::string builder, MeshFn mesh, uint32
 
 // ---- the bins curve (--curve): tree quality beside the time --------------------------------------
 
-constexpr uint32_t kCurveBins[] = {8, 12, 16, 24, 32, 48, 64, 128};
-
 // Closest-hit rays traversed front to back over the Bvh itself: a node counts as visited when it is
 // entered (its box was hit closer than the closest hit so far when it is popped); every triangle of
 // a visited leaf counts as tested. Rays: from random points on the sphere around the scene (radius
@@ -402,163 +400,6 @@ void curveEmbree(benchmark::State& state, MeshFn mesh) {
   state.counters["ray_cost"] = q.rayCost;
 }
 
-// Console output as usual (aggregates only), plus a table per mesh at the end, from the medians.
-class RatioReporter : public benchmark::ConsoleReporter {
- public:
-  explicit RatioReporter(bool curve) : curve_(curve) {}
-  void ReportRuns(const std::vector<Run>& runs) override {
-    std::vector<Run> aggregates;  // the console shows these; the repetitions feed the paired ratios
-    for (const Run& run : runs)
-      if (run.run_type == Run::RT_Aggregate) aggregates.push_back(run);
-    ConsoleReporter::ReportRuns(aggregates);
-    for (const Run& run : runs) {
-      if (run.error_occurred) continue;
-      // Names are "builder/mesh/threads:N" (run_name.str(): without the aggregate's suffix).
-      const std::string name = run.run_name.str();
-      const size_t a = name.find('/'), b = name.find("/threads:");
-      if (a == std::string::npos || b == std::string::npos) continue;
-      Result& r = results_[{name.substr(a + 1, b - a - 1), name.substr(0, a)}];
-      const int threads = std::atoi(name.c_str() + b + 9) == 1 ? 0 : 1;
-      const double t = run.GetAdjustedRealTime(), cpu = run.GetAdjustedCPUTime();
-      if (run.run_type == Run::RT_Iteration) {  // one repetition: its time at its round
-        if (run.repetition_index < 0) continue;
-        std::vector<double>& rounds = r.rounds[threads];
-        if (rounds.size() <= size_t(run.repetition_index)) rounds.resize(size_t(run.repetition_index) + 1, NAN);
-        rounds[size_t(run.repetition_index)] = t;
-        continue;
-      }
-      auto counter = [&run](const char* name) {
-        const auto it = run.counters.find(name);
-        return it == run.counters.end() ? 0.0 : double(it->second);
-      };
-      if (run.aggregate_name == "median") {
-        r.time[threads] = t, r.cpu[threads] = cpu;
-        r.sah = counter("sah"), r.epo = counter("epo"), r.rayCost = counter("ray_cost");
-      } else if (run.aggregate_name == "min") {
-        r.low[threads] = t, r.cpuLow[threads] = cpu;
-      } else if (run.aggregate_name == "max") {
-        r.high[threads] = t, r.cpuHigh[threads] = cpu;
-      }
-    }
-  }
-  void Finalize() override {
-    ConsoleReporter::Finalize();
-    if (curve_) return printCurve();
-    std::string mesh;
-    for (const auto& [key, r] : results_) {
-      if (key.first != mesh) {
-        mesh = key.first;
-        std::printf("\n%s: median of the repetitions [min, max], ms; ratios against embree-raw with 2 threads\n", mesh.c_str());
-        std::printf("%-14s %26s %26s %9s %9s %9s %9s %9s %24s %24s\n", "builder", "1 thread", "2 threads", "x t(1)", "x t(2)", "SAH",
-                    "x SAH", "x b. SAH", "x sah-binned t(1) [95%]", "x sah-binned t(2) [95%]");
-      }
-      const Result* binned = find(mesh, "sah-binned");
-      const Result* ref = find(mesh, "embree-raw");
-      auto cell = [](const Result& x, int k) {
-        char buf[64];
-        if (x.time[k] > 0)
-          std::snprintf(buf, sizeof buf, "%8.2f [%7.2f,%7.2f]", x.time[k], x.low[k], x.high[k]);
-        else
-          std::snprintf(buf, sizeof buf, "%s", "-");
-        return std::string(buf);
-      };
-      auto ratio = [&](double x) { return ref && ref->time[1] > 0 && x > 0 ? x / ref->time[1] : NAN; };
-      auto versusBinned = [&](int k) { return binned && key.second != "sah-binned" ? paired(r.rounds[k], binned->rounds[k]) : "-"; };
-      std::printf("%-14s %26s %26s %9.3f %9.3f %9.3f %9.4f %9.4f %24s %24s\n", key.second.c_str(), cell(r, 0).c_str(),
-                  cell(r, 1).c_str(), ratio(r.time[0]), ratio(r.time[1]), r.sah, ref && ref->sah > 0 ? r.sah / ref->sah : NAN,
-                  binned && binned->sah > 0 ? r.sah / binned->sah : NAN, versusBinned(0).c_str(), versusBinned(1).c_str());
-    }
-    std::printf("\n(x SAH: against embree-raw's tree; x b. SAH: against sah-binned's.)\n");
-    std::printf("\nTarget (issue 15): sah-binned with 1 thread <= 0.5x embree-raw (MEDIUM) with 2 threads, SAH <= 1.01x\n");
-    for (const auto& [key, r] : results_) {
-      if (key.second != "sah-binned") continue;
-      const Result* ref = find(key.first, "embree-raw");
-      if (!ref || ref->time[1] <= 0 || r.time[0] <= 0) continue;
-      std::printf("  %-10s sah-binned(1 thread) / embree-raw(2 threads) = %.3f (ratio of medians); paired %s   SAH ratio = %.4f\n",
-                  key.first.c_str(), r.time[0] / ref->time[1], paired(r.rounds[0], ref->rounds[1]).c_str(),
-                  ref->sah > 0 ? r.sah / ref->sah : NAN);
-    }
-    std::printf("\nTargets (issue 15): sbvh SAH <= 0.92x sah-binned's; ploc SAH <= 1.05x sah-binned's and time <= sah-binned's\n");
-    std::set<std::string> meshes;
-    for (const auto& [key, r] : results_) meshes.insert(key.first);
-    for (const std::string& m : meshes) {
-      const Result* binned = find(m, "sah-binned");
-      if (!binned || binned->sah <= 0) continue;
-      auto sahRatio = [&](const Result* x) { return x && x->sah > 0 ? x->sah / binned->sah : NAN; };
-      auto verdict = [](double v, double limit) { return v != v ? "-" : v <= limit ? "met" : "not met"; };
-      const Result* sbvh = find(m, "sbvh");
-      const Result* ploc = find(m, "ploc");
-      if (!sbvh && !ploc) continue;
-      std::printf("  %-10s", m.c_str());
-      if (sbvh) std::printf(" sbvh SAH %.4f (%s)  ", sahRatio(sbvh), verdict(sahRatio(sbvh), 0.92));
-      if (ploc)
-        std::printf(" ploc SAH %.4f (%s), ploc / sah-binned time, paired: 1 thread %s, 2 threads %s", sahRatio(ploc),
-                    verdict(sahRatio(ploc), 1.05), paired(ploc->rounds[0], binned->rounds[0]).c_str(),
-                    paired(ploc->rounds[1], binned->rounds[1]).c_str());
-      std::printf("\n");
-    }
-  }
-
- private:
-  struct Result {
-    double time[2] = {0, 0}, low[2] = {0, 0}, high[2] = {0, 0};  // [1 thread, 2 threads], wall ms
-    double cpu[2] = {0, 0}, cpuLow[2] = {0, 0}, cpuHigh[2] = {0, 0};  // process CPU ms (--curve)
-    double sah = 0, epo = 0, rayCost = 0;
-    std::vector<double> rounds[2];  // wall ms of each repetition, by round (NaN: none that round)
-  };
-
-  // a / b over the rounds both ran: the median per-round ratio and its 95% interval, or why not.
-  static std::string paired(const std::vector<double>& a, const std::vector<double>& b) {
-    const size_t n = std::min(a.size(), b.size());
-    const std::optional<Interval> q = pairedRatio(std::span(a.data(), n), std::span(b.data(), n));
-    if (!q) return n ? "- (< 6 rounds)" : "-";
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.3f [%.3f, %.3f]", q->estimate, q->low, q->high);
-    return buf;
-  }
-
-  // Ratios of medians, with the range [min / ref max, max / ref min] over the repetitions beside them.
-  static std::string ratio(double median, double low, double high, double refMedian, double refLow, double refHigh) {
-    char buf[64];
-    if (median > 0 && refMedian > 0)
-      std::snprintf(buf, sizeof buf, "%.3f [%.2f-%.2f]", median / refMedian, low / refHigh, high / refLow);
-    else
-      std::snprintf(buf, sizeof buf, "-");
-    return buf;
-  }
-  void printCurve() const {
-    std::printf("\nsah-binned bins curve (leaf 4, Ct = Ci = 1): ratios to embree-raw (MEDIUM, 2 threads) as median "
-                "[min-max range over the repetitions]; wall = real time; CPU = process CPU time, against Embree's "
-                "halved (its 2-thread wall time is at least that); SAH, EPO and ray cost against the registered "
-                "embree builder's tree\n");
-    std::set<std::string> meshes;
-    for (const auto& [key, r] : results_) meshes.insert(key.first);
-    for (const std::string& mesh : meshes) {
-      const Result* ref = find(mesh, "embree-raw");
-      if (!ref) continue;
-      std::printf("\n%s: embree-raw wall %.2f [%.2f, %.2f] ms, CPU %.2f ms; SAH %.3f, EPO %.3f, ray cost %.2f\n", mesh.c_str(),
-                  ref->time[1], ref->low[1], ref->high[1], ref->cpu[1], ref->sah, ref->epo, ref->rayCost);
-      std::printf("%5s %10s %20s %20s %10s %20s %8s %8s %8s\n", "bins", "1t wall ms", "x wall (1 thread)", "x CPU/2 (1 thread)",
-                  "2t wall ms", "x wall (2 threads)", "x SAH", "x EPO", "x rays");
-      for (uint32_t bins : kCurveBins) {
-        const Result* r = find(mesh, "sah-binned:" + std::to_string(bins));
-        if (!r) continue;
-        const double half = 0.5;  // Embree's CPU time over its two threads, halved
-        std::printf("%5u %10.2f %20s %20s %10.2f %20s %8.4f %8.4f %8.4f\n", bins, r->time[0],
-                    ratio(r->time[0], r->low[0], r->high[0], ref->time[1], ref->low[1], ref->high[1]).c_str(),
-                    ratio(r->cpu[0], r->cpuLow[0], r->cpuHigh[0], half * ref->cpu[1], half * ref->cpuLow[1], half * ref->cpuHigh[1]).c_str(),
-                    r->time[1], ratio(r->time[1], r->low[1], r->high[1], ref->time[1], ref->low[1], ref->high[1]).c_str(),
-                    r->sah / ref->sah, r->epo / ref->epo, r->rayCost / ref->rayCost);
-      }
-    }
-  }
-  bool curve_ = false;
-  const Result* find(const std::string& mesh, const std::string& builder) const {
-    const auto it = results_.find({mesh, builder});
-    return it == results_.end() ? nullptr : &it->second;
-  }
-  std::map<std::pair<std::string, std::string>, Result> results_;  // (mesh, builder)
-};
 
 }  // namespace
 
@@ -596,7 +437,7 @@ int main(int argc, char** argv) {
   for (const auto& [meshName, set] : curve ? curveMeshes : decltype(curveMeshes){}) {
     auto timeCpuToo = [&](benchmark::internal::Benchmark* b) { configure(b), b->MeasureProcessCPUTime(); };
     timeCpuToo(benchmark::RegisterBenchmark(("embree-raw/" + meshName + "/threads:2").c_str(), curveEmbree, set));
-    for (uint32_t bins : kCurveBins)
+    for (uint32_t bins : bench::kCurveBins)
       for (uint32_t threads : {1u, 2u})
         timeCpuToo(benchmark::RegisterBenchmark(
             ("sah-binned:" + std::to_string(bins) + "/" + meshName + "/threads:" + std::to_string(threads)).c_str(),
@@ -614,7 +455,7 @@ int main(int argc, char** argv) {
   }
   benchmark::Initialize(&count, args.data());
   if (benchmark::ReportUnrecognizedArguments(count, args.data())) return 1;
-  RatioReporter reporter(curve);
+  bench::RatioReporter reporter(curve);
   benchmark::RunSpecifiedBenchmarks(&reporter);
   benchmark::Shutdown();
 }
