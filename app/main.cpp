@@ -34,7 +34,7 @@ namespace {
 
 struct BuildCommand {
   std::string mesh, builder = "sah-binned", optimize, layout = kDefaultLayout, triangles = kDefaultTriangleFormat;
-  int leafSize = 4, bins = 0, plocRadius = 16, mortonSizeBits = 0;
+  int leafSize = 4, bins = 0, plocRadius = 16, plocTopDown = 0, mortonSizeBits = 0;
   std::string mortonGrid = "cube";
   float sbvhAlpha = 1e-5f;
   bool json = false;
@@ -49,6 +49,7 @@ int buildCommand(const BuildCommand& c) {
   asRender.optimize = c.optimize;
   asRender.sbvhAlpha = c.sbvhAlpha;
   asRender.plocRadius = c.plocRadius;
+  asRender.plocTopDown = c.plocTopDown;
   asRender.mortonSizeBits = c.mortonSizeBits;
   asRender.mortonGrid = c.mortonGrid;
   OptionReview review;
@@ -74,6 +75,7 @@ int buildCommand(const BuildCommand& c) {
                         {"leaf_size", stats.leafSize},  // what the leaves were limited to
                         {"leaf_size_requested", c.leafSize},
                         {"ploc_radius", options.plocRadius},
+                        {"ploc_top_down", options.plocTopDown},
                         {"morton_size_bits", options.mortonSizeBits},
                         {"morton_grid", mortonGridName(options.mortonGrid)},
                         {"warnings", review.warnings},
@@ -142,6 +144,8 @@ int main(int argc, char** argv) {
   build->add_option("--optimize", bc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
   build->add_option("--sbvh-alpha", bc.sbvhAlpha, "sbvh: overlap threshold for spatial splits");
   build->add_option("--ploc-radius", bc.plocRadius, "ploc: nearest-neighbour search radius");
+  build->add_option("--ploc-top-down", bc.plocTopDown,
+                    "ploc: split the last n/F clusters top-down by binned SAH, 0..1024 (0 = cluster to the end)");
   build->add_option("--morton-size-bits", bc.mortonSizeBits,
                     "ploc, lbvh: primitive-size bits in the Morton codes, 0..9 (0 = position only)");
   build->add_option("--morton-grid", bc.mortonGrid,

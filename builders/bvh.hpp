@@ -65,6 +65,11 @@ struct BuildOptions {
   float sbvhAlpha = 1e-5f;
   float sbvhReferenceBudget = 2.0f;
   uint32_t plocRadius = 16;  // ploc (Meister & Bittner 2018): nearest-neighbour search radius in Morton order
+  // ploc: 0 (default) clusters to the end, as the paper does. F > 0: once the clusters are down to
+  // n / F, those are split top-down by binned SAH (sah-binned over the cluster boxes, one cluster per
+  // leaf) instead: PLOC for the bottom of the tree, SAH for its top, where PLOC loses most of its SAH
+  // (docs/builders.md, "PLOC with an SAH top"). 0..kMaxPlocTopDown.
+  uint32_t plocTopDown = 0;
   // ploc, lbvh: bits of each primitive's size (the square root of its box diagonal over the scene's)
   // among the upper bits of its Morton code (Vinkler, Bittner & Havran 2017; builders/morton.hpp),
   // 0..kMaxMortonSizeBits. 0 = plain position codes (measured: no setting helps on scanned meshes).
@@ -111,6 +116,8 @@ struct BuildStats {
 constexpr uint32_t kMaxLeafSize = 255;  // the packed node stores a leaf count in 8 bits
 // One size bit per 7 code bits (6 of position, builders/morton.hpp) in a 63-bit code: at most 9.
 constexpr uint32_t kMaxMortonSizeBits = 9;
+// BuildOptions::plocTopDown: a divisor of the primitive count (the measured range is 2..64).
+constexpr uint32_t kMaxPlocTopDown = 1024;
 
 // SAH cost of a built tree with the given model (recomputed from the tree, not trusted from a builder).
 double sahCost(const Bvh& bvh, const CostModel& cost);

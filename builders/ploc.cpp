@@ -10,6 +10,10 @@
 //     merged box has the smallest (half) area -- among the clusters within +-radius in the current
 //     order (BuildOptions::plocRadius, 1..1024); mutual nearest neighbours merge (the merged cluster
 //     takes the lower position, the order is kept) and the array is compacted.
+//     With BuildOptions::plocTopDown = F > 0 the passes stop once n / F clusters are left, and
+//     those are split top-down instead: sah-binned over the cluster boxes (box centres as centroids),
+//     leaves of one cluster, the same thread count. PLOC for the bottom of the tree, binned SAH for
+//     its top, where PLOC loses most of its SAH (docs/builders.md, "PLOC with an SAH top").
 //  3. The single-primitive-leaf tree is collapsed by SAH (builders/collapse.hpp, shared with lbvh).
 // Ties in the merged area are broken by a key of the pair alone (distance in the order, then the
 // lower position's parity, then the lower position), so the smallest pair in the window is always
@@ -48,6 +52,7 @@
 
 #include "builders/morton.hpp"
 #include "builders/build_util.hpp"
+#include "builders/builder.hpp"
 #include "builders/collapse.hpp"
 
 namespace bvhlab {
@@ -316,6 +321,9 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
   if (radius < 1 || radius > kMaxRadius)
     throw std::invalid_argument("ploc: plocRadius " + std::to_string(radius) + " is outside 1.." +
                                 std::to_string(kMaxRadius));
+  if (options.plocTopDown > kMaxPlocTopDown)
+    throw std::invalid_argument("ploc: plocTopDown " + std::to_string(options.plocTopDown) + " is outside 0.." +
+                                std::to_string(kMaxPlocTopDown));
   const uint32_t n = uint32_t(input.boxes.size());
   const unsigned threads = detail::resolveThreads(options.threads);
   const uint32_t jobs = (n + kChunk - 1) / kChunk;
@@ -407,6 +415,7 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
   // and the chunk's counts; (b) the offsets from the counts; (c) per chunk, the merged and kept
   // clusters written at those offsets. Merges are numbered in order, so the tree is that of a
   // sequential pass, whichever thread does which chunk.
+  const uint32_t stopAt = options.plocTopDown ? std::max(1u, n / options.plocTopDown) : 1u;
   std::vector<uint32_t> partner(n);  // the nearest neighbour when mutual, else kNone
   uint32_t chunks = (m + kChunk - 1) / kChunk, total = 0;
   const unsigned team = std::min<unsigned>(threads, chunks);
@@ -457,7 +466,7 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
   // While a pass has several chunks: one team of threads for all those passes, in step at a barrier
   // after each phase (a thread start costs tens of microseconds, a pass can take less). The barrier's
   // completion step runs alone: the offsets, then the swap to the next pass.
-  if (m > 1 && team > 1) {
+  if (m > stopAt && team > 1) {
     std::atomic<uint32_t> claimSearch{0}, claimWrite{0};
     bool afterSearch = true;
     auto step = [&]() noexcept {
@@ -472,7 +481,7 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
     };
     std::barrier sync(team, step);
     detail::runJobs(team, team, [&](size_t member) {  // team jobs on team threads: all run at once
-      while (m > 1 && chunks > 1) {
+      while (m > stopAt && chunks > 1) {
         for (uint32_t job; (job = claimSearch++) < chunks;) search(job, scratch[member]);
         sync.arrive_and_wait();
         for (uint32_t job; (job = claimWrite++) < chunks;) write(job);
@@ -480,11 +489,46 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
       }
     });
   }
-  while (m > 1) {  // the rest (or everything, on one thread), sequentially
+  while (m > stopAt) {  // the rest (or everything, on one thread), sequentially
     for (uint32_t job = 0; job < chunks; ++job) search(job, scratch[0]);
     total = offsets(chunks);
     for (uint32_t job = 0; job < chunks; ++job) write(job);
     finishPass();
+  }
+
+  // The top, when the passes stopped early: sah-binned over the clusters, whose inner nodes become the
+  // full tree's, made children first (each node's collapse entry needs its children's) and numbered
+  // downwards from the m - 1 indices still free (m - 2 .. 0: the root last, at 0).
+  if (m > 1) {
+    std::vector<Aabb> boxes(m);
+    std::vector<glm::vec3> centres(m);
+    for (uint32_t i = 0; i < m; ++i) boxes[i] = clusters.bounds(i), centres[i] = boxes[i].center();
+    BuildOptions topOptions;
+    topOptions.maxLeafSize = 1;
+    topOptions.cost = options.cost;
+    topOptions.threads = options.threads;
+    const Bvh top = buildBvh("sah-binned", BuildInput{boxes, centres}, topOptions);
+    uint32_t free = m - 1;
+    std::vector<uint32_t> made(top.nodes.size());  // top's node -> the full tree's
+    std::vector<std::pair<uint32_t, bool>> stack{{0u, false}};  // (node, children made)
+    while (!stack.empty()) {
+      const auto [i, childrenMade] = stack.back();
+      stack.pop_back();
+      const BvhNode& t = top.nodes[i];
+      if (t.isLeaf()) {
+        made[i] = clusters.node[top.primIndices[t.first]];
+      } else if (!childrenMade) {
+        stack.push_back({i, true});
+        stack.push_back({t.right, false});
+        stack.push_back({t.left, false});
+      } else {
+        const uint32_t l = made[t.left], r = made[t.right];
+        Aabb box = full[l].node.bounds;
+        box.grow(full[r].node.bounds);
+        made[i] = --free;
+        makeInner(made[i], l, r, box, full[l].info, full[r].info);
+      }
+    }
   }
 
   // 3. Leaves.

@@ -35,7 +35,8 @@ const std::vector<BuilderInfo>& builders() {
        /*usesBins=*/true, /*usesSbvhAlpha=*/true},
       {"lbvh", "Morton-code radix tree (LBVH), SAH-collapsed leaves", buildLbvh, false, false, false, kMaxLeafSize,
        /*usesMortonSizeBits=*/true},
-      {"ploc", "PLOC: bottom-up clustering in Morton order, neighbours within +-plocRadius, SAH-collapsed leaves",
+      {"ploc", "PLOC: bottom-up clustering in Morton order, neighbours within +-plocRadius, SAH-collapsed leaves; "
+               "plocTopDown F: the last n/F clusters split top-down by binned SAH",
        buildPloc, false, false, /*usesPlocRadius=*/true, kMaxLeafSize, /*usesMortonSizeBits=*/true},
       // Embree's builder caps leaves at RTC_BUILD_MAX_PRIMITIVES_PER_LEAF (builders/embree.cpp).
       {"embree", "Embree 3 rtcBuildBVH, quality MEDIUM (the reference)", buildEmbreeBvh, false, false, false,
@@ -121,6 +122,9 @@ OptionReview reviewBuildOptions(const std::string& builder, const BuildOptions& 
   if (options.mortonSizeBits > kMaxMortonSizeBits)
     throw std::invalid_argument("--morton-size-bits must be in 0.." + std::to_string(kMaxMortonSizeBits) + " (got " +
                                 std::to_string(options.mortonSizeBits) + ")");
+  if (options.plocTopDown > kMaxPlocTopDown)
+    throw std::invalid_argument("--ploc-top-down must be in 0.." + std::to_string(kMaxPlocTopDown) + " (got " +
+                                std::to_string(options.plocTopDown) + ")");
   OptionReview review;
   review.leafSize = std::min(options.maxLeafSize, info.leafSizeCap);
   const BuildOptions defaults;
@@ -134,6 +138,8 @@ OptionReview reviewBuildOptions(const std::string& builder, const BuildOptions& 
     review.warnings.push_back(info.name + " ignores --sbvh-alpha (only sbvh makes spatial splits)");
   if (options.plocRadius != defaults.plocRadius && !info.usesPlocRadius)
     review.warnings.push_back(info.name + " ignores --ploc-radius (only ploc clusters)");
+  if (options.plocTopDown != defaults.plocTopDown && !info.usesPlocRadius)
+    review.warnings.push_back(info.name + " ignores --ploc-top-down (only ploc clusters)");
   if (options.mortonSizeBits != defaults.mortonSizeBits && !info.usesMortonSizeBits)
     review.warnings.push_back(info.name + " ignores --morton-size-bits (only ploc and lbvh build Morton codes)");
   if (options.mortonGrid != defaults.mortonGrid && !info.usesMortonSizeBits)

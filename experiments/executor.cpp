@@ -103,6 +103,8 @@ std::vector<std::string> renderCommandLine(const fs::path& binary, const RunRequ
         argv.insert(argv.end(), {"--sbvh-alpha", number(value.value["sbvh_alpha"].get<double>())});
       if (value.value.contains("ploc_radius"))
         argv.insert(argv.end(), {"--ploc-radius", scalarFlag(value.value["ploc_radius"])});
+      if (value.value.contains("ploc_top_down"))
+        argv.insert(argv.end(), {"--ploc-top-down", scalarFlag(value.value["ploc_top_down"])});
       if (value.value.contains("morton_size_bits"))
         argv.insert(argv.end(), {"--morton-size-bits", scalarFlag(value.value["morton_size_bits"])});
       if (value.value.contains("morton_grid"))

@@ -39,6 +39,8 @@ void addTreeOptions(CLI::App& app, RenderCommand& rc) {
   app.add_option("--optimize", rc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
   app.add_option("--sbvh-alpha", rc.sbvhAlpha, "sbvh: overlap threshold for spatial splits (fraction of the root area)");
   app.add_option("--ploc-radius", rc.plocRadius, "ploc: nearest-neighbour search radius");
+  app.add_option("--ploc-top-down", rc.plocTopDown,
+                 "ploc: split the last n/F clusters top-down by binned SAH, 0..1024 (0 = cluster to the end)");
   app.add_option("--morton-size-bits", rc.mortonSizeBits,
                  "ploc, lbvh: primitive-size bits in the Morton codes, 0..9 (0 = position only)");
   app.add_option("--morton-grid", rc.mortonGrid,

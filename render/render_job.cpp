@@ -37,6 +37,9 @@ BuildOptions renderBuildOptions(const RenderCommand& cmd, OptionReview* review) 
   if (!(cmd.sbvhAlpha >= 0.0f && cmd.sbvhAlpha <= 1.0f))
     throw std::invalid_argument("--sbvh-alpha must be in 0..1 (a fraction of the root's area)");
   if (cmd.plocRadius < 1 || cmd.plocRadius > 1024) throw std::invalid_argument("--ploc-radius must be in 1..1024");
+  if (cmd.plocTopDown < 0 || cmd.plocTopDown > int(kMaxPlocTopDown))
+    throw std::invalid_argument("--ploc-top-down must be in 0.." + std::to_string(kMaxPlocTopDown) + " (got " +
+                                std::to_string(cmd.plocTopDown) + ")");
   if (cmd.mortonSizeBits < 0 || cmd.mortonSizeBits > int(kMaxMortonSizeBits))
     throw std::invalid_argument("--morton-size-bits must be in 0.." + std::to_string(kMaxMortonSizeBits) + " (got " +
                                 std::to_string(cmd.mortonSizeBits) + ")");
@@ -46,6 +49,7 @@ BuildOptions renderBuildOptions(const RenderCommand& cmd, OptionReview* review) 
   b.optimize = cmd.optimize;
   b.sbvhAlpha = cmd.sbvhAlpha;
   b.plocRadius = uint32_t(cmd.plocRadius);
+  b.plocTopDown = uint32_t(cmd.plocTopDown);
   b.mortonSizeBits = uint32_t(cmd.mortonSizeBits);
   b.mortonGrid = parseMortonGrid(cmd.mortonGrid);
   OptionReview r = reviewBuildOptions(cmd.builder, b);  // bad values throw before the input is read
@@ -123,7 +127,7 @@ std::string treeKey(const RenderCommand& c) {
     key += text;
   };
   for (const std::string& f : {c.input, c.layout, c.triangles, c.builder, std::to_string(c.leafSize), std::to_string(c.bins), c.optimize,
-                               std::to_string(c.sbvhAlpha), std::to_string(c.plocRadius), std::to_string(c.mortonSizeBits), c.mortonGrid, c.cameraPath})
+                               std::to_string(c.sbvhAlpha), std::to_string(c.plocRadius), std::to_string(c.plocTopDown), std::to_string(c.mortonSizeBits), c.mortonGrid, c.cameraPath})
     field(f);
   for (const auto& v : {c.width, c.height, c.depth}) field(v ? std::to_string(*v) : "-");
   for (const auto& v : {c.eye, c.target}) field(v ? vecText(*v) : "-");

@@ -99,6 +99,27 @@ TEST(CliOptions, MortonGridIsCheckedReportedAndWarnedAbout) {
   EXPECT_NE(r.err.find("warning: median ignores --morton-grid"), std::string::npos) << r.err;
 }
 
+TEST(CliOptions, PlocTopDownIsCheckedReportedAndWarnedAbout) {
+  // Out of range: refused before the mesh is read, naming the flag and the range.
+  for (const std::string command : {"build --mesh", "render", "trace"}) {
+    Result r = run(command + " no_such_mesh.off --builder ploc --ploc-top-down 1025");
+    EXPECT_NE(r.code, 0) << command;
+    EXPECT_NE(r.err.find("--ploc-top-down must be in 0..1024 (got 1025)"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("no_such_mesh"), std::string::npos) << r.err;
+  }
+  const fs::path mesh = gridMesh();
+  Result r = run("build --mesh " + mesh.string() + " --builder ploc --ploc-top-down 4 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+  EXPECT_EQ(json::parse(r.out)["ploc_top_down"], 4);
+  r = run("build --mesh " + mesh.string() + " --builder ploc --json");  // the default: cluster to the end
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out)["ploc_top_down"], 0);
+  r = run("build --mesh " + mesh.string() + " --builder lbvh --ploc-top-down 4 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: lbvh ignores --ploc-top-down"), std::string::npos) << r.err;
+}
+
 TEST(CliOptions, IgnoredBinsAndCappedLeavesWarnAndTheJsonSaysWhatWasUsed) {
   const fs::path mesh = gridMesh();
   Result r = run("build --mesh " + mesh.string() + " --builder median --bins 16 --json");

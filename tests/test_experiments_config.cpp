@@ -185,8 +185,9 @@ leaf_sizes = [1, 4]
 TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
   const fs::path dir = fs::path(BVHLAB_SOURCE_DIR) / "experiments" / "configs";
   std::map<std::string, size_t> expectedRuns = {
-      {"quick.toml", 56},      {"seed-figures.toml", 18}, {"builders.toml", 1810}, {"accuracy-vs-time.toml", 30},
-      {"antialiasing.toml", 16}, {"flythrough.toml", 15}, {"large.toml", 2}, {"bench.toml", 400}};
+      {"quick.toml", 56},      {"seed-figures.toml", 18}, {"builders.toml", 1990}, {"accuracy-vs-time.toml", 30},
+      {"antialiasing.toml", 16}, {"flythrough.toml", 15}, {"large.toml", 2}, {"bench.toml", 400},
+      {"morton-grid.toml", 20}, {"ploc-top-down.toml", 12}, {"storage.toml", 15}};
   // layouts.toml sweeps `layouts = "all"`: (3 scenes x 2 workloads + the report scene + the bunny's diffuse
   // rays with indexed triangles) per registered layout.
   expectedRuns["layouts.toml"] = 8 * layouts().size();
@@ -293,6 +294,29 @@ builders = [{ name = "ploc", morton_grid = "axes" }, "ploc"]
     EXPECT_NE(std::string(e.what()).find("cfg.toml:3"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("morton_grid"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("axes"), std::string::npos) << e.what();
+  }
+}
+
+// A builder table's ploc_top_down reaches the render command line and the label; out of range is
+// refused with the file, line and key.
+TEST_F(Experiments, BuilderTableCarriesPlocTopDown) {
+  writeText(root / "m.off", "OFF\n0 0 0\n");
+  const ExperimentConfig cfg = parse(R"(
+[axes]
+scenes = "m.off"
+builders = [{ name = "ploc", ploc_top_down = 4 }, "ploc"]
+)");
+  ASSERT_EQ(cfg.runs.size(), 2u);
+  const std::string line = shellQuote(renderCommandLine("/bin/bvhlab", RunRequest{cfg.runs[0], root / "i.png", root / "v.png", "", ""}));
+  EXPECT_NE(line.find("--builder ploc --ploc-top-down 4"), std::string::npos) << line;
+  EXPECT_EQ(cfg.runs[0].axis("builder")->label, "ploc[top-down=4]");
+  EXPECT_EQ(cfg.runs[1].axis("builder")->label, "ploc");
+  try {
+    parse("[axes]\nscenes = 'm.off'\nbuilders = { name = 'ploc', ploc_top_down = 2000 }\n");
+    ADD_FAILURE() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cfg.toml:3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("ploc_top_down"), std::string::npos) << e.what();
   }
 }
 

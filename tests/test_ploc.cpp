@@ -339,6 +339,77 @@ TEST(Ploc, SahNearSahBinnedOnTheBunny) {
   EXPECT_LE(sah("ploc", bunny, withRadius(16)), 1.12 * sah("sah-binned", bunny, {}));
 }
 
+BuildOptions withTopDown(uint32_t fraction, uint32_t threads = 0, uint32_t leafSize = 4) {
+  BuildOptions options = withRadius(16, threads, leafSize);
+  options.plocTopDown = fraction;
+  return options;
+}
+
+// PLOC with an SAH top (BuildOptions::plocTopDown): the same tree for any thread count, every
+// primitive once, and a fraction above the primitive count leaves nothing to the top: plain PLOC.
+TEST(Ploc, TopDownSameTreeForAnyThreadCount) {
+  for (const PrimitiveSet& set : {testing::randomSoup(60000, 11), testing::sphereSoup(200, 150, 0.2f)}) {
+    SCOPED_TRACE(set.name);
+    for (uint32_t fraction : {2u, 4u, 64u}) {
+      const Bvh one = buildBvh("ploc", set.input(), withTopDown(fraction, 1));
+      EXPECT_FALSE(testing::identical(one, buildBvh("ploc", set.input(), withTopDown(0, 1))))
+          << "top-down " << fraction << " built plain PLOC's tree";
+      for (uint32_t threads : {2u, 8u})
+        EXPECT_TRUE(testing::identical(one, buildBvh("ploc", set.input(), withTopDown(fraction, threads))))
+            << "top-down " << fraction << ", " << threads << " threads";
+    }
+  }
+}
+
+TEST(Ploc, TopDownReferencesEveryPrimitiveOnce) {
+  PrimitiveSet clumps = testing::randomSoup(3000, 5);  // plus exact duplicates and shared centroids
+  for (size_t i = 0; i < 1000; ++i) clumps.addBox(clumps.boxes[i], clumps.centroids[i]);
+  for (const PrimitiveSet& set : {testing::randomSoup(20000, 4), clumps, testing::planeSoup(5000)})
+    for (uint32_t leafSize : {1u, 4u, 16u})
+      for (uint32_t fraction : {1u, 4u, 1024u}) {
+        SCOPED_TRACE(set.name + " leaf " + std::to_string(leafSize) + " top-down " + std::to_string(fraction));
+        const Bvh bvh = buildBvh("ploc", set.input(), withTopDown(fraction, 0, leafSize));
+        ASSERT_EQ(bvh.primIndices.size(), set.size());
+        const Walk w = walk(bvh, set.size());
+        EXPECT_EQ(w.leafEntries, set.size());
+        EXPECT_EQ(std::count(w.references.begin(), w.references.end(), 1), ptrdiff_t(set.size()));
+        auto contains = [](const Aabb& outer, const Aabb& inner) {
+          return glm::all(glm::lessThanEqual(outer.min, inner.min)) && glm::all(glm::greaterThanEqual(outer.max, inner.max));
+        };
+        size_t outside = 0;  // children or primitives outside their node's box
+        for (const BvhNode& node : bvh.nodes)
+          if (node.isLeaf())
+            for (uint32_t k = node.first; k < node.first + node.count; ++k)
+              outside += !contains(node.bounds, set.boxes[bvh.primIndices[k]]);
+          else
+            outside += !contains(node.bounds, bvh.nodes[node.left].bounds) + !contains(node.bounds, bvh.nodes[node.right].bounds);
+        EXPECT_EQ(outside, 0u);
+      }
+}
+
+TEST(Ploc, TopDownAboveThePrimitiveCountIsPlainPloc) {
+  const PrimitiveSet set = testing::randomSoup(1000, 3);  // n / 1024 = 0: no cluster is left to the top
+  EXPECT_TRUE(testing::identical(buildBvh("ploc", set.input(), withTopDown(1024)), buildBvh("ploc", set.input(), withTopDown(0))));
+  try {
+    buildBvh("ploc", set.input(), withTopDown(1025));
+    FAIL() << "top-down 1025 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("plocTopDown 1025 is outside 0..1024"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Ploc, TopDownBringsTheSahWithin5PercentOfSahBinnedOnTheBunny) {
+  // Measured (leaf 4, vertex-mean centroids as here): plain PLOC 1.098x sah-binned's SAH, with the
+  // last n/4 clusters split by binned SAH 1.035x (issue 15's target: 1.05x). The SAH top recovers
+  // what PLOC loses in the upper levels (docs/builders.md).
+  const PrimitiveSet bunny = testing::loadTriangles(testing::bunnyPath());
+  if (bunny.size() == 0) GTEST_SKIP() << testing::bunnyPath() << " is missing: run `bash datasets/fetch.sh`";
+  const double binned = sah("sah-binned", bunny, {}), plain = sah("ploc", bunny, withTopDown(0)),
+               top = sah("ploc", bunny, withTopDown(4));
+  EXPECT_LE(top, 1.05 * binned);
+  EXPECT_LT(top, 0.97 * plain);
+}
+
 TEST(Ploc, EqualBoxesPairUpInsteadOfChaining) {
   // 4096 equal boxes on a line, equally spaced: every merged area ties with the next. The tie rule
   // pairs (2k, 2k+1) each pass, so the tree is perfectly balanced (a chain would be 4096 deep).

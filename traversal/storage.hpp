@@ -1,4 +1,4 @@
-// storage.hpp — C++ mirror of storage_tbo.glsl and storage_tex2d.glsl. Both GLSL storage kinds
+// storage.hpp — C++ mirror of storage_tbo.glsl, storage_tex2d.glsl and storage_ssbo.glsl. Every GLSL storage kind
 // return texel i of a stream; the mirror reads the PackedBvh's streams directly. A texel out of
 // range throws std::out_of_range here (a kernel bug), where GLSL would read an undefined texel.
 #pragma once

@@ -19,7 +19,9 @@
 // interval needs 6 or more repetitions, hence the default of 7); then issue 15's target lines per mesh:
 // sah-binned with 1 thread vs embree-raw with 2 threads (paired the same way), sbvh's SAH and ploc's
 // SAH and time against sah-binned's (the SAH targets were set on scans, but their anchors come from
-// architectural scenes: the ship and the interior are that class here).
+// architectural scenes: the ship and the interior are that class here). One more row, "ploc[top-down=F]",
+// is ploc with an SAH top (BuildOptions::plocTopDown = F, 4 unless --ploc-top-down=F says otherwise; 0:
+// no such row), with its own target line.
 //
 // --curve runs the accuracy curve of sah-binned's bin count instead (issue 15: what accuracy costs in
 // time): bins in kCurveBins on the bunny, the elephant, the armadillo and makeLargeMesh(1M), 1 and 2
@@ -30,7 +32,7 @@
 // timing: SAH, EPO (builders/epo.hpp) and the ray cost (node visits + triangle tests per ray, Ct =
 // Ci = 1) of closest-hit rays traversed front to back on the CPU here, against the registered
 // `embree` builder's tree (MEDIUM, the same build embree-raw times).
-//   bench_builders [--reps=N] [--curve] [--benchmark_filter=...]   (meshes: `bash datasets/fetch.sh`)
+//   bench_builders [--reps=N] [--curve] [--ploc-top-down=F] [--benchmark_filter=...]   (meshes: `bash datasets/fetch.sh`)
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -238,12 +240,13 @@ void embreeRaw(benchmark::State& state, MeshFn mesh, unsigned threads) {
 
 // ---- every registered builder ---------------------------------------------------------------------
 
-void buildWith(benchmark::State& state, std::string builder, MeshFn mesh, uint32_t threads) {
+void buildWith(benchmark::State& state, std::string builder, MeshFn mesh, uint32_t threads, uint32_t plocTopDown = 0) {
   const PrimitiveSet* set = &mesh();
   if (set->size() == 0) return state.SkipWithError("mesh missing: run `bash datasets/fetch.sh`");
   BuildOptions options;
   options.maxLeafSize = kLeafSize;
   options.threads = threads;
+  options.plocTopDown = plocTopDown;
   const BuildInput input = set->inputWithTriangles();  // builders that clip (sbvh) get the triangles
   validateBuildInput(input, options);  // once, outside the timed loop (buildBvh does it per call)
   const BuilderInfo& info = findBuilder(builder);
@@ -408,10 +411,15 @@ int main(int argc, char** argv) {
   // repetitions see the same drift).
   int reps = 7;  // 6 or more for a 95% interval of a median (paired ratios)
   bool interleaving = false, curve = false;
+  uint32_t plocTopDown = 4;  // the extra ploc row: `--ploc-top-down 4` (0: no such row)
   std::vector<char*> args;
   for (int i = 0; i < argc; ++i) {
     if (std::strncmp(argv[i], "--reps=", 7) == 0) {
       reps = std::max(1, std::atoi(argv[i] + 7));
+      continue;
+    }
+    if (std::strncmp(argv[i], "--ploc-top-down=", 16) == 0) {
+      plocTopDown = uint32_t(std::max(0, std::atoi(argv[i] + 16)));
       continue;
     }
     if (std::strcmp(argv[i], "--curve") == 0) {
@@ -450,12 +458,16 @@ int main(int argc, char** argv) {
       const std::string suffix = "/" + meshName + "/threads:" + std::to_string(threads);
       if (threads == 2) configure(benchmark::RegisterBenchmark(("embree-raw" + suffix).c_str(), embreeRaw, set, threads));
       for (const BuilderInfo& info : builders())
-        configure(benchmark::RegisterBenchmark((info.name + suffix).c_str(), buildWith, info.name, set, threads));
+        configure(benchmark::RegisterBenchmark((info.name + suffix).c_str(), buildWith, info.name, set, threads, 0u));
+      // PLOC with an SAH top: the last n/4 clusters split by binned SAH (BuildOptions::plocTopDown).
+      if (plocTopDown)
+        configure(benchmark::RegisterBenchmark((bench::plocTopDownRow(plocTopDown) + suffix).c_str(), buildWith, "ploc",
+                                               set, threads, plocTopDown));
     }
   }
   benchmark::Initialize(&count, args.data());
   if (benchmark::ReportUnrecognizedArguments(count, args.data())) return 1;
-  bench::RatioReporter reporter(curve);
+  bench::RatioReporter reporter(curve, plocTopDown);
   benchmark::RunSpecifiedBenchmarks(&reporter);
   benchmark::Shutdown();
 }

@@ -22,13 +22,16 @@
 
 namespace bvhlab::bench {
 
+// The name of the row of ploc with an SAH top (`--ploc-top-down F`).
+inline std::string plocTopDownRow(uint32_t fraction) { return "ploc[top-down=" + std::to_string(fraction) + "]"; }
+
 // sah-binned's bin counts on the bins curve (--curve).
 constexpr uint32_t kCurveBins[] = {8, 12, 16, 24, 32, 48, 64, 128};
 
 // Console output as usual (aggregates only), plus a table per mesh at the end, from the medians.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
-  explicit RatioReporter(bool curve) : curve_(curve) {}
+  RatioReporter(bool curve, uint32_t plocTopDown) : curve_(curve), plocTopDownRow_(plocTopDownRow(plocTopDown)) {}
   void ReportRuns(const std::vector<Run>& runs) override {
     std::vector<Run> aggregates;  // the console shows these; the repetitions feed the paired ratios
     for (const Run& run : runs)
@@ -111,13 +114,15 @@ class RatioReporter : public benchmark::ConsoleReporter {
       auto verdict = [](double v, double limit) { return v != v ? "-" : v <= limit ? "met" : "not met"; };
       const Result* sbvh = find(m, "sbvh");
       const Result* ploc = find(m, "ploc");
-      if (!sbvh && !ploc) continue;
+      const Result* plocTop = find(m, plocTopDownRow_);
+      if (!sbvh && !ploc && !plocTop) continue;
       std::printf("  %-10s", m.c_str());
       if (sbvh) std::printf(" sbvh SAH %.4f (%s)  ", sahRatio(sbvh), verdict(sahRatio(sbvh), 0.92));
-      if (ploc)
-        std::printf(" ploc SAH %.4f (%s), ploc / sah-binned time, paired: 1 thread %s, 2 threads %s", sahRatio(ploc),
-                    verdict(sahRatio(ploc), 1.05), paired(ploc->rounds[0], binned->rounds[0]).c_str(),
-                    paired(ploc->rounds[1], binned->rounds[1]).c_str());
+      for (const auto& [row, name] : {std::pair{ploc, "ploc"}, std::pair{plocTop, plocTopDownRow_.c_str()}})
+        if (row)
+          std::printf("\n  %-10s %s SAH %.4f (%s), / sah-binned time, paired: 1 thread %s, 2 threads %s", "", name,
+                      sahRatio(row), verdict(sahRatio(row), 1.05), paired(row->rounds[0], binned->rounds[0]).c_str(),
+                      paired(row->rounds[1], binned->rounds[1]).c_str());
       std::printf("\n");
     }
   }
@@ -176,6 +181,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
     }
   }
   bool curve_ = false;
+  std::string plocTopDownRow_;
   const Result* find(const std::string& mesh, const std::string& builder) const {
     const auto it = results_.find({mesh, builder});
     return it == results_.end() ? nullptr : &it->second;
