@@ -508,7 +508,7 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
     topOptions.cost = options.cost;
     topOptions.threads = options.threads;
     const Bvh top = buildBvh("sah-binned", BuildInput{boxes, centres}, topOptions);
-    uint32_t free = m - 1;
+    uint32_t nextFree = m - 1;  // one past the next index to give
     std::vector<uint32_t> made(top.nodes.size());  // top's node -> the full tree's
     std::vector<std::pair<uint32_t, bool>> stack{{0u, false}};  // (node, children made)
     while (!stack.empty()) {
@@ -525,7 +525,7 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
         const uint32_t l = made[t.left], r = made[t.right];
         Aabb box = full[l].node.bounds;
         box.grow(full[r].node.bounds);
-        made[i] = --free;
+        made[i] = --nextFree;
         makeInner(made[i], l, r, box, full[l].info, full[r].info);
       }
     }
