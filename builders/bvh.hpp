@@ -118,6 +118,8 @@ constexpr uint32_t kMaxLeafSize = 255;  // the packed node stores a leaf count i
 constexpr uint32_t kMaxMortonSizeBits = 9;
 // BuildOptions::plocTopDown: a divisor of the primitive count (the measured range is 2..64).
 constexpr uint32_t kMaxPlocTopDown = 1024;
+// BuildOptions::plocRadius: 1..kMaxPlocRadius (the search costs O(radius) per cluster and pass).
+constexpr uint32_t kMaxPlocRadius = 1024;
 
 // SAH cost of a built tree with the given model (recomputed from the tree, not trusted from a builder).
 double sahCost(const Bvh& bvh, const CostModel& cost);

@@ -60,7 +60,7 @@ namespace bvhlab {
 namespace {
 
 // The CLI's range too (app/, render/, experiments/): the search costs O(radius) per cluster and pass.
-constexpr uint32_t kMaxRadius = 1024;
+constexpr uint32_t kMaxRadius = kMaxPlocRadius;
 // Clusters per job. Fixed (never derived from the thread count); chunks only split the work, no
 // cluster's neighbour depends on them. A job also searches for the radius clusters on either side
 // (to see which of its own are mutual) and needs the merged areas of the radius before those:

@@ -36,7 +36,8 @@ BuildOptions renderBuildOptions(const RenderCommand& cmd, OptionReview* review) 
   if (cmd.bins < 0) throw std::invalid_argument("--bins must be >= 0 (0 = the builder's default)");
   if (!(cmd.sbvhAlpha >= 0.0f && cmd.sbvhAlpha <= 1.0f))
     throw std::invalid_argument("--sbvh-alpha must be in 0..1 (a fraction of the root's area)");
-  if (cmd.plocRadius < 1 || cmd.plocRadius > 1024) throw std::invalid_argument("--ploc-radius must be in 1..1024");
+  if (cmd.plocRadius < 1 || cmd.plocRadius > int(kMaxPlocRadius))
+    throw std::invalid_argument("--ploc-radius must be in 1.." + std::to_string(kMaxPlocRadius));
   if (cmd.plocTopDown < 0 || cmd.plocTopDown > int(kMaxPlocTopDown))
     throw std::invalid_argument("--ploc-top-down must be in 0.." + std::to_string(kMaxPlocTopDown) + " (got " +
                                 std::to_string(cmd.plocTopDown) + ")");

@@ -21,7 +21,8 @@
 // SAH and time against sah-binned's (the SAH targets were set on scans, but their anchors come from
 // architectural scenes: the ship and the interior are that class here). One more row, "ploc[top-down=F]",
 // is ploc with an SAH top (BuildOptions::plocTopDown = F, 4 unless --ploc-top-down=F says otherwise; 0:
-// no such row), with its own target line.
+// no such row) and the search radius --ploc-radius=R (16, the builder's default, unless given), with
+// its own target line; the plain ploc row keeps the default radius.
 //
 // --curve runs the accuracy curve of sah-binned's bin count instead (issue 15: what accuracy costs in
 // time): bins in kCurveBins on the bunny, the elephant, the armadillo and makeLargeMesh(1M), 1 and 2
@@ -32,7 +33,7 @@
 // timing: SAH, EPO (builders/epo.hpp) and the ray cost (node visits + triangle tests per ray, Ct =
 // Ci = 1) of closest-hit rays traversed front to back on the CPU here, against the registered
 // `embree` builder's tree (MEDIUM, the same build embree-raw times).
-//   bench_builders [--reps=N] [--curve] [--ploc-top-down=F] [--benchmark_filter=...]   (meshes: `bash datasets/fetch.sh`)
+//   bench_builders [--reps=N] [--curve] [--ploc-top-down=F] [--ploc-radius=R] [--benchmark_filter=...]   (meshes: `bash datasets/fetch.sh`)
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -240,13 +241,15 @@ void embreeRaw(benchmark::State& state, MeshFn mesh, unsigned threads) {
 
 // ---- every registered builder ---------------------------------------------------------------------
 
-void buildWith(benchmark::State& state, std::string builder, MeshFn mesh, uint32_t threads, uint32_t plocTopDown = 0) {
+void buildWith(benchmark::State& state, std::string builder, MeshFn mesh, uint32_t threads, uint32_t plocTopDown = 0,
+               uint32_t plocRadius = 0) {
   const PrimitiveSet* set = &mesh();
   if (set->size() == 0) return state.SkipWithError("mesh missing: run `bash datasets/fetch.sh`");
   BuildOptions options;
   options.maxLeafSize = kLeafSize;
   options.threads = threads;
   options.plocTopDown = plocTopDown;
+  if (plocRadius) options.plocRadius = plocRadius;
   const BuildInput input = set->inputWithTriangles();  // builders that clip (sbvh) get the triangles
   validateBuildInput(input, options);  // once, outside the timed loop (buildBvh does it per call)
   const BuilderInfo& info = findBuilder(builder);
@@ -412,6 +415,7 @@ int main(int argc, char** argv) {
   int reps = 7;  // 6 or more for a 95% interval of a median (paired ratios)
   bool interleaving = false, curve = false;
   uint32_t plocTopDown = 4;  // the extra ploc row: `--ploc-top-down 4` (0: no such row)
+  uint32_t plocRadius = BuildOptions{}.plocRadius;  // and its search radius
   std::vector<char*> args;
   for (int i = 0; i < argc; ++i) {
     if (std::strncmp(argv[i], "--reps=", 7) == 0) {
@@ -420,6 +424,15 @@ int main(int argc, char** argv) {
     }
     if (std::strncmp(argv[i], "--ploc-top-down=", 16) == 0) {
       plocTopDown = uint32_t(std::max(0, std::atoi(argv[i] + 16)));
+      continue;
+    }
+    if (std::strncmp(argv[i], "--ploc-radius=", 14) == 0) {
+      const int r = std::atoi(argv[i] + 14);
+      if (r < 1 || r > int(kMaxPlocRadius)) {
+        std::fprintf(stderr, "bench_builders: --ploc-radius=%s: expected 1..%u\n", argv[i] + 14, kMaxPlocRadius);
+        return 2;
+      }
+      plocRadius = uint32_t(r);
       continue;
     }
     if (std::strcmp(argv[i], "--curve") == 0) {
@@ -458,16 +471,16 @@ int main(int argc, char** argv) {
       const std::string suffix = "/" + meshName + "/threads:" + std::to_string(threads);
       if (threads == 2) configure(benchmark::RegisterBenchmark(("embree-raw" + suffix).c_str(), embreeRaw, set, threads));
       for (const BuilderInfo& info : builders())
-        configure(benchmark::RegisterBenchmark((info.name + suffix).c_str(), buildWith, info.name, set, threads, 0u));
+        configure(benchmark::RegisterBenchmark((info.name + suffix).c_str(), buildWith, info.name, set, threads, 0u, 0u));
       // PLOC with an SAH top: the last n/4 clusters split by binned SAH (BuildOptions::plocTopDown).
       if (plocTopDown)
-        configure(benchmark::RegisterBenchmark((bench::plocTopDownRow(plocTopDown) + suffix).c_str(), buildWith, "ploc",
-                                               set, threads, plocTopDown));
+        configure(benchmark::RegisterBenchmark((bench::plocTopDownRow(plocTopDown, plocRadius) + suffix).c_str(),
+                                               buildWith, "ploc", set, threads, plocTopDown, plocRadius));
     }
   }
   benchmark::Initialize(&count, args.data());
   if (benchmark::ReportUnrecognizedArguments(count, args.data())) return 1;
-  bench::RatioReporter reporter(curve, plocTopDown);
+  bench::RatioReporter reporter(curve, plocTopDown, plocRadius);
   benchmark::RunSpecifiedBenchmarks(&reporter);
   benchmark::Shutdown();
 }

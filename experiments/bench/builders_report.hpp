@@ -22,8 +22,12 @@
 
 namespace bvhlab::bench {
 
-// The name of the row of ploc with an SAH top (`--ploc-top-down F`).
-inline std::string plocTopDownRow(uint32_t fraction) { return "ploc[top-down=" + std::to_string(fraction) + "]"; }
+// The name of the row of ploc with an SAH top (`--ploc-top-down F`), and its radius where it is not
+// the builder's default.
+inline std::string plocTopDownRow(uint32_t fraction, uint32_t radius) {
+  const std::string r = radius == BuildOptions{}.plocRadius ? "" : ",radius=" + std::to_string(radius);
+  return "ploc[top-down=" + std::to_string(fraction) + r + "]";
+}
 
 // sah-binned's bin counts on the bins curve (--curve).
 constexpr uint32_t kCurveBins[] = {8, 12, 16, 24, 32, 48, 64, 128};
@@ -31,7 +35,8 @@ constexpr uint32_t kCurveBins[] = {8, 12, 16, 24, 32, 48, 64, 128};
 // Console output as usual (aggregates only), plus a table per mesh at the end, from the medians.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
-  RatioReporter(bool curve, uint32_t plocTopDown) : curve_(curve), plocTopDownRow_(plocTopDownRow(plocTopDown)) {}
+  RatioReporter(bool curve, uint32_t plocTopDown, uint32_t plocRadius)
+      : curve_(curve), plocTopDownRow_(plocTopDownRow(plocTopDown, plocRadius)) {}
   void ReportRuns(const std::vector<Run>& runs) override {
     std::vector<Run> aggregates;  // the console shows these; the repetitions feed the paired ratios
     for (const Run& run : runs)
