@@ -32,6 +32,16 @@ fs::path tempDir() {
   return d;
 }
 
+// Removes tempDir() when the test program ends (ctest runs each test in a process of its own, so
+// each would otherwise leave a directory behind).
+struct RemoveTempDir : ::testing::Environment {
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(fs::temp_directory_path() / ("bvhlab_test_viewer_" + std::to_string(::getpid())), ec);
+  }
+};
+[[maybe_unused]] ::testing::Environment* const kRemoveTempDir = ::testing::AddGlobalTestEnvironment(new RemoveTempDir);
+
 void writeFile(const fs::path& p, const std::string& text) {
   std::ofstream(p) << text;
 }
