@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <random>
 
 #include <nlohmann/json.hpp>
@@ -69,7 +70,8 @@ void addTraceOptions(CLI::App& app, TraceCommand& c, RenderCliText& text) {
   app.add_option("--warmup", rc.warmup, "untimed rounds first (llvmpipe compiles at the first dispatch)");
   app.add_option("--backend", rc.backend, "osmesa | egl");
   addTreeOptions(app, rc);
-  app.add_option("--robust", rc.robust, "triangle/box tests as render --robust (the offset is the generator's)");
+  app.add_option("--robust", rc.robust,
+                 "triangle/box tests as render --robust (the offset is the generator's); Embree runs in robust mode with watertight triangles, in its default mode with fast ones");
   app.add_option("--max-frames", c.maxFrames, "go on past --frames until --target-ci-pct is met, up to this many (0 = fixed)");
   app.add_option("--target-ci-pct", c.targetCiPct, "stop when the GLSL time's 95% interval is within +-this % of its median");
   app.add_option("--max-seconds", c.maxSeconds, "stop the rounds after this long (0 = no limit)");
@@ -93,7 +95,15 @@ int runTrace(const TraceCommand& c) {
   const TriangleSoup& soup = prepared->soup;
   if (soup.size() == 0) throw InputError(rc.input + ": no triangles to trace rays against");
 
-  EmbreeTracer embree(soup, c.embreeThreads);
+  // The workload's secondary rays start from Embree's robust-mode hits whatever --robust says, so
+  // every setting traces the same rays; the yardstick then runs Embree in the mode that matches the
+  // kernel's triangle test (robust against watertight, its default test against the fast one: each
+  // costs its tracer about the same, docs/layouts.md), a second scene only when they differ.
+  EmbreeTracer generator(soup, c.embreeThreads);
+  const bool embreeRobust = setup.shader.robust.triangle == TriangleTest::Watertight;
+  std::optional<EmbreeTracer> matching;
+  if (!embreeRobust) matching.emplace(soup, c.embreeThreads, false);
+  const EmbreeTracer& embree = matching ? *matching : generator;
   WorkloadRequest req;
   req.workload = workload;
   req.count = c.count;
@@ -101,9 +111,9 @@ int runTrace(const TraceCommand& c) {
   req.aoRadius = c.aoRadius;
   req.width = prepared->scene.settings.width;
   req.height = prepared->scene.settings.height;
-  const RayWorkload rays = generateWorkload(req, prepared->scene, soup, [&embree](const std::vector<BatchRay>& r) {
+  const RayWorkload rays = generateWorkload(req, prepared->scene, soup, [&generator](const std::vector<BatchRay>& r) {
     std::vector<BatchHit> hits;
-    embree.closest(r, hits);
+    generator.closest(r, hits);
     return hits;
   });
   const bool anyHit = isAnyHit(workload);
@@ -210,6 +220,7 @@ int runTrace(const TraceCommand& c) {
   j["embree_mrays_per_s"] = eMs > 0 ? n / (eMs * 1e3) : 0.0;
   j["embree_threads"] = embree.threads();
   j["embree_build_ms"] = embree.buildMs();
+  j["embree_robust"] = embree.robust();
   j["ratio_to_embree"] = ratio ? nlohmann::json(ratio->estimate) : nlohmann::json(eMs > 0 ? ms / eMs : 0.0);
   j["ratio_ci_low"] = orNull(ratio, false);
   j["ratio_ci_high"] = orNull(ratio, true);

@@ -139,8 +139,9 @@ TEST(TraceWorkloads, DiffuseDirectionsAreCosineDistributed) {
     const double critical = 1.95 / std::sqrt(double(n));
     EXPECT_LT(ks(cos2), critical) << workloadName(kind) << ": cos^2(theta) is not uniform";
     EXPECT_LT(ks(phi), critical) << workloadName(kind) << ": the azimuth is not uniform";
-    if (kind == Workload::Ao)
+    if (kind == Workload::Ao) {
       for (const BatchRay& r : w.rays) ASSERT_EQ(r.tMax, w.aoDistance);
+    }
   }
 }
 
@@ -344,6 +345,16 @@ TEST(TraceCli, JsonHasTheIssueKeys) {
   EXPECT_GT(j["ms"].get<double>(), 0.0);
   EXPECT_GT(j["embree_ms"].get<double>(), 0.0);
   EXPECT_FALSE(j["ratio_ci_low"].is_null());  // 6 rounds: an interval exists
+  EXPECT_EQ(j["embree_robust"], true);         // watertight triangles (the default): Embree's robust mode
+
+  // The fast triangle test is timed against Embree's default (non-robust) mode, on the same rays.
+  r = clitest::run("trace " + input + " --rays diffuse --json --count 3000 --frames 1 --warmup 0 --robust fast");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json fast = nlohmann::json::parse(r.out);
+  EXPECT_EQ(fast["embree_robust"], false);
+  EXPECT_EQ(fast["robust"], "fast");
+  EXPECT_EQ(fast["rays"], 3000);
+  EXPECT_GT(fast["embree_ms"].get<double>(), 0.0);
 
   r = clitest::run("trace " + input + " --rays sideways");
   EXPECT_NE(r.code, 0);

@@ -59,14 +59,15 @@ double parallelRays(size_t n, unsigned threads, const Body& body) {
 
 }  // namespace
 
-EmbreeTracer::EmbreeTracer(const TriangleSoup& soup, unsigned threads) : impl_(std::make_unique<Impl>()) {
+EmbreeTracer::EmbreeTracer(const TriangleSoup& soup, unsigned threads, bool robust)
+    : impl_(std::make_unique<Impl>()), robust_(robust) {
   threads_ = threads ? threads : std::max(1u, std::thread::hardware_concurrency());
   const auto start = Clock::now();
   const std::string config = "threads=" + std::to_string(threads_);
   impl_->device = rtcNewDevice(config.c_str());
   if (!impl_->device) throw std::runtime_error("embree: rtcNewDevice failed");
   impl_->scene = rtcNewScene(impl_->device);
-  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneFlags(impl_->scene, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_MEDIUM);
   RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
   const size_t n = soup.size();
