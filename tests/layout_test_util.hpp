@@ -58,10 +58,10 @@ inline const std::vector<TestMesh>& testMeshes() {
   return meshes;
 }
 
-inline Bvh build(const std::string& builder, const TriangleSoup& soup) {
+inline Bvh build(const std::string& builder, const TriangleSoup& soup, const BuildOptions& options = {}) {
   const std::vector<Aabb> boxes = triangleBoxes(soup);
   const std::vector<glm::vec3> centroids = triangleCentroids(soup);
-  return buildBvh(builder, BuildInput{boxes, centroids, soup.v0, soup.v1, soup.v2}, BuildOptions{});
+  return buildBvh(builder, BuildInput{boxes, centroids, soup.v0, soup.v1, soup.v2}, options);
 }
 
 // One leaf holding every triangle (at most kMaxLeafSize): the tree whose root is a leaf.

@@ -107,7 +107,9 @@ void checkBvh2cb(const PackedBvh& p, const PackedBvh& v1, const TriangleSoup& so
       const Aabb box{s.bmin, s.bmax};
       if (s.isInner()) {
         ASSERT_LT(s.link, records);
-        if (c == 0) EXPECT_EQ(s.link, index + 1) << "child A's record follows its parent's";
+        if (c == 0) {
+          EXPECT_EQ(s.link, index + 1) << "child A's record follows its parent's";
+        }
         ASSERT_EQ(reached[s.link]++, 0) << "record " << s.link << " reached twice";
         const Bvh2cbRecord child = unpackBvh2cbRecord(p, s.link);
         for (const Bvh2cbSlot& g : child.child) EXPECT_TRUE(box.contains(Aabb{g.bmin, g.bmax})) << "record " << s.link;
@@ -137,7 +139,9 @@ void checkBvh2cb(const PackedBvh& p, const PackedBvh& v1, const TriangleSoup& so
   const std::vector<Aabb> triBoxes = triangleBoxes(soup);
   for (uint32_t t = 0; t < soup.size(); ++t)
     EXPECT_TRUE(leafUnion[t].contains(triBoxes[t])) << "triangle " << t << " outside its leaves' boxes";
-  if (records > 1) EXPECT_EQ(maxDepth, p.depth);
+  if (records > 1) {
+    EXPECT_EQ(maxDepth, p.depth);
+  }
   EXPECT_EQ(p.nodes.size(), size_t(kBvh2cbRecordTexels) * records);
 }
 
@@ -161,7 +165,8 @@ TEST(Bvh2cbPacker, EveryBuildersTreeKeepsTheInvariants) {
 }
 
 // Every builder x layout x kernel of that layout (watertight tests) finds brute force's closest hit
-// (the same t; another triangle only at the same t) and its any-hit answer, on every ray.
+// (the same t; another triangle only at the same t) and its any-hit answer, on every ray; PLOC with
+// an SAH top (--ploc-top-down 4) as one more builder.
 TEST(LayoutKernels, EveryBuilderLayoutAndKernelFindTheBruteForceHits) {
   for (const TestMesh& m : testMeshes()) {
     const std::vector<BatchRay> rays = testRays(m.soup, 600, 5);
@@ -172,6 +177,9 @@ TEST(LayoutKernels, EveryBuilderLayoutAndKernelFindTheBruteForceHits) {
     EXPECT_GT(hits, rays.size() / 5) << m.name;
     std::vector<std::pair<std::string, Bvh>> trees;
     for (const BuilderInfo& b : builders()) trees.emplace_back(b.name, build(b.name, m.soup));
+    BuildOptions topDown;
+    topDown.plocTopDown = 4;
+    trees.emplace_back("ploc[top-down=4]", build("ploc", m.soup, topDown));
     for (const auto& [builder, bvh] : trees)
       for (const LayoutInfo& l : layouts()) {
         const PackedBvh packed = l.pack(bvh, m.soup);
