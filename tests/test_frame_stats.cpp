@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "experiments/bench/across_processes.hpp"
 #include "render/frame_stats.hpp"
 
 using namespace bvhlab;
@@ -69,7 +70,9 @@ TEST(FrameStats, MedianIntervalCoversTheTrueMedianAtLeast95PercentOfTheTime) {
     EXPECT_LE(rate, 0.99) << "n = " << n;
     // Normal theory: 2 * 1.96 * 1.2533 * 0.1 / sqrt(60) = 6.3% of the median; order statistics are a
     // little wider (conservative ranks).
-    if (n == 60) EXPECT_LT(width / trials, 0.08) << "a 60-frame interval of a 10% spread should be ~6-7%";
+    if (n == 60) {
+      EXPECT_LT(width / trials, 0.08) << "a 60-frame interval of a 10% spread should be ~6-7%";
+    }
   }
 }
 
@@ -153,4 +156,53 @@ TEST(FrameStats, SpearmanRanksWithTiesAndRefusesWhatItCannotRank) {
   EXPECT_FALSE(spearman(std::vector<double>{1, 2}, std::vector<double>{1, 2}).has_value());
   EXPECT_FALSE(spearman(std::vector<double>{1, 1, 1}, std::vector<double>{1, 2, 3}).has_value());
   EXPECT_FALSE(spearman(std::vector<double>{1, std::nan(""), 3}, std::vector<double>{1, 2, 3}).has_value());
+}
+
+// bench_builders --processes: a paired-ratio line survives the round trip exactly, malformed ones are
+// refused, and the processes' estimates combine into the median with its order-statistic interval.
+TEST(AcrossProcesses, LinesRoundTripAndBadOnesAreRefused) {
+  const bench::PairedLine p{"bunny", "ploc[top-down=4] t(1)", "sah-binned t(1)", 1.0123456789012345, 0.9, 1.1};
+  const std::optional<bench::PairedLine> q = bench::parsePairedLine(bench::formatPairedLine(p));
+  ASSERT_TRUE(q.has_value());
+  EXPECT_EQ(q->mesh, p.mesh);
+  EXPECT_EQ(q->row, p.row);
+  EXPECT_EQ(q->versus, p.versus);
+  EXPECT_EQ(q->estimate, p.estimate);
+  EXPECT_EQ(q->low, p.low);
+  EXPECT_EQ(q->high, p.high);
+  for (const char* bad : {"", "bunny\tploc t(1)\tsah-binned t(1)\t1.0\t0.9", "bunny\tploc\tsah\t1.0\t0.9\t1.1\t2",
+                          "bunny\tploc\tsah\tnan\t0.9\t1.1", "bunny\tploc\tsah\t1.0\t-1\t1.1",
+                          "bunny\tploc\tsah\t1.0x\t0.9\t1.1", "\tploc\tsah\t1.0\t0.9\t1.1", "bunny\tploc\tsah\tinf\t0.9\t1.1"})
+    EXPECT_FALSE(bench::parsePairedLine(bad).has_value()) << bad;
+}
+
+TEST(AcrossProcesses, MedianOfTheProcessesWithItsIntervalAndVerdict) {
+  auto line = [](const char* row, double e) { return bench::PairedLine{"bunny", row, "sah-binned t(1)", e, e * 0.95, e * 1.05}; };
+  // Six processes: the interval is [min, max] (coverage 1 - 2/64), the estimate the median.
+  const double faster[6] = {0.90, 0.93, 0.85, 0.97, 0.91, 0.88};
+  const double mixed[6] = {0.990, 1.092, 1.012, 1.124, 0.978, 1.050};
+  std::vector<std::vector<bench::PairedLine>> processes(6);
+  for (int k = 0; k < 6; ++k) processes[k] = {line("fast t(1)", faster[k]), line("mixed t(1)", mixed[k])};
+  processes[0].push_back(line("once t(1)", 0.5));  // a comparison only one process made
+  const std::vector<bench::AcrossProcesses> all = bench::combineProcesses(processes);
+  ASSERT_EQ(all.size(), 3u);
+  const bench::AcrossProcesses& fast = all[0];
+  EXPECT_EQ(fast.row, "fast t(1)");
+  ASSERT_TRUE(fast.interval.has_value());
+  EXPECT_DOUBLE_EQ(fast.interval->estimate, (0.90 + 0.91) / 2);
+  EXPECT_DOUBLE_EQ(fast.interval->low, 0.85);
+  EXPECT_DOUBLE_EQ(fast.interval->high, 0.97);
+  EXPECT_EQ(fast.verdict, "below 1");
+  EXPECT_EQ(fast.estimates, std::vector<double>(faster, faster + 6));
+  const bench::AcrossProcesses& mixedRow = all[1];
+  EXPECT_EQ(mixedRow.row, "mixed t(1)");
+  ASSERT_TRUE(mixedRow.interval.has_value());
+  EXPECT_EQ(mixedRow.verdict, "no detectable difference");
+  const bench::AcrossProcesses& once = all[2];
+  EXPECT_FALSE(once.interval.has_value());
+  EXPECT_EQ(once.verdict, "< 6 processes: no interval");
+  // All six above 1.
+  for (auto& lines : processes)
+    for (bench::PairedLine& p : lines) p.estimate += 1.0;
+  EXPECT_EQ(bench::combineProcesses(processes)[0].verdict, "above 1");
 }

@@ -33,13 +33,21 @@
 // timing: SAH, EPO (builders/epo.hpp) and the ray cost (node visits + triangle tests per ray, Ct =
 // Ci = 1) of closest-hit rays traversed front to back on the CPU here, against the registered
 // `embree` builder's tree (MEDIUM, the same build embree-raw times).
-//   bench_builders [--reps=N] [--curve] [--ploc-top-down=F] [--ploc-radius=R] [--benchmark_filter=...]   (meshes: `bash datasets/fetch.sh`)
+//
+// --processes=K (K >= 2) runs the same benchmarks in K processes one after another (each with its own
+// interleaving) and prints every paired ratio combined across them: the median of the processes'
+// estimates with its order-statistic interval across processes (6 or more), which, unlike one
+// process's interval, covers what differs from process to process (experiments/bench/across_processes.hpp).
+// Each process's full output is kept in a file whose path is printed.
+//   bench_builders [--reps=N] [--curve] [--ploc-top-down=F] [--ploc-radius=R] [--processes=K]
+//                  [--paired-out=FILE] [--benchmark_filter=...]   (meshes: `bash datasets/fetch.sh`)
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 #include <new>
@@ -50,6 +58,7 @@
 #include <vector>
 
 #include <benchmark/benchmark.h>
+#include <unistd.h>
 #include <embree3/rtcore.h>
 
 #include "builders/builder.hpp"
@@ -60,6 +69,7 @@
 #include "datasets/procedural.hpp"
 #include "layout/layout.hpp"
 #include "experiments/bench/builders_report.hpp"
+#include "experiments/process.hpp"
 
 namespace {
 
@@ -407,6 +417,61 @@ void curveEmbree(benchmark::State& state, MeshFn mesh) {
 }
 
 
+// --processes=K: this program again, K times, with `args` (our flags less --processes) and a
+// --paired-out file each; then the paired ratios across the processes. Returns the exit code.
+int runProcesses(int processes, const std::vector<std::string>& args) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("bench_builders_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::vector<std::vector<bench::PairedLine>> perProcess;
+  for (int k = 1; k <= processes; ++k) {
+    const fs::path paired = dir / ("process-" + std::to_string(k) + ".tsv");
+    const fs::path output = dir / ("process-" + std::to_string(k) + ".txt");
+    std::vector<std::string> argv{"/proc/self/exe"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    argv.push_back("--paired-out=" + paired.string());
+    std::fprintf(stderr, "bench_builders: process %d of %d ...\n", k, processes);
+    const ProcessResult r = runProcess(argv);
+    std::ofstream(output) << r.out << r.err;
+    if (!r.ok()) {
+      std::fprintf(stderr, "bench_builders: process %d failed (%s); its output: %s\n", k, r.status().c_str(),
+                   output.string().c_str());
+      return 1;
+    }
+    std::ifstream in(paired);
+    std::vector<bench::PairedLine> lines;
+    int lineNo = 0;
+    for (std::string line; std::getline(in, line);) {
+      ++lineNo;
+      const std::optional<bench::PairedLine> p = bench::parsePairedLine(line);
+      if (!p) {
+        std::fprintf(stderr, "bench_builders: %s:%d: not a paired-ratio line\n", paired.string().c_str(), lineNo);
+        return 1;
+      }
+      lines.push_back(*p);
+    }
+    perProcess.push_back(std::move(lines));
+  }
+  std::printf("Paired ratios across %d processes (each process: the median per-round ratio of its repetitions; here the "
+              "median over the processes with its 95%% order-statistic interval, which needs 6 processes). Outputs: %s\n\n",
+              processes, dir.string().c_str());
+  std::printf("%-10s %-34s %-18s %-26s %-26s %s\n", "mesh", "row", "versus", "across processes [95%]", "verdict",
+              "per process");
+  for (const bench::AcrossProcesses& a : bench::combineProcesses(perProcess)) {
+    char cell[64] = "-";
+    if (a.interval) std::snprintf(cell, sizeof cell, "%.3f [%.3f, %.3f]", a.interval->estimate, a.interval->low, a.interval->high);
+    std::string each;
+    for (double e : a.estimates) {
+      char buf[16];
+      std::snprintf(buf, sizeof buf, "%s%.3f", each.empty() ? "" : " ", e);
+      each += buf;
+    }
+    std::printf("%-10s %-34s %-18s %-26s %-26s %s\n", a.mesh.c_str(), a.row.c_str(), a.versus.c_str(), cell,
+                a.verdict.c_str(), each.c_str());
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -416,8 +481,25 @@ int main(int argc, char** argv) {
   bool interleaving = false, curve = false;
   uint32_t plocTopDown = 4;  // the extra ploc row: `--ploc-top-down 4` (0: no such row)
   uint32_t plocRadius = BuildOptions{}.plocRadius;  // and its search radius
+  int processes = 1;
+  std::string pairedOut;
+  std::vector<std::string> childArgs;  // every argument but --processes (and argv[0])
+  for (int i = 1; i < argc; ++i)
+    if (std::strncmp(argv[i], "--processes=", 12) != 0) childArgs.push_back(argv[i]);
   std::vector<char*> args;
   for (int i = 0; i < argc; ++i) {
+    if (std::strncmp(argv[i], "--processes=", 12) == 0) {
+      processes = std::atoi(argv[i] + 12);
+      if (processes < 1 || processes > 100) {
+        std::fprintf(stderr, "bench_builders: --processes=%s: expected 1..100\n", argv[i] + 12);
+        return 2;
+      }
+      continue;
+    }
+    if (std::strncmp(argv[i], "--paired-out=", 13) == 0) {
+      pairedOut = argv[i] + 13;
+      continue;
+    }
     if (std::strncmp(argv[i], "--reps=", 7) == 0) {
       reps = std::max(1, std::atoi(argv[i] + 7));
       continue;
@@ -478,9 +560,14 @@ int main(int argc, char** argv) {
                                                buildWith, "ploc", set, threads, plocTopDown, plocRadius));
     }
   }
+  if (processes > 1) return runProcesses(processes, childArgs);
   benchmark::Initialize(&count, args.data());
   if (benchmark::ReportUnrecognizedArguments(count, args.data())) return 1;
-  bench::RatioReporter reporter(curve, plocTopDown, plocRadius);
+  bench::RatioReporter reporter(curve, plocTopDown, plocRadius, pairedOut);
   benchmark::RunSpecifiedBenchmarks(&reporter);
   benchmark::Shutdown();
+  if (!reporter.pairedOutWritten()) {
+    std::fprintf(stderr, "bench_builders: could not write --paired-out=%s\n", pairedOut.c_str());
+    return 1;
+  }
 }

@@ -3,11 +3,14 @@
 // paired ratios against sah-binned at the same thread count (render/frame_stats.hpp pairedRatio:
 // repetition r of every benchmark runs in round r of the interleaving); then issue 15's target lines,
 // or with --curve the bins curve. Benchmark names are "builder/mesh/threads:N"; the benchmarks report
-// the counters "sah", "epo" and "ray_cost". Only bench_builders.cpp includes this.
+// the counters "sah", "epo" and "ray_cost". With a paired-out file, every paired ratio it prints also
+// goes there, one line each (across_processes.hpp: --processes=K combines them). Only
+// bench_builders.cpp includes this.
 #pragma once
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <map>
 #include <optional>
 #include <set>
@@ -18,6 +21,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "experiments/bench/across_processes.hpp"
 #include "render/frame_stats.hpp"
 
 namespace bvhlab::bench {
@@ -35,8 +39,10 @@ constexpr uint32_t kCurveBins[] = {8, 12, 16, 24, 32, 48, 64, 128};
 // Console output as usual (aggregates only), plus a table per mesh at the end, from the medians.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
-  RatioReporter(bool curve, uint32_t plocTopDown, uint32_t plocRadius)
-      : curve_(curve), plocTopDownRow_(plocTopDownRow(plocTopDown, plocRadius)) {}
+  RatioReporter(bool curve, uint32_t plocTopDown, uint32_t plocRadius, std::string pairedOut = "")
+      : curve_(curve), plocTopDownRow_(plocTopDownRow(plocTopDown, plocRadius)), pairedOut_(std::move(pairedOut)) {}
+  // False when the paired-out file could not be written (after Finalize).
+  bool pairedOutWritten() const { return pairedOutOk_; }
   void ReportRuns(const std::vector<Run>& runs) override {
     std::vector<Run> aggregates;  // the console shows these; the repetitions feed the paired ratios
     for (const Run& run : runs)
@@ -75,6 +81,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
   void Finalize() override {
     ConsoleReporter::Finalize();
     if (curve_) return printCurve();
+    writePairedOut();
     std::string mesh;
     for (const auto& [key, r] : results_) {
       if (key.first != mesh) {
@@ -140,11 +147,14 @@ class RatioReporter : public benchmark::ConsoleReporter {
     std::vector<double> rounds[2];  // wall ms of each repetition, by round (NaN: none that round)
   };
 
+  static std::optional<Interval> pairedInterval(const std::vector<double>& a, const std::vector<double>& b) {
+    const size_t n = std::min(a.size(), b.size());
+    return pairedRatio(std::span(a.data(), n), std::span(b.data(), n));
+  }
   // a / b over the rounds both ran: the median per-round ratio and its 95% interval, or why not.
   static std::string paired(const std::vector<double>& a, const std::vector<double>& b) {
-    const size_t n = std::min(a.size(), b.size());
-    const std::optional<Interval> q = pairedRatio(std::span(a.data(), n), std::span(b.data(), n));
-    if (!q) return n ? "- (< 6 rounds)" : "-";
+    const std::optional<Interval> q = pairedInterval(a, b);
+    if (!q) return std::min(a.size(), b.size()) ? "- (< 6 rounds)" : "-";
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.3f [%.3f, %.3f]", q->estimate, q->low, q->high);
     return buf;
@@ -185,8 +195,34 @@ class RatioReporter : public benchmark::ConsoleReporter {
       }
     }
   }
+  // The paired ratios of the tables and target lines above, one line each, into pairedOut_: every row
+  // against sah-binned at its thread count, and sah-binned with one thread against embree-raw with two.
+  void writePairedOut() {
+    if (pairedOut_.empty()) return;
+    std::vector<PairedLine> lines;
+    auto add = [&](const std::string& mesh, const std::string& row, const std::string& versus,
+                   const std::optional<Interval>& q) {
+      if (q) lines.push_back({mesh, row, versus, q->estimate, q->low, q->high});
+    };
+    const char* threads[2] = {" t(1)", " t(2)"};
+    for (const auto& [key, r] : results_) {
+      const Result* binned = find(key.first, "sah-binned");
+      if (binned && key.second != "sah-binned")
+        for (int k = 0; k < 2; ++k)
+          add(key.first, key.second + threads[k], std::string("sah-binned") + threads[k], pairedInterval(r.rounds[k], binned->rounds[k]));
+      const Result* ref = find(key.first, "embree-raw");
+      if (ref && key.second == "sah-binned")
+        add(key.first, "sah-binned t(1)", "embree-raw t(2)", pairedInterval(r.rounds[0], ref->rounds[1]));
+    }
+    std::ofstream out(pairedOut_);
+    for (const PairedLine& p : lines) out << formatPairedLine(p) << '\n';
+    out.close();
+    pairedOutOk_ = bool(out);
+  }
   bool curve_ = false;
   std::string plocTopDownRow_;
+  std::string pairedOut_;
+  bool pairedOutOk_ = true;
   const Result* find(const std::string& mesh, const std::string& builder) const {
     const auto it = results_.find({mesh, builder});
     return it == results_.end() ? nullptr : &it->second;
