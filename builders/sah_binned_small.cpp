@@ -35,8 +35,10 @@ constexpr auto makeSortingNetwork() {
   forEachCompareExchange<N>([&](uint32_t a, uint32_t b) { network[next++] = {uint8_t(a), uint8_t(b)}; });
   return network;
 }
+#if defined(BVHLAB_BINNED_SSE)  // the portable path ranks by counting instead
 template <uint32_t N>
 constexpr auto kSortingNetwork = makeSortingNetwork<N>();
+#endif
 
 }  // namespace
 

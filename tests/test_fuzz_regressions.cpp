@@ -90,9 +90,11 @@ TEST_P(FuzzRegressions, EveryFileParsesOrIsAnInputError) {
 // Every folder is a known parser, so a misspelt folder cannot silently replay nothing.
 TEST(FuzzRegressionsLayout, FoldersNameKnownParsers) {
   const auto& names = fuzz::parserNames();
-  for (const auto& e : fs::directory_iterator(kRegressions))
-    if (e.is_directory())
+  for (const auto& e : fs::directory_iterator(kRegressions)) {
+    if (e.is_directory()) {
       EXPECT_NE(std::find(names.begin(), names.end(), e.path().filename().string()), names.end()) << e.path();
+    }
+  }
 }
 
 // The guards in front of assimp (datasets/mesh_io_prechecks.cpp) refuse with their own message, before

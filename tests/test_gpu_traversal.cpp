@@ -97,7 +97,9 @@ TEST(GpuLayouts, BoxTestsPerPixelEqualTheMirrorOnEveryLayout) {
     }
     EXPECT_EQ(differ, 0u);
     EXPECT_GT(boxes, 0u);
-    if (l.name == "bvh4" || l.name == "bvh8" || l.name == "cwbvh") EXPECT_GT(boxes, 2 * visits);
+    if (l.name == "bvh4" || l.name == "bvh8" || l.name == "cwbvh") {
+      EXPECT_GT(boxes, 2 * visits);
+    }
   }
 }
 

@@ -124,10 +124,12 @@ TEST(HardScenes, CommittedFilesEqualTheGenerator) {
         << f.path << " differs from datasets/hard_scenes.cpp's output; regenerate with "
         << "BVHLAB_WRITE_HARD_SCENES=1 build/tests/test_hard_scenes --gtest_filter='HardScenes.CommittedFiles*'";
   }
-  for (const auto& e : fs::recursive_directory_iterator(hardDir()))
-    if (e.is_regular_file())
+  for (const auto& e : fs::recursive_directory_iterator(hardDir())) {
+    if (e.is_regular_file()) {
       EXPECT_TRUE(expected.count(fs::relative(e.path(), hardDir()).generic_string()))
           << e.path() << " is not produced by the generator (stale file?)";
+    }
+  }
 }
 
 TEST(HardScenes, FamilyMembersAreTransformedCopiesOfTheirReference) {
@@ -313,7 +315,7 @@ TEST(HardScenes, FarMeshFilesRenderLikeTheirNearCopy) {
     const FrameOptions f = smallFrame(p->scene, 96, 64);
     return std::pair{renderGpu(*p, optionsFor(*p, variant), f).rgba, p->scene.origin};
   };
-  for (const std::string variant : {robustnessNames().front(), std::string("watertight")}) {
+  for (const std::string& variant : {robustnessNames().front(), std::string("watertight")}) {
     const auto [nearImage, nearOrigin] = render(hardDir() / "meshes/ball_24x12.obj", variant);
     EXPECT_EQ(nearOrigin, glm::dvec3(0.0));
     for (const fs::path& file : far) {

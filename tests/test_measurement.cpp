@@ -223,7 +223,9 @@ TEST_F(Measurement, FakeClockWithKnownEffectsGivesTheRightVerdicts) {
   EXPECT_EQ(equalPairs, 1);
   // Median vs the fastest at leaf 4 and at leaf 16: slower both times.
   for (const json& c : f["comparisons"])
-    if (c["kind"] == "axis" && c["axis"] == "builder" && c["a_label"] == "median") EXPECT_EQ(c["verdict"], "slower");
+    if (c["kind"] == "axis" && c["axis"] == "builder" && c["a_label"] == "median") {
+      EXPECT_EQ(c["verdict"], "slower");
+    }
 
   // sah-binned leaf 16 vs 4: the same tree (same hash, same shader) although the fake clock says
   // 10% slower: the verdict must come from the tree, not the clock.
@@ -251,8 +253,12 @@ TEST_F(Measurement, FakeClockWithKnownEffectsGivesTheRightVerdicts) {
     ASSERT_FALSE(c["ci_low"].is_null()) << c.dump();
     EXPECT_LE(c["ci_low"].get<double>(), c["ratio"].get<double>());
     EXPECT_GE(c["ci_high"].get<double>(), c["ratio"].get<double>());
-    if (c["verdict"] == "slower") EXPECT_GT(c["ci_low"].get<double>(), std::exp(c["band"].get<double>()));
-    if (c["verdict"] == "faster") EXPECT_LT(c["ci_high"].get<double>(), std::exp(-c["band"].get<double>()));
+    if (c["verdict"] == "slower") {
+      EXPECT_GT(c["ci_low"].get<double>(), std::exp(c["band"].get<double>()));
+    }
+    if (c["verdict"] == "faster") {
+      EXPECT_LT(c["ci_high"].get<double>(), std::exp(-c["band"].get<double>()));
+    }
   }
   // The bunny-like scene has effective depth 1 but no depth axis: nothing skipped.
   EXPECT_TRUE(f["skipped"].empty());

@@ -53,7 +53,9 @@ TEST(RobustGpu, CameraInsideClosedMeshesNeverLeaksWithWatertightTrianglesAndBoxe
       size_t leaks = 0, rays = 0, mismatch = 0;
       for (const auto& [name, scene] : views) {
         const GpuLeakCounts n = gpuLeaks(*scene, name, r, k.name);
-        if (watertight) EXPECT_EQ(n.leaks, 0u) << name << " " << k.name << " " << robustnessName(r);
+        if (watertight) {
+          EXPECT_EQ(n.leaks, 0u) << name << " " << k.name << " " << robustnessName(r);
+        }
         // The mirror rounds like the GLSL except where llvmpipe contracts to FMA: allow a handful of
         // pixels on an edge to pick the neighbouring triangle (or, without the watertight pair, to leak
         // on one side and not the other).

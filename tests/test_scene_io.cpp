@@ -109,9 +109,14 @@ TEST(ShippedScenes, EveryOneLoadsAndIsWellFormed) {
         ASSERT_LT(size_t(o.mesh), s.meshes.size());
       }
     }
-    for (const Material& m : s.materials)
-      if (m.texture >= 0) EXPECT_LT(size_t(m.texture), s.images.size());
-    if (s.world.kind == WorldKind::Map) EXPECT_LT(size_t(s.world.image), s.images.size());
+    for (const Material& m : s.materials) {
+      if (m.texture >= 0) {
+        EXPECT_LT(size_t(m.texture), s.images.size());
+      }
+    }
+    if (s.world.kind == WorldKind::Map) {
+      EXPECT_LT(size_t(s.world.image), s.images.size());
+    }
   }
   EXPECT_GE(count, 15u);
   if (skipped) GTEST_SKIP() << skipped << " scene(s) need the dataset cache: run `bash datasets/fetch.sh`";

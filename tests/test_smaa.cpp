@@ -146,7 +146,9 @@ TEST(SmaaDiagonalArea, RotationByHalfATurnSwapsInnerAndOuter) {
           const glm::vec4 r = diagonalArea(neg(e2), neg(e1), d2, d1);
           EXPECT_NEAR(a.x, r.z, 1e-6f) << e1 << e2 << " " << d1 << " " << d2;
           // The outer pixel before unit k is the outer pixel at unit k-1 (same run).
-          if (d1 > 0) EXPECT_NEAR(a.y, diagonalArea(e1, e2, d1 - 1, d2 + 1).z, 1e-6f);
+          if (d1 > 0) {
+            EXPECT_NEAR(a.y, diagonalArea(e1, e2, d1 - 1, d2 + 1).z, 1e-6f);
+          }
         }
 }
 
