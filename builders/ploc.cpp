@@ -59,8 +59,6 @@ namespace bvhlab {
 
 namespace {
 
-// The CLI's range too (app/, render/, experiments/): the search costs O(radius) per cluster and pass.
-constexpr uint32_t kMaxRadius = kMaxPlocRadius;
 // Clusters per job. Fixed (never derived from the thread count); chunks only split the work, no
 // cluster's neighbour depends on them. A job also searches for the radius clusters on either side
 // (to see which of its own are mutual) and needs the merged areas of the radius before those:
@@ -146,7 +144,7 @@ struct Clusters {
 
 // Orders the candidates of cluster x that tie on merged area by a key of the pair {x, j} alone
 // (distance, parity of the lower position, the lower position), so both ends of a pair rank it alike.
-// Below 2^32 for any radius below 2^29 (kMaxRadius is far below).
+// Below 2^32 for any radius below 2^29 (kMaxPlocRadius is far below).
 uint32_t tieKey(uint32_t x, uint32_t j) {
   const uint32_t d = x > j ? x - j : j - x, lower = std::min(x, j);
   return 4 * d + 2 * (lower & 1) + (j > x ? 1 : 0);
@@ -318,9 +316,9 @@ void nearestNeighbours(const Clusters& c, [[maybe_unused]] uint32_t m, uint32_t 
 
 Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
   const uint32_t radius = options.plocRadius;
-  if (radius < 1 || radius > kMaxRadius)
+  if (radius < 1 || radius > kMaxPlocRadius)
     throw std::invalid_argument("ploc: plocRadius " + std::to_string(radius) + " is outside 1.." +
-                                std::to_string(kMaxRadius));
+                                std::to_string(kMaxPlocRadius));
   if (options.plocTopDown > kMaxPlocTopDown)
     throw std::invalid_argument("ploc: plocTopDown " + std::to_string(options.plocTopDown) + " is outside 0.." +
                                 std::to_string(kMaxPlocTopDown));
