@@ -256,12 +256,14 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
           out.groupSize = int(r.integer(mv, key, 1, 100000));
         } else if (mk == "aa_control") {
           out.aaControl = r.boolean(mv, key);
+        } else if (mk == "share_programs") {
+          out.sharePrograms = r.boolean(mv, key);
         } else if (mk == "interleave") {
           out.interleave = r.boolean(mv, key);
         } else {
           r.fail(mk.source(), key,
                  "unknown key; [measure] has min_frames, max_frames, target_ci_pct, max_seconds, group_size, "
-                 "aa_control, interleave");
+                 "aa_control, share_programs, interleave");
         }
       }
     } else if (section == "trace") {

@@ -40,6 +40,9 @@ struct RunRender {
   double maxSeconds = 0.0;  // > 0: a group also stops once its rounds took this long (min_frames still first)
   int groupSize = 64;     // most runs measured together by one process (memory: one tree + program each)
   bool aaControl = true;  // measure one run of each group twice (the A/A control: the noise floor)
+  // Runs of a group whose shaders are one text draw with one compiled program (render/program_cache.hpp):
+  // a comparison between them does not see where the JIT placed each copy's code. false: each compiles its own.
+  bool sharePrograms = true;
   bool interleave = true; // false: every run is its own `bvhlab render` process (isolation, no pairing)
   std::string backend = "osmesa";
   bool heatmaps = true;                       // ask for --visits-out next to every image

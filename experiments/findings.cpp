@@ -57,7 +57,7 @@ std::string label(const json& row, const std::string& axis) {
   return it->dump();
 }
 
-std::optional<double> number(const json& row, const char* key) {
+std::optional<double> number(const json& row, const std::string& key) {
   auto it = row.find(key);
   if (it == row.end() || !it->is_number()) return std::nullopt;
   const double v = it->get<double>();
@@ -119,20 +119,21 @@ std::optional<double> correlationOf(const std::vector<const json*>& rows, const 
   return spearman(x, y);
 }
 
-// A run's A/A control: recomputed from the two frame lists (so findings always use the current
-// interval method), else the ratio `measure` stored.
-std::optional<Interval> controlRatio(const json& row) {
+// A run's A/A control (`prefix` "aa_control": a second program; "aa_shared_control": the same
+// program, its own buffers; render/measure_command.cpp): recomputed from the two frame lists (so
+// findings always use the current interval method), else the ratio `measure` stored.
+std::optional<Interval> controlRatio(const json& row, const std::string& prefix = "aa_control") {
   const std::vector<double> control = [&] {
     std::vector<double> out;
-    if (auto it = row.find("aa_control_frame_ms_all"); it != row.end() && it->is_array())
+    if (auto it = row.find(prefix + "_frame_ms_all"); it != row.end() && it->is_array())
       for (const json& v : *it)
         if (v.is_number()) out.push_back(v.get<double>());
     return out;
   }();
   const std::vector<double> original = frames(row);
   if (!control.empty() && control.size() == original.size()) return pairedRatio(original, control);
-  const auto ratio = number(row, "aa_control_ratio"), lo = number(row, "aa_control_ci_low"),
-             hi = number(row, "aa_control_ci_high");
+  const auto ratio = number(row, prefix + "_ratio"), lo = number(row, prefix + "_ci_low"),
+             hi = number(row, prefix + "_ci_high");
   if (!ratio || !lo || !hi) return std::nullopt;
   return Interval{*ratio, *lo, *hi, kConfidence, original.size()};
 }
@@ -143,10 +144,13 @@ class Finder {
     for (const json& r : rows)
       if (r.value("status", "") == "ok" && !r.value("reference_only", false) && number(r, "frame_ms"))
         ok_.push_back(&r);
-    // The noise band of each session: how far its A/A control's interval reaches from 1.
-    for (const json* r : ok_)
+    // The noise bands of each session: how far its A/A controls' intervals reach from 1.
+    for (const json* r : ok_) {
       if (const auto aa = controlRatio(*r); aa && aa->low > 0.0)
         band_[session(*r)] = std::max(std::abs(std::log(aa->low)), std::abs(std::log(aa->high)));
+      if (const auto aa = controlRatio(*r, "aa_shared_control"); aa && aa->low > 0.0)
+        sharedBand_[session(*r)] = std::max(std::abs(std::log(aa->low)), std::abs(std::log(aa->high)));
+    }
   }
 
   json run() {
@@ -182,7 +186,18 @@ class Finder {
     return out;
   }
 
+  // Both runs drew with one compiled program (one session, the same `program`).
+  static bool sharedProgram(const json& a, const json& b) {
+    const auto pa = number(a, "program"), pb = number(b, "program");
+    return pa && pb && *pa == *pb && !session(a).empty() && session(a) == session(b);
+  }
+
+  // The noise band of a comparison: from the shared-program control when both runs drew with one
+  // program and their session has one, else from the second-program control (which also holds what
+  // two programs' code placement does to a ratio).
   double bandOf(const json& a, const json& b) {
+    if (sharedProgram(a, b))
+      if (auto it = sharedBand_.find(session(a)); it != sharedBand_.end()) return it->second;
     double band = 0.0;
     for (const json* r : {&a, &b})
       if (auto it = band_.find(session(*r)); it != band_.end()) band = std::max(band, it->second);
@@ -224,6 +239,7 @@ class Finder {
                             std::hash<std::string>{}(label(a, "key") + "/" + label(b, "key")));
     const double band = bandOf(a, b);
     c["paired"] = paired;
+    c["shared_program"] = sharedProgram(a, b);
     c["normalised_by"] = viaEmbree ? json("embree") : json();
     c["band"] = band;
     c["n"] = ratio ? ratio->n : std::min(fa.size(), fb.size());
@@ -251,15 +267,17 @@ class Finder {
     contextAxes_ = varying(rows);
     // Noise floor: every run that carries an A/A control.
     for (const json* r : rows)
-      if (const auto aa = controlRatio(*r))
-        out_["noise"].push_back({{"scene", scene},
-                                 {"key", (*r)["key"]},
-                                 {"session", session(*r)},
-                                 {"description", describe(*r, contextAxes_)},
-                                 {"ratio", aa->estimate},
-                                 {"ci_low", aa->low},
-                                 {"ci_high", aa->high},
-                                 {"n", aa->n}});
+      for (const char* control : {"aa_control", "aa_shared_control"})
+        if (const auto aa = controlRatio(*r, control))
+          out_["noise"].push_back({{"scene", scene},
+                                   {"key", (*r)["key"]},
+                                   {"session", session(*r)},
+                                   {"control", std::string(control) == "aa_control" ? "program" : "shared"},
+                                   {"description", describe(*r, contextAxes_)},
+                                   {"ratio", aa->estimate},
+                                   {"ci_low", aa->low},
+                                   {"ci_high", aa->high},
+                                   {"n", aa->n}});
 
     const bool deep = std::any_of(rows.begin(), rows.end(), [](const json* r) {
       return number(*r, "effective_depth").value_or(2.0) > 1.0;  // unknown: assume it matters
@@ -394,7 +412,7 @@ class Finder {
 
   const json& axisOrder_;
   std::vector<const json*> ok_;
-  std::map<std::string, double> band_;
+  std::map<std::string, double> band_, sharedBand_;  // per session: second-program / shared-program control
   std::vector<std::string> contextAxes_;
   json out_;
 };

@@ -68,6 +68,13 @@ def noise_floor(page, data, f):
     page.p("Each group of runs measured together (one session) measures one configuration twice "
            "(<i>A/A control</i>). The ratio of the two should be 1; its interval is what this machine's noise "
            "does to a ratio, and a difference inside that band is never called faster or slower.")
+    kinds = {e.get("control") for e in noise if e.get("control")}
+    if "shared" in kinds:
+        page.p("Two controls per group: <i>program</i> draws the run with a second, separately compiled copy of its "
+               "program (its band applies to runs with different shaders, e.g. kernels: each compiled copy gets its "
+               "own code placement); <i>shared</i> draws it with the same program over its own buffers (its band "
+               "applies to runs that drew with one program, e.g. builders and leaf sizes: "
+               "<code>shared_program</code> in findings.json).")
     cells, bands = [], []
     for e in noise:
         band = band_of(e.get("ci_low"), e.get("ci_high"))
@@ -75,7 +82,8 @@ def noise_floor(page, data, f):
         original = e.get("b") or e.get("key")
         keys = [k for k in (original, e.get("a") if e.get("b") else None) if k]
         cells.append([html.escape(str(e.get("scene", "?"))),
-                      html.escape(str(e.get("group", e.get("session", "–")))),
+                      html.escape(str(e.get("group", e.get("session", "–")))) +
+                      (" (%s)" % html.escape(str(e["control"])) if e.get("control") else ""),
                       _run_text(data, original, e.get("description") or original),
                       " / ".join("<code>%s</code>" % html.escape(str(k)) for k in keys),
                       " / ".join(fmt_ms(data.by_key.get(k) or {}) for k in keys),

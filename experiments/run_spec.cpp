@@ -75,6 +75,7 @@ json RunRender::groupJson() const {
   json g = keyJson();
   g["group_size"] = groupSize;
   g["aa_control"] = aaControl;
+  g["share_programs"] = sharePrograms;
   g["interleave"] = interleave;
   g["timeout_s"] = timeoutSeconds;
   g["trace_count"] = traceCount;
@@ -148,6 +149,7 @@ RunSpec RunSpec::fromJson(const json& j) {
   s.render.maxSeconds = r.value("max_seconds", s.render.maxSeconds);
   s.render.groupSize = r.value("group_size", s.render.groupSize);
   s.render.aaControl = r.value("aa_control", s.render.aaControl);
+  s.render.sharePrograms = r.value("share_programs", s.render.sharePrograms);
   s.render.interleave = r.value("interleave", s.render.interleave);
   s.render.traceCount = r.value("trace_count", s.render.traceCount);
   s.render.traceSeed = r.value("trace_seed", s.render.traceSeed);

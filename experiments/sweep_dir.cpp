@@ -122,7 +122,9 @@ const std::vector<std::string>& resultColumns() {
       "width", "height", "frames", "warmup", "backend",
       // measurements
       "frame_ms", "frame_ms_ci_low", "frame_ms_ci_high", "ci_pct", "ci_target_met", "measure_stop", "frame_ms_min",
-      "frame_ms_max", "fps", "aa_control_ratio", "aa_control_ci_low", "aa_control_ci_high", "session",
+      "frame_ms_max", "fps", "aa_control_ratio", "aa_control_ci_low", "aa_control_ci_high",
+      "aa_shared_control_ratio", "aa_shared_control_ci_low", "aa_shared_control_ci_high", "session", "program",
+      "bvh_stack_size",
       "build_ms", "sah_cost", "epo", "tree_hash", "references", "sah_before_optimize", "optimize_ms", "nodes",
       "leaves", "bvh_depth",
       "bytes", "bytes_per_triangle", "triangles", "node_visits_per_ray", "node_visits_p95", "triangle_tests_per_ray",

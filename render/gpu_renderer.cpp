@@ -111,18 +111,19 @@ unsigned compileComputeProgram(const AssembledShader& shader) {
   return linkProgram({cs}, shader, "compute");
 }
 
-GpuRenderer::GpuRenderer(const PreparedScene& scene, const ShaderOptions& shader, const FrameOptions& frame)
-    : scene_(scene), options_(shader), frame_(frame) {
+GpuRenderer::GpuRenderer(const PreparedScene& scene, const ShaderOptions& shader, const FrameOptions& frame,
+                         ProgramCache* programs)
+    : scene_(scene), options_(shader), frame_(frame), programs_(programs) {
   if (frame.width < 1 || frame.height < 1) throw std::invalid_argument("image size must be at least 1x1");
   compile();
   upload();
   createFramebuffer();
-  setCamera(frame.camera);
+  setUniforms();
   checkGl("GpuRenderer setup");
 }
 
 GpuRenderer::~GpuRenderer() {
-  glDeleteProgram(program_);
+  if (!programs_) glDeleteProgram(program_);  // a cached program belongs to its cache
   glDeleteVertexArrays(1, &vao_);
   glDeleteFramebuffers(1, &fbo_);
   GLuint textures[] = {colorTex_, statsTex_, boxTestsTex_, streams_[0], streams_[1], streams_[2], streams_[3], texArray_, worldTex_};
@@ -154,7 +155,13 @@ void GpuRenderer::compile() {
                                 " but the tree's triangles are packed as " + scene_.packed.triangleFormat);
   if (options_.bvhStackSize < 1) options_.bvhStackSize = 1;
   shader_ = assembleTracer(features, options_);
-  program_ = compileFullscreenProgram(shader_);
+  if (programs_) {
+    const ProgramCache::Program p = programs_->get(shader_);
+    program_ = p.id;
+    programIndex_ = p.index;
+  } else {
+    program_ = compileFullscreenProgram(shader_);
+  }
   glCreateVertexArrays(1, &vao_);
 }
 
@@ -203,7 +210,13 @@ void GpuRenderer::upload() {
   glTextureParameteri(worldTex_, GL_TEXTURE_WRAP_S, GL_REPEAT);
   glTextureParameteri(worldTex_, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   checkGl("scene upload");
+}
 
+// Uniforms live in the program: a program shared through a ProgramCache gets this renderer's values
+// again before each of its frames (drawFrame), so renderers never see each other's settings.
+void GpuRenderer::setUniforms() {
+  const SceneData& d = scene_.data;
+  const PackedBvh& p = scene_.packed;
   glUseProgram(program_);
   auto seti = [&](const char* n, int v) { glUniform1i(glGetUniformLocation(program_, n), v); };
   auto setf = [&](const char* n, float v) { glUniform1f(glGetUniformLocation(program_, n), v); };
@@ -226,6 +239,7 @@ void GpuRenderer::upload() {
   setf("u_exposure", frame_.exposure);
   setf("u_sceneRadius", d.sceneRadius);
   glUniform2f(glGetUniformLocation(program_, "u_resolution"), float(frame_.width), float(frame_.height));
+  setCamera(frame_.camera);
   checkGl("uniforms");
 }
 
@@ -261,6 +275,7 @@ void GpuRenderer::createFramebuffer() {
 }
 
 double GpuRenderer::drawFrame() {
+  if (programs_) setUniforms();  // a shared program holds the last renderer's uniforms (not timed)
   auto start = std::chrono::steady_clock::now();
   glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
   glViewport(0, 0, frame_.width, frame_.height);

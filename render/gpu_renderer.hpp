@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 
 #include "render/prepared_scene.hpp"
+#include "render/program_cache.hpp"
 #include "shaders/assemble.hpp"
 
 namespace bvhlab {
@@ -43,8 +44,11 @@ inline bool statsNonFinite(const glm::uvec4& s) { return (s.w >> 31) != 0u; }
 
 class GpuRenderer {
  public:
-  // Needs a current GL context. Throws ShaderError / std::runtime_error.
-  GpuRenderer(const PreparedScene& scene, const ShaderOptions& shader, const FrameOptions& frame);
+  // Needs a current GL context. Throws ShaderError / std::runtime_error. With `programs`, the tracer
+  // program comes from that cache (shared with every renderer of the same shader source; the cache
+  // owns it and must outlive this renderer); without, this renderer compiles and owns its own.
+  GpuRenderer(const PreparedScene& scene, const ShaderOptions& shader, const FrameOptions& frame,
+              ProgramCache* programs = nullptr);
   ~GpuRenderer();
   GpuRenderer(const GpuRenderer&) = delete;
   GpuRenderer& operator=(const GpuRenderer&) = delete;
@@ -54,18 +58,22 @@ class GpuRenderer {
   std::vector<glm::uvec4> readStats() const;   // needs ShaderOptions::countStats
   std::vector<uint32_t> readBoxTests() const;  // per pixel, main.glsl's o_boxTests; needs countStats
   const AssembledShader& shader() const { return shader_; }
+  int programIndex() const { return programIndex_; }  // its index in the cache; -1: its own program
   unsigned colorTexture() const { return colorTex_; }  // RGBA8 result, for post passes and viewers
   void setCamera(const Camera& camera);
 
  private:
   void compile();
   void upload();
+  void setUniforms();
   void createFramebuffer();
 
   const PreparedScene& scene_;
   ShaderOptions options_;
   FrameOptions frame_;
   AssembledShader shader_;
+  ProgramCache* programs_ = nullptr;
+  int programIndex_ = -1;
   unsigned program_ = 0, vao_ = 0, fbo_ = 0, colorTex_ = 0, statsTex_ = 0, boxTestsTex_ = 0, ubo_ = 0;
   unsigned streams_[4] = {0, 0, 0, 0}, streamBuffers_[4] = {0, 0, 0, 0};  // node, triangle, attribute, vertex
   unsigned texArray_ = 0, worldTex_ = 0;

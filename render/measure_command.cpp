@@ -14,7 +14,9 @@
 #include "datasets/scene_io.hpp"
 #include "render/frame_stats.hpp"
 #include "render/render_cli.hpp"
+#include "render/program_cache.hpp"
 #include "render/render_job.hpp"
+#include "traversal/kernels.hpp"
 
 namespace bvhlab {
 
@@ -23,7 +25,13 @@ using nlohmann::json;
 
 namespace {
 
-// One entry of the round-robin: a run of the group, or the A/A control of the first run.
+// The A/A controls of a group's first run: `Program` draws it with a second, separately compiled copy
+// of its program (what two runs with different shaders see: their own JIT code placement, and the
+// machine); `Shared` draws it with the very same program (the group's ProgramCache) but its own
+// buffers (what two runs with one shader text see: builders, leaf sizes).
+enum class Control { None, Program, Shared };
+
+// One entry of the round-robin: a run of the group, or an A/A control of the first run.
 struct Entry {
   std::string key;
   RenderCommand cmd;
@@ -32,7 +40,7 @@ struct Entry {
   std::unique_ptr<GpuJob> job;
   FrameTimes times;
   std::string error;
-  bool control = false;
+  Control control = Control::None;
   bool alive() const { return job != nullptr && error.empty(); }
 };
 
@@ -72,6 +80,8 @@ json measureGroup(const json& spec) {
   const double maxSeconds = spec.value("max_seconds", 0.0);
   if (!(maxSeconds >= 0.0)) throw std::invalid_argument("group file: max_seconds must be >= 0");
   const bool wantControl = spec.value("aa_control", true) && maxFrames >= int(kMinValuesForInterval);
+  // One program per distinct shader text (render/program_cache.hpp); false: every run compiles its own.
+  const bool sharePrograms = spec.value("share_programs", true);
   const std::string session = spec.value("session", std::string("unnamed"));
   const auto start = std::chrono::steady_clock::now();
 
@@ -106,10 +116,25 @@ json measureGroup(const json& spec) {
   }
   scenes.clear();  // every tree holds its own copy
 
+  // With shared programs, every run of a layout gets the largest stack any of its trees needs, so
+  // that runs differing only in their tree (builder, leaf size, options) assemble one shader text.
+  std::map<std::string, int> stackSizes;
+  if (sharePrograms)
+    for (const auto& e : entries)
+      if (e->error.empty()) {
+        int& size = stackSizes[e->setup.shader.layout];
+        size = std::max(size, stackSizeFor(e->prepared->packed));
+      }
+  auto stackSizeOf = [&](const Entry& e) {
+    auto it = stackSizes.find(e.setup.shader.layout);
+    return it == stackSizes.end() ? 0 : it->second;
+  };
+
   // ---- GL: one context, one program per entry ------------------------------------------------------
   const Backend backend = entries.front()->error.empty() ? entries.front()->setup.backend : Backend::OSMesa;
   std::unique_ptr<GlContext> ctx = createContext(backend);
   const std::string renderer = ctx->renderer();
+  ProgramCache programs;  // declared after the context: destroyed while it is still current
   for (auto& e : entries) {
     if (!e->error.empty()) continue;
     if (e->setup.backend != backend) {
@@ -117,32 +142,38 @@ json measureGroup(const json& spec) {
       continue;
     }
     try {
-      e->job = std::make_unique<GpuJob>(e->cmd, e->setup, e->prepared);
+      e->job = std::make_unique<GpuJob>(e->cmd, e->setup, e->prepared, sharePrograms ? &programs : nullptr,
+                                        stackSizeOf(*e));
     } catch (const std::exception& ex) {
       e->error = std::string(dynamic_cast<const ShaderError*>(&ex) ? "shader error: " : "") + ex.what();
     }
   }
-  // The A/A control: the first run that works, measured a second time by a second program.
+  // The A/A controls: the first run that works, measured a second time by a second program and,
+  // with shared programs, a third time by its own program over its own buffers.
   Entry* controlled = nullptr;
   if (wantControl) {
     auto first = std::find_if(entries.begin(), entries.end(), [](const auto& e) { return e->alive(); });
     if (first != entries.end()) {
-      const Entry& original = **first;
-      auto c = std::make_unique<Entry>();
-      c->key = original.key;
-      c->cmd = original.cmd;
-      c->setup.shader = original.setup.shader;
-      c->setup.path = original.setup.path;
-      c->setup.smaaOn = original.setup.smaaOn;
-      c->setup.smaa = original.setup.smaa;
-      c->prepared = original.prepared;
-      c->control = true;
-      try {
-        c->job = std::make_unique<GpuJob>(c->cmd, c->setup, c->prepared);
-        controlled = first->get();
-        entries.push_back(std::move(c));
-      } catch (const std::exception& ex) {
-        std::cerr << "bvhlab measure: warning: no A/A control: " << ex.what() << "\n";
+      controlled = first->get();
+      for (const Control kind : {Control::Program, Control::Shared}) {
+        if (kind == Control::Shared && !sharePrograms) continue;
+        const Entry& original = *controlled;
+        auto c = std::make_unique<Entry>();
+        c->key = original.key;
+        c->cmd = original.cmd;
+        c->setup.shader = original.setup.shader;
+        c->setup.path = original.setup.path;
+        c->setup.smaaOn = original.setup.smaaOn;
+        c->setup.smaa = original.setup.smaa;
+        c->prepared = original.prepared;
+        c->control = kind;
+        try {
+          c->job = std::make_unique<GpuJob>(c->cmd, c->setup, c->prepared,
+                                            kind == Control::Shared ? &programs : nullptr, stackSizeOf(original));
+          entries.push_back(std::move(c));
+        } catch (const std::exception& ex) {
+          std::cerr << "bvhlab measure: warning: no A/A control: " << ex.what() << "\n";
+        }
       }
     }
   }
@@ -200,12 +231,12 @@ json measureGroup(const json& spec) {
 
   // ---- images, counts, JSON --------------------------------------------------------------------------
   json out = {{"session", session}, {"rounds", rounds}, {"stop", stop}, {"renderer", renderer},
-              {"gpu", !isSoftwareRenderer(renderer)}};
+              {"gpu", !isSoftwareRenderer(renderer)}, {"share_programs", sharePrograms}};
   json runs = json::object();
-  const Entry* control = nullptr;
+  std::map<Control, const Entry*> controls;
   for (auto& e : entries) {
-    if (e->control) {
-      control = e.get();
+    if (e->control != Control::None) {
+      controls[e->control] = e.get();
       continue;
     }
     if (!e->error.empty()) {
@@ -221,6 +252,9 @@ json measureGroup(const json& spec) {
                             e->job->stats, e->job->boxTests, e->times, renderer, false);
       r["session"] = session;
       r["rounds"] = rounds;
+      // Runs of one session with the same `program` drew with one compiled program.
+      r["program"] = e->job->programIndex() >= 0 ? json(e->job->programIndex()) : json();
+      r["bvh_stack_size"] = e->job->shader().bvhStackSize;
       const uint64_t overflows = stackOverflowPixels(e->job->stats);
       e->job.reset();
       if (overflows > 0)
@@ -232,17 +266,23 @@ json measureGroup(const json& spec) {
       runs[e->key] = {{"error", ex.what()}};
     }
   }
-  if (controlled && control && runs[controlled->key].contains("frame_ms")) {
+  if (controlled && runs[controlled->key].contains("frame_ms")) {
     json& r = runs[controlled->key];
-    r["aa_control_frame_ms_all"] = control->times.ms;
-    // original / control from paired rounds: an interval that excludes 1 would mean the round-robin
-    // itself favours one program (the report prints it as the sweep's noise floor).
-    if (const auto ratio = pairedRatio(controlled->times.ms, control->times.ms)) {
-      r["aa_control_ratio"] = ratio->estimate;
-      r["aa_control_ci_low"] = ratio->low;
-      r["aa_control_ci_high"] = ratio->high;
+    for (const auto& [kind, control] : controls) {
+      if (!control->error.empty()) continue;
+      // original / control from paired rounds: an interval that excludes 1 would mean the round-robin
+      // itself favours one program (the report prints it as the sweep's noise floor).
+      const std::string prefix = kind == Control::Program ? "aa_control" : "aa_shared_control";
+      r[prefix + "_frame_ms_all"] = control->times.ms;
+      if (const auto ratio = pairedRatio(controlled->times.ms, control->times.ms)) {
+        r[prefix + "_ratio"] = ratio->estimate;
+        r[prefix + "_ci_low"] = ratio->low;
+        r[prefix + "_ci_high"] = ratio->high;
+      }
     }
   }
+  for (auto& e : entries) e->job.reset();  // before the program cache and the context go
+  out["programs"] = programs.size();
   out["runs"] = std::move(runs);
   out["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

@@ -138,15 +138,17 @@ std::string treeKey(const RenderCommand& c) {
   return key;
 }
 
-GpuJob::GpuJob(const RenderCommand& cmd, const RenderSetup& setup, std::shared_ptr<const PreparedScene> prepared)
-    : prepared_(std::move(prepared)), shader_(setup.shader), path_(setup.path) {
+GpuJob::GpuJob(const RenderCommand& cmd, const RenderSetup& setup, std::shared_ptr<const PreparedScene> prepared,
+               ProgramCache* programs, int stackSize)
+    : prepared_(std::move(prepared)), shader_(setup.shader), path_(setup.path), programs_(programs) {
   const Scene& sc = prepared_->scene;
-  shader_.bvhStackSize = stackSizeFor(prepared_->packed);
+  shader_.bvhStackSize = std::max(stackSizeFor(prepared_->packed), stackSize);
   frame_.width = sc.settings.width;
   frame_.height = sc.settings.height;
   frame_.camera = sc.camera;
   frame_.exposure = sc.settings.exposure;
-  gpu_ = std::make_unique<GpuRenderer>(*prepared_, shader_, frame_);
+  gpu_ = std::make_unique<GpuRenderer>(*prepared_, shader_, frame_, programs_);
+  programIndex_ = gpu_->programIndex();
   if (setup.smaaOn) smaa_ = std::make_unique<SmaaPass>(frame_.width, frame_.height, setup.smaa);
 }
 
@@ -173,7 +175,7 @@ void GpuJob::finish(bool wantStats) {
     counted.countStats = true;
     FrameOptions fo = frame_;
     if (!path_.empty()) fo.camera = path_.front().camera;
-    GpuRenderer gpu(*prepared_, counted, fo);
+    GpuRenderer gpu(*prepared_, counted, fo, programs_);
     gpu.drawFrame();
     stats = gpu.readStats();
     boxTests = gpu.readBoxTests();

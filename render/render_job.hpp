@@ -48,7 +48,11 @@ std::string treeKey(const RenderCommand& cmd);
 // The GL side of one render. Keeps `prepared` alive; needs a current context for its whole life.
 class GpuJob {
  public:
-  GpuJob(const RenderCommand& cmd, const RenderSetup& setup, std::shared_ptr<const PreparedScene> prepared);
+  // `programs`: draw with the cache's program for this shader source (render/program_cache.hpp),
+  // else compile one of its own. `stackSize`: BVH_STACK_SIZE at least this (0: the tree's own bound,
+  // stackSizeFor): a group gives all runs of one layout the same, so that their shaders are one text.
+  GpuJob(const RenderCommand& cmd, const RenderSetup& setup, std::shared_ptr<const PreparedScene> prepared,
+         ProgramCache* programs = nullptr, int stackSize = 0);
   // One frame (the trace, plus the SMAA passes when on, each waited for with glFinish), drawn from
   // camera-path pose index mod N. Returns its wall-clock ms; `aaMs` gets the SMAA part.
   double frame(int index, double& aaMs);
@@ -59,6 +63,7 @@ class GpuJob {
   const PreparedScene& prepared() const { return *prepared_; }
   const ShaderOptions& shader() const { return shader_; }
   const FrameOptions& frameOptions() const { return frame_; }
+  int programIndex() const { return programIndex_; }  // in the cache; -1: its own program
   std::vector<uint8_t> image;     // RGBA8, rows bottom-up (after finish)
   std::vector<glm::uvec4> stats;  // per pixel (after finish(true))
   std::vector<uint32_t> boxTests;  // per pixel, ray-box tests (after finish(true))
@@ -68,6 +73,8 @@ class GpuJob {
   ShaderOptions shader_;
   FrameOptions frame_;
   CameraPath path_;
+  ProgramCache* programs_ = nullptr;
+  int programIndex_ = -1;
   std::unique_ptr<GpuRenderer> gpu_;
   std::unique_ptr<SmaaPass> smaa_;
 };
