@@ -151,7 +151,8 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   std::vector<Exclusion> exclusions;
   const toml::table* referenceTable = nullptr;
   const toml::node* cameraPathNode = nullptr;
-  const toml::node *framesNode = nullptr, *measureMinNode = nullptr, *maxFramesNode = nullptr;
+  const toml::node *framesNode = nullptr, *measureMinNode = nullptr, *maxFramesNode = nullptr,
+                   *programCopiesNode = nullptr;
   std::optional<int> measureMin;
 
   auto readAxes = [&](const toml::table& t, const std::string& section, Sweep& into,
@@ -258,12 +259,15 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
           out.aaControl = r.boolean(mv, key);
         } else if (mk == "share_programs") {
           out.sharePrograms = r.boolean(mv, key);
+        } else if (mk == "program_copies") {
+          programCopiesNode = &mv;
+          out.programCopies = int(r.integer(mv, key, 1, 64));
         } else if (mk == "interleave") {
           out.interleave = r.boolean(mv, key);
         } else {
           r.fail(mk.source(), key,
                  "unknown key; [measure] has min_frames, max_frames, target_ci_pct, max_seconds, group_size, "
-                 "aa_control, share_programs, interleave");
+                 "aa_control, share_programs, program_copies, interleave");
         }
       }
     } else if (section == "trace") {
@@ -338,6 +342,10 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   if (cfg.render.maxFrames < cfg.render.frames)
     r.fail(maxFramesNode->source(), "measure.max_frames",
            std::to_string(cfg.render.maxFrames) + " is below min_frames " + std::to_string(cfg.render.frames));
+
+  if (programCopiesNode && cfg.render.programCopies > 1 && !cfg.render.interleave)
+    r.fail(programCopiesNode->source(), "measure.program_copies",
+           "needs interleave = true (program copies are drawn in one `bvhlab measure` process)");
 
   if (sweeps.empty()) sweeps.push_back(Sweep{"main", {}, {}, {}, {}});
   for (Sweep& s : sweeps) {

@@ -43,6 +43,9 @@ struct RunRender {
   // Runs of a group whose shaders are one text draw with one compiled program (render/program_cache.hpp):
   // a comparison between them does not see where the JIT placed each copy's code. false: each compiles its own.
   bool sharePrograms = true;
+  // Each run drawn by this many separately compiled copies of its program; from 6, findings take
+  // their intervals across the copies (code placements) rather than across rounds of one program.
+  int programCopies = 1;
   bool interleave = true; // false: every run is its own `bvhlab render` process (isolation, no pairing)
   std::string backend = "osmesa";
   bool heatmaps = true;                       // ask for --visits-out next to every image

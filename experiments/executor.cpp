@@ -166,7 +166,7 @@ json measureSpec(const fs::path& binary, const GroupRequest& request) {
   return {{"session", request.session},         {"min_frames", r.frames},
           {"max_frames", r.maxFrames},          {"target_ci_pct", r.targetCiPct},
           {"max_seconds", r.maxSeconds},        {"aa_control", r.aaControl},
-          {"share_programs", r.sharePrograms},
+          {"share_programs", r.sharePrograms},   {"program_copies", r.programCopies},
           {"runs", runs}};
 }
 

@@ -119,6 +119,41 @@ std::optional<double> correlationOf(const std::vector<const json*>& rows, const 
   return spearman(x, y);
 }
 
+// A run's frames per program copy (`frame_ms_copies`, copy 0 first); empty without copies or when a
+// list is malformed or of another length than the rest.
+std::vector<std::vector<double>> programCopies(const json& row) {
+  std::vector<std::vector<double>> out;
+  auto it = row.find("frame_ms_copies");
+  if (it == row.end() || !it->is_array() || it->size() < 2) return {};
+  for (const json& list : *it) {
+    if (!list.is_array()) return {};
+    std::vector<double>& ms = out.emplace_back();
+    for (const json& v : list) {
+      if (!v.is_number()) return {};
+      ms.push_back(v.get<double>());
+    }
+    if (ms.size() != out.front().size()) return {};
+  }
+  return out;
+}
+
+// a/b across program copies: per copy, the paired ratio of the two runs' frames drawn with that copy
+// (one code placement, shared by both runs when they share a program); the median of those ratios
+// with its order-statistic interval over the copies. nullopt unless both runs have the same number of
+// copies, at least kMinValuesForInterval, with paired frames each.
+std::optional<Interval> ratioAcrossCopies(const json& a, const json& b) {
+  const auto ca = programCopies(a), cb = programCopies(b);
+  if (ca.size() < kMinValuesForInterval || ca.size() != cb.size()) return std::nullopt;
+  std::vector<double> perCopy;
+  for (size_t j = 0; j < ca.size(); ++j) {
+    if (ca[j].size() != cb[j].size()) return std::nullopt;
+    const auto r = pairedRatio(ca[j], cb[j]);
+    if (!r) return std::nullopt;
+    perCopy.push_back(r->estimate);
+  }
+  return medianInterval(perCopy);
+}
+
 // A run's A/A control (`prefix` "aa_control": a second program; "aa_shared_control": the same
 // program, its own buffers; render/measure_command.cpp): recomputed from the two frame lists (so
 // findings always use the current interval method), else the ratio `measure` stored.
@@ -130,7 +165,9 @@ std::optional<Interval> controlRatio(const json& row, const std::string& prefix 
         if (v.is_number()) out.push_back(v.get<double>());
     return out;
   }();
-  const std::vector<double> original = frames(row);
+  // The control repeats the run's own program copy: with program copies, copy 0's frames.
+  const std::vector<std::vector<double>> copies = programCopies(row);
+  const std::vector<double> original = copies.empty() ? frames(row) : copies.front();
   if (!control.empty() && control.size() == original.size()) return pairedRatio(original, control);
   const auto ratio = number(row, prefix + "_ratio"), lo = number(row, prefix + "_ci_low"),
              hi = number(row, prefix + "_ci_high");
@@ -232,13 +269,19 @@ class Finder {
                               nb = paired ? std::vector<double>() : embreeNormalised(b);
     const bool viaEmbree = !na.empty() && !nb.empty();
     std::optional<Interval> ratio;
-    if (paired)
+    // With 6 or more program copies the interval spans code placements, which is what the A/A
+    // bands stand in for otherwise: no band on top.
+    const std::optional<Interval> acrossCopies = paired ? ratioAcrossCopies(a, b) : std::nullopt;
+    if (acrossCopies)
+      ratio = acrossCopies;
+    else if (paired)
       ratio = pairedRatio(fa, fb);
     else
       ratio = unpairedRatio(viaEmbree ? na : fa, viaEmbree ? nb : fb,
                             std::hash<std::string>{}(label(a, "key") + "/" + label(b, "key")));
-    const double band = bandOf(a, b);
+    const double band = acrossCopies ? 0.0 : bandOf(a, b);
     c["paired"] = paired;
+    c["interval_over"] = acrossCopies ? "program copies" : paired ? "rounds" : "bootstrap";
     c["shared_program"] = sharedProgram(a, b);
     c["normalised_by"] = viaEmbree ? json("embree") : json();
     c["band"] = band;

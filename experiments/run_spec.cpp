@@ -68,6 +68,7 @@ json RunRender::keyJson() const {
   key["max_frames"] = maxFrames;
   key["target_ci_pct"] = targetCiPct;
   if (maxSeconds > 0.0) key["max_seconds"] = maxSeconds;
+  if (programCopies != 1) key["program_copies"] = programCopies;  // frame_ms is then a median over copies
   return key;
 }
 
@@ -150,6 +151,7 @@ RunSpec RunSpec::fromJson(const json& j) {
   s.render.groupSize = r.value("group_size", s.render.groupSize);
   s.render.aaControl = r.value("aa_control", s.render.aaControl);
   s.render.sharePrograms = r.value("share_programs", s.render.sharePrograms);
+  s.render.programCopies = r.value("program_copies", s.render.programCopies);
   s.render.interleave = r.value("interleave", s.render.interleave);
   s.render.traceCount = r.value("trace_count", s.render.traceCount);
   s.render.traceSeed = r.value("trace_seed", s.render.traceSeed);

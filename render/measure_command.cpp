@@ -31,7 +31,8 @@ namespace {
 // buffers (what two runs with one shader text see: builders, leaf sizes).
 enum class Control { None, Program, Shared };
 
-// One entry of the round-robin: a run of the group, or an A/A control of the first run.
+// One entry of the round-robin: a run of the group (copy 0), one more program copy of a run
+// (program_copies), or an A/A control of the first run.
 struct Entry {
   std::string key;
   RenderCommand cmd;
@@ -41,8 +42,36 @@ struct Entry {
   FrameTimes times;
   std::string error;
   Control control = Control::None;
+  int copy = 0;                  // which program copy draws it (0: the run itself)
+  std::vector<double> copy0Ms;   // a run with copies: its own frames (times.ms becomes the copies' median per round)
   bool alive() const { return job != nullptr && error.empty(); }
 };
+
+// Another entry drawing what `original` draws (its scene, tree, settings), with a program of its own
+// kind: an A/A control or a program copy.
+std::unique_ptr<Entry> repeatOf(const Entry& original) {
+  auto c = std::make_unique<Entry>();
+  c->key = original.key;
+  c->cmd = original.cmd;
+  c->setup.shader = original.setup.shader;
+  c->setup.path = original.setup.path;
+  c->setup.smaaOn = original.setup.smaaOn;
+  c->setup.smaa = original.setup.smaa;
+  c->prepared = original.prepared;
+  return c;
+}
+
+// Per round, the median over the copies' frames (all the same length): robust to one copy's frame
+// meeting a hiccup of the machine, as a mean is not.
+std::vector<double> medianPerRound(const std::vector<const std::vector<double>*>& lists) {
+  std::vector<double> out(lists.front()->size());
+  std::vector<double> round(lists.size());
+  for (size_t i = 0; i < out.size(); ++i) {
+    for (size_t k = 0; k < lists.size(); ++k) round[k] = (*lists[k])[i];
+    out[i] = medianOf(round);
+  }
+  return out;
+}
 
 int intField(const json& spec, const char* name, int fallback, int lo, int hi) {
   if (!spec.contains(name)) return fallback;
@@ -82,6 +111,9 @@ json measureGroup(const json& spec) {
   const bool wantControl = spec.value("aa_control", true) && maxFrames >= int(kMinValuesForInterval);
   // One program per distinct shader text (render/program_cache.hpp); false: every run compiles its own.
   const bool sharePrograms = spec.value("share_programs", true);
+  // Each run drawn by this many separately compiled copies of its program (each copy shared by the
+  // runs of one shader text): the findings' intervals then span code placements (6 or more copies).
+  const int programCopies = intField(spec, "program_copies", 1, 1, 64);
   const std::string session = spec.value("session", std::string("unnamed"));
   const auto start = std::chrono::steady_clock::now();
 
@@ -134,7 +166,10 @@ json measureGroup(const json& spec) {
   const Backend backend = entries.front()->error.empty() ? entries.front()->setup.backend : Backend::OSMesa;
   std::unique_ptr<GlContext> ctx = createContext(backend);
   const std::string renderer = ctx->renderer();
-  ProgramCache programs;  // declared after the context: destroyed while it is still current
+  // One cache per program copy; declared after the context: destroyed while it is still current.
+  std::vector<std::unique_ptr<ProgramCache>> caches;
+  for (int k = 0; k < programCopies; ++k) caches.push_back(std::make_unique<ProgramCache>());
+  ProgramCache& programs = *caches.front();
   for (auto& e : entries) {
     if (!e->error.empty()) continue;
     if (e->setup.backend != backend) {
@@ -148,6 +183,22 @@ json measureGroup(const json& spec) {
       e->error = std::string(dynamic_cast<const ShaderError*>(&ex) ? "shader error: " : "") + ex.what();
     }
   }
+  // The program copies 1..K-1 of every run that works.
+  const size_t runCount = entries.size();
+  for (int k = 1; k < programCopies; ++k)
+    for (size_t i = 0; i < runCount; ++i) {
+      const Entry& original = *entries[i];
+      if (!original.alive()) continue;
+      auto c = repeatOf(original);
+      c->copy = k;
+      try {
+        c->job = std::make_unique<GpuJob>(c->cmd, c->setup, c->prepared, sharePrograms ? caches[size_t(k)].get() : nullptr,
+                                          stackSizeOf(original));
+      } catch (const std::exception& ex) {
+        c->error = ex.what();
+      }
+      entries.push_back(std::move(c));
+    }
   // The A/A controls: the first run that works, measured a second time by a second program and,
   // with shared programs, a third time by its own program over its own buffers.
   Entry* controlled = nullptr;
@@ -158,14 +209,7 @@ json measureGroup(const json& spec) {
       for (const Control kind : {Control::Program, Control::Shared}) {
         if (kind == Control::Shared && !sharePrograms) continue;
         const Entry& original = *controlled;
-        auto c = std::make_unique<Entry>();
-        c->key = original.key;
-        c->cmd = original.cmd;
-        c->setup.shader = original.setup.shader;
-        c->setup.path = original.setup.path;
-        c->setup.smaaOn = original.setup.smaaOn;
-        c->setup.smaa = original.setup.smaa;
-        c->prepared = original.prepared;
+        auto c = repeatOf(original);
         c->control = kind;
         try {
           c->job = std::make_unique<GpuJob>(c->cmd, c->setup, c->prepared,
@@ -234,14 +278,33 @@ json measureGroup(const json& spec) {
               {"gpu", !isSoftwareRenderer(renderer)}, {"share_programs", sharePrograms}};
   json runs = json::object();
   std::map<Control, const Entry*> controls;
+  std::map<std::string, std::vector<const Entry*>> copiesOf;  // run key -> its copies 1..K-1
+  for (const auto& e : entries)
+    if (e->copy > 0) copiesOf[e->key].push_back(e.get());
   for (auto& e : entries) {
     if (e->control != Control::None) {
       controls[e->control] = e.get();
       continue;
     }
+    if (e->copy > 0) continue;
+    for (const Entry* c : copiesOf[e->key])
+      if (e->error.empty() && !c->error.empty()) e->error = "program copy " + std::to_string(c->copy) + ": " + c->error;
     if (!e->error.empty()) {
       runs[e->key] = {{"error", e->error}};
       continue;
+    }
+    json copyFrames;
+    if (programCopies > 1) {  // the run's time: per round, the median over its copies
+      std::vector<const std::vector<double>*> ms{&e->times.ms}, aa{&e->times.aaMs};
+      copyFrames = json::array({e->times.ms});
+      for (const Entry* c : copiesOf[e->key]) {
+        ms.push_back(&c->times.ms);
+        aa.push_back(&c->times.aaMs);
+        copyFrames.push_back(c->times.ms);
+      }
+      e->copy0Ms = e->times.ms;
+      e->times.ms = medianPerRound(ms);
+      if (!e->times.aaMs.empty()) e->times.aaMs = medianPerRound(aa);
     }
     try {
       e->times.stop = stop;
@@ -255,6 +318,10 @@ json measureGroup(const json& spec) {
       // Runs of one session with the same `program` drew with one compiled program.
       r["program"] = e->job->programIndex() >= 0 ? json(e->job->programIndex()) : json();
       r["bvh_stack_size"] = e->job->shader().bvhStackSize;
+      if (programCopies > 1) {
+        r["program_copies"] = programCopies;
+        r["frame_ms_copies"] = std::move(copyFrames);  // copy 0 (the run's own program) first
+      }
       const uint64_t overflows = stackOverflowPixels(e->job->stats);
       e->job.reset();
       if (overflows > 0)
@@ -268,13 +335,14 @@ json measureGroup(const json& spec) {
   }
   if (controlled && runs[controlled->key].contains("frame_ms")) {
     json& r = runs[controlled->key];
+    const std::vector<double>& own = controlled->copy0Ms.empty() ? controlled->times.ms : controlled->copy0Ms;
     for (const auto& [kind, control] : controls) {
       if (!control->error.empty()) continue;
       // original / control from paired rounds: an interval that excludes 1 would mean the round-robin
       // itself favours one program (the report prints it as the sweep's noise floor).
       const std::string prefix = kind == Control::Program ? "aa_control" : "aa_shared_control";
       r[prefix + "_frame_ms_all"] = control->times.ms;
-      if (const auto ratio = pairedRatio(controlled->times.ms, control->times.ms)) {
+      if (const auto ratio = pairedRatio(own, control->times.ms)) {
         r[prefix + "_ratio"] = ratio->estimate;
         r[prefix + "_ci_low"] = ratio->low;
         r[prefix + "_ci_high"] = ratio->high;
@@ -283,6 +351,7 @@ json measureGroup(const json& spec) {
   }
   for (auto& e : entries) e->job.reset();  // before the program cache and the context go
   out["programs"] = programs.size();
+  out["program_copies"] = programCopies;
   out["runs"] = std::move(runs);
   out["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

@@ -267,82 +267,6 @@ TEST_F(Measurement, FakeClockWithKnownEffectsGivesTheRightVerdicts) {
   EXPECT_GT(f["predictors"][0]["spearman"]["sah_cost"].get<double>(), 0.5);
 }
 
-// Program placement (render/program_cache.hpp): a fake group where runs of one kernel share a
-// program, embree's tree is truly 3% slower than sah-binned, and the separately compiled copy of the first
-// run's program (the "program" control) is 8% slow, as llvmpipe's unlucky copies are. Between runs
-// of one program the shared-program control's narrow band applies, so the 3% is called; across
-// kernels (two programs) the program control's band does. Without a shared control (older results)
-// the program band applies everywhere and the 3% is not called.
-TEST_F(Measurement, RunsThatShareAProgramUseTheSharedControlsBand) {
-  const std::string config = R"(
-[axes]
-scenes = "a.off"
-builders = ["sah-binned", "embree"]
-kernels = ["stack-ordered", "stackless"]
-)";
-  for (const bool sharedControl : {true, false}) {
-    SCOPED_TRACE(sharedControl ? "with a shared control" : "without");
-    const fs::path out = root / (sharedControl ? "shared" : "program-only");
-    RunOptions o = options(config, out);
-    o.groupExecutor = [&](GroupRequest& g) {
-      std::mt19937_64 rng(7);
-      std::normal_distribution<double> load(0.0, 0.2), jitter(0.0, 0.005);
-      const size_t n = g.runs.size();
-      std::vector<std::vector<double>> ms(n + 2);  // the runs, then the program and shared controls
-      auto trueMs = [&](size_t i) { return g.runs[i].spec.axis("builder")->label == "embree" ? 10.3 : 10.0; };
-      for (int r = 0; r < 60; ++r) {
-        const double machine = std::exp(load(rng));
-        for (size_t i = 0; i < n; ++i) ms[i].push_back(trueMs(i) * machine * std::exp(jitter(rng)));
-        ms[n].push_back(trueMs(0) * 1.08 * machine * std::exp(jitter(rng)));      // another copy, unlucky
-        ms[n + 1].push_back(trueMs(0) * machine * std::exp(jitter(rng)));         // the same program
-      }
-      json result = json::object();
-      for (size_t i = 0; i < n; ++i) {
-        const RunSpec& s = g.runs[i].spec;
-        json r = {{"frame_ms", medianOf(ms[i])}, {"frame_ms_all", ms[i]}, {"frames", 60},
-                  {"session", g.session},        {"tree_hash", s.axis("builder")->label},
-                  {"program", s.axis("kernel")->label == "stackless" ? 1 : 0}};
-        if (i == 0) {
-          r["aa_control_frame_ms_all"] = ms[n];
-          if (sharedControl) r["aa_shared_control_frame_ms_all"] = ms[n + 1];
-        }
-        result[s.key] = r;
-      }
-      return result;
-    };
-    runSweep(o);
-    const json f = readJsonFile(out / "findings.json");
-    ASSERT_EQ(f["noise"].size(), sharedControl ? 2u : 1u);
-    double programBand = 0.0, sharedBand = 0.0;
-    for (const json& e : f["noise"]) {
-      const double band = std::max(std::abs(std::log(e["ci_low"].get<double>())), std::abs(std::log(e["ci_high"].get<double>())));
-      (e["control"] == "program" ? programBand : sharedBand) = band;
-    }
-    EXPECT_GT(programBand, 0.06);  // the unlucky copy's 8%
-    if (sharedControl) EXPECT_LT(sharedBand, 0.02);
-
-    int builderPairs = 0, kernelPairs = 0;
-    for (const json& c : f["comparisons"]) {
-      if (c["kind"] != "axis") continue;
-      if (c["axis"] == "builder") {
-        ++builderPairs;
-        EXPECT_TRUE(c["shared_program"]) << c.dump();
-        EXPECT_EQ(c["a_label"], "embree");
-        EXPECT_NEAR(c["ratio"].get<double>(), 1.03, 0.01);
-        EXPECT_NEAR(c["band"].get<double>(), sharedControl ? sharedBand : programBand, 1e-12);
-        EXPECT_EQ(c["verdict"], sharedControl ? "slower" : "no detectable difference") << c.dump();
-      } else if (c["axis"] == "kernel") {
-        ++kernelPairs;
-        EXPECT_FALSE(c["shared_program"]) << c.dump();
-        EXPECT_NEAR(c["band"].get<double>(), programBand, 1e-12);
-        EXPECT_EQ(c["verdict"], "no detectable difference") << c.dump();
-      }
-    }
-    EXPECT_EQ(builderPairs, 2);  // one per kernel
-    EXPECT_EQ(kernelPairs, 2);   // one per builder
-  }
-}
-
 TEST_F(Measurement, DepthIsComparedOnlyWhereItChangesTheRays) {
   FakeClock clock;
   RunOptions o = options(R"(
@@ -519,38 +443,6 @@ kernels = ["stack-ordered", "no-such-kernel"]
     EXPECT_TRUE(c["paired"]) << c.dump();
     EXPECT_TRUE(c["shared_program"]) << c.dump();
   }
-}
-
-// share_programs = false: every run compiles its own program (no `program`, no shared control).
-TEST_F(Measurement, ShareProgramsFalseGivesEveryRunItsOwnProgram) {
-  RunOptions o = options(R"(
-[render]
-width = 32
-height = 18
-warmup = 1
-heatmaps = false
-[measure]
-min_frames = 6
-max_frames = 6
-share_programs = false
-[axes]
-scenes = "a.off"
-builders = ["median", "sah-binned"]
-kernels = "stack-ordered"
-)",
-                         root / "out");
-  o.binary = BVHLAB_BINARY;
-  ASSERT_EQ(runSweep(o).failed, 0u);
-  int controls = 0;
-  for (const auto& [key, record] : readRecords(SweepDir{root / "out"})) {
-    ASSERT_EQ(record["status"], "ok") << record.dump();
-    const json& r = record["result"];
-    EXPECT_TRUE(r["program"].is_null()) << r["program"];
-    EXPECT_FALSE(r.contains("aa_shared_control_ratio"));
-    controls += r.contains("aa_control_ratio") ? 1 : 0;
-  }
-  EXPECT_EQ(controls, 1);
-  for (const json& c : readJsonFile(root / "out" / "findings.json")["comparisons"]) EXPECT_FALSE(c["shared_program"]);
 }
 
 // Ctrl-C (SIGINT) or SIGTERM to `bvhlab run` stops the group's child too, keeps what finished, and
