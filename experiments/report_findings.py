@@ -65,8 +65,8 @@ def noise_floor(page, data, f):
         page.note("No A/A control in this sweep: the noise band is 0, so any interval that excludes 1 is "
                   "called faster or slower.")
         return
-    page.p("Each group of runs measured together (one session) measures one configuration twice "
-           "(<i>A/A control</i>). The ratio of the two should be 1; its interval is what this machine's noise "
+    page.p("Each group of runs measured together (one session) measures one configuration again, as if it were "
+           "another (<i>A/A control</i>). The ratio of the two should be 1; its interval is what this machine's noise "
            "does to a ratio, and a difference inside that band is never called faster or slower.")
     kinds = {e.get("control") for e in noise if e.get("control")}
     if "shared" in kinds:
