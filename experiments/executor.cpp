@@ -62,6 +62,7 @@ std::vector<std::string> traceCommandLine(const fs::path& binary, const RunSpec&
                                    "--max-frames", std::to_string(r.maxFrames),
                                    "--target-ci-pct", number(r.targetCiPct), "--backend", r.backend};
   if (r.maxSeconds > 0.0) argv.insert(argv.end(), {"--max-seconds", number(r.maxSeconds)});
+  if (r.programCopies > 1) argv.insert(argv.end(), {"--program-copies", std::to_string(r.programCopies)});
   for (const char* key : {"eye", "target", "up"})
     if (scene.value.contains(key)) argv.insert(argv.end(), {std::string("--") + key, vec3Flag(scene.value[key])});
   if (scene.value.contains("fov")) argv.insert(argv.end(), {"--fov", number(scene.value["fov"].get<double>())});

@@ -5,8 +5,10 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <optional>
 #include <random>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -76,6 +78,10 @@ void addTraceOptions(CLI::App& app, TraceCommand& c, RenderCliText& text) {
   app.add_option("--target-ci-pct", c.targetCiPct, "stop when the GLSL time's 95% interval is within +-this % of its median");
   app.add_option("--max-seconds", c.maxSeconds, "stop the rounds after this long (0 = no limit)");
   app.add_option("--embree-threads", c.embreeThreads, "Embree's threads (0 = every core)");
+  app.add_option("--program-copies", c.programCopies,
+                 "trace with this many separately compiled copies of the kernel's program, each once per round; "
+                 "from 6 the ratio to Embree's interval spans them")
+      ->check(CLI::Range(1, 64));
   app.add_option("--eye", text.eye, "camera position x,y,z");
   app.add_option("--target", text.target, "camera target x,y,z");
   app.add_option("--up", text.up, "camera up x,y,z");
@@ -124,18 +130,24 @@ int runTrace(const TraceCommand& c) {
   to.storage = setup.shader.storage;
   to.robust = setup.shader.robust;
   to.anyHit = anyHit;
-  GlRayTracer gl(prepared->packed, to);
-  gl.setRays(rays.rays);
+  // Copy 0 gives the hits and the counts; every copy is timed.
+  std::vector<std::unique_ptr<GlRayTracer>> copies;
+  for (int k = 0; k < c.programCopies; ++k) {
+    copies.push_back(std::make_unique<GlRayTracer>(prepared->packed, to));
+    copies.back()->setRays(rays.rays);
+  }
+  GlRayTracer& gl = *copies.front();
 
   std::vector<BatchHit> embreeHits;
   auto embreeTrace = [&] { return anyHit ? embree.occluded(rays.rays, embreeHits) : embree.closest(rays.rays, embreeHits); };
   for (int i = 0; i < rc.warmup; ++i) {
-    gl.trace();
+    for (auto& copy : copies) copy->trace();
     embreeTrace();
   }
   // Rounds: one trace of each, in an order drawn per round (fixed seed), so drift hits both alike and
   // round i's two times pair up.
   std::vector<double> glMs, embreeMs;
+  std::vector<std::vector<double>> copyMs(copies.size());
   std::mt19937_64 order(0x7261795f74726163ull);
   const int maxFrames = std::max(rc.frames, c.maxFrames);
   const auto started = std::chrono::steady_clock::now();
@@ -153,13 +165,31 @@ int runTrace(const TraceCommand& c) {
         break;
       }
     }
-    if (order() & 1u) {
-      glMs.push_back(gl.trace());
-      embreeMs.push_back(embreeTrace());
-    } else {
-      embreeMs.push_back(embreeTrace());
-      glMs.push_back(gl.trace());
+    if (copies.size() == 1) {
+      if (order() & 1u) {
+        glMs.push_back(gl.trace());
+        embreeMs.push_back(embreeTrace());
+      } else {
+        embreeMs.push_back(embreeTrace());
+        glMs.push_back(gl.trace());
+      }
+      continue;
     }
+    // Copies: every copy and Embree once, in a shuffled order (Fisher-Yates on the raw stream); the
+    // round's GLSL time is the median over the copies.
+    std::vector<size_t> slots(copies.size() + 1);  // slot copies.size() is Embree
+    for (size_t k = 0; k < slots.size(); ++k) slots[k] = k;
+    for (size_t k = slots.size(); k > 1; --k) std::swap(slots[k - 1], slots[size_t(order() % k)]);
+    std::vector<double> round;
+    for (size_t slot : slots) {
+      if (slot == copies.size()) {
+        embreeMs.push_back(embreeTrace());
+      } else {
+        copyMs[slot].push_back(copies[slot]->trace());
+        round.push_back(copyMs[slot].back());
+      }
+    }
+    glMs.push_back(medianOf(round));
   }
   const std::vector<BatchHit> glHits = gl.results();
   const Agreement agree = compare(glHits, embreeHits, anyHit);
@@ -183,7 +213,15 @@ int runTrace(const TraceCommand& c) {
   const double n = double(rays.rays.size());
   const double ms = medianOf(glMs), eMs = medianOf(embreeMs);
   const auto ci = medianInterval(glMs), eCi = medianInterval(embreeMs);
-  const auto ratio = pairedRatio(glMs, embreeMs);
+  // The ratio to Embree: across the copies from 6 of them (per copy its paired ratio, then the median
+  // of those with its order-statistic interval), else over the rounds.
+  std::vector<double> copyRatios;
+  if (copies.size() > 1)
+    for (const std::vector<double>& m : copyMs)
+      if (const auto r = pairedRatio(m, embreeMs)) copyRatios.push_back(r->estimate);
+  const std::optional<Interval> acrossCopies =
+      copyRatios.size() == copies.size() ? medianInterval(copyRatios) : std::nullopt;
+  const auto ratio = acrossCopies ? acrossCopies : pairedRatio(glMs, embreeMs);
   const auto orNull = [](const std::optional<Interval>& i, bool high) {
     return i ? nlohmann::json(high ? i->high : i->low) : nlohmann::json();
   };
@@ -224,6 +262,12 @@ int runTrace(const TraceCommand& c) {
   j["ratio_to_embree"] = ratio ? nlohmann::json(ratio->estimate) : nlohmann::json(eMs > 0 ? ms / eMs : 0.0);
   j["ratio_ci_low"] = orNull(ratio, false);
   j["ratio_ci_high"] = orNull(ratio, true);
+  j["ratio_interval_over"] = acrossCopies ? "program copies" : "rounds";
+  j["program_copies"] = copies.size();
+  if (copies.size() > 1) {
+    j["ms_copies"] = copyMs;
+    j["ratio_to_embree_copies"] = copyRatios;
+  }
   j["node_visits_per_ray"] = visitsPerRay;
   j["triangle_tests_per_ray"] = testsPerRay;
   j["box_tests_per_ray"] = n > 0 ? double(boxTests) / n : 0.0;  // a wide node visit tests several boxes

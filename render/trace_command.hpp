@@ -23,6 +23,10 @@ struct TraceCommand {
   // interval is within +-targetCiPct % of its median, or maxFrames rounds, or maxSeconds.
   int maxFrames = 0;  // 0 = --frames (a fixed count)
   double targetCiPct = 0.0, maxSeconds = 0.0;  // 0 = hardware concurrency (llvmpipe uses every core too)
+  // The kernel traced by this many separately compiled copies of its program (each compiled copy has
+  // its own speed on llvmpipe: experiments/README.md, "One program per shader text"); from 6, the
+  // ratio to Embree gets its interval across the copies.
+  int programCopies = 1;
 };
 
 void addTraceOptions(CLI::App& app, TraceCommand& cmd, RenderCliText& text);

@@ -16,6 +16,7 @@
 #include "cli_run.hpp"
 #include "datasets/procedural.hpp"
 #include "datasets/scene_io.hpp"
+#include "render/frame_stats.hpp"
 #include "render/gl_context.hpp"
 #include "render/prepared_scene.hpp"
 #include "render/ray_tracer_gl.hpp"
@@ -359,6 +360,36 @@ TEST(TraceCli, JsonHasTheIssueKeys) {
   r = clitest::run("trace " + input + " --rays sideways");
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.err.find("primary, shadow, specular, diffuse, ao"), std::string::npos) << r.err;
+}
+
+// --program-copies 6: six compiled copies of the kernel traced every round; the round's GLSL time is
+// their median, and the ratio to Embree's interval is [min, max] of the six copies' paired ratios
+// (the order-statistic interval of six values). Out-of-range counts are refused.
+TEST(TraceCli, ProgramCopiesGiveTheRatioAnIntervalAcrossCopies) {
+  const std::string input = clitest::scene("mesh.toml").string();
+  if (!fs::exists(input)) GTEST_SKIP() << "no mesh input";
+  clitest::Result r = clitest::run("trace " + input + " --rays primary --json --count 2000 --frames 6 --warmup 1 --program-copies 6");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["program_copies"], 6);
+  EXPECT_EQ(j["ratio_interval_over"], "program copies");
+  ASSERT_EQ(j["ms_copies"].size(), 6u);
+  const std::vector<double> all = j["ms_all"];
+  ASSERT_EQ(all.size(), 6u);
+  for (size_t i = 0; i < all.size(); ++i) {
+    std::vector<double> round;
+    for (const nlohmann::json& copy : j["ms_copies"]) round.push_back(copy.at(i).get<double>());
+    EXPECT_DOUBLE_EQ(all[i], medianOf(round));
+  }
+  const std::vector<double> ratios = j["ratio_to_embree_copies"];
+  ASSERT_EQ(ratios.size(), 6u);
+  EXPECT_DOUBLE_EQ(j["ratio_ci_low"].get<double>(), *std::min_element(ratios.begin(), ratios.end()));
+  EXPECT_DOUBLE_EQ(j["ratio_ci_high"].get<double>(), *std::max_element(ratios.begin(), ratios.end()));
+  EXPECT_EQ(j["hit_mismatches"], 0);
+
+  r = clitest::run("trace " + input + " --json --count 100 --frames 1 --program-copies 0");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("--program-copies"), std::string::npos) << r.err;
 }
 
 }  // namespace
