@@ -182,12 +182,10 @@ class Finder {
       if (r.value("status", "") == "ok" && !r.value("reference_only", false) && number(r, "frame_ms"))
         ok_.push_back(&r);
     // The noise bands of each session: how far its A/A controls' intervals reach from 1.
-    for (const json* r : ok_) {
-      if (const auto aa = controlRatio(*r); aa && aa->low > 0.0)
-        band_[session(*r)] = std::max(std::abs(std::log(aa->low)), std::abs(std::log(aa->high)));
-      if (const auto aa = controlRatio(*r, "aa_shared_control"); aa && aa->low > 0.0)
-        sharedBand_[session(*r)] = std::max(std::abs(std::log(aa->low)), std::abs(std::log(aa->high)));
-    }
+    for (const json* r : ok_)
+      for (auto [prefix, bands] : {std::pair{"aa_control", &band_}, std::pair{"aa_shared_control", &sharedBand_}})
+        if (const auto aa = controlRatio(*r, prefix); aa && aa->low > 0.0)
+          (*bands)[session(*r)] = std::max(std::abs(std::log(aa->low)), std::abs(std::log(aa->high)));
   }
 
   json run() {

@@ -11,7 +11,9 @@
 #pragma once
 #include <cstdint>
 #include <optional>
+#include <random>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace bvhlab {
@@ -23,6 +25,14 @@ constexpr double kConfidence = 0.95;
 constexpr size_t kMinValuesForInterval = 6;
 
 double medianOf(std::vector<double> values);  // 0 for an empty list
+
+// The order of one round of interleaved measurements: Fisher-Yates driven by the generator's raw
+// output (std::shuffle's use of it is implementation-defined), so a fixed seed gives the same orders
+// on every standard library.
+template <class T>
+void shuffleRound(std::vector<T>& order, std::mt19937_64& rng) {
+  for (size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[size_t(rng() % i)]);
+}
 
 struct Interval {
   double estimate = 0.0;      // the median (or median ratio)

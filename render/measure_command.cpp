@@ -251,8 +251,7 @@ json measureGroup(const json& spec) {
   std::string stop = minFrames == maxFrames ? "fixed" : "max_frames";
   const auto roundsStart = std::chrono::steady_clock::now();
   while (rounds < maxFrames) {
-    // Fisher-Yates with the generator's raw output (std::shuffle's use of it is implementation-defined).
-    for (size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[size_t(rng() % i)]);
+    shuffleRound(order, rng);
     for (size_t i : order)
       if (entries[i]->alive()) draw(*entries[i], rounds, true);
     ++rounds;

@@ -144,8 +144,8 @@ int runTrace(const TraceCommand& c) {
     for (auto& copy : copies) copy->trace();
     embreeTrace();
   }
-  // Rounds: one trace of each, in an order drawn per round (fixed seed), so drift hits both alike and
-  // round i's two times pair up.
+  // Rounds: one trace of each copy and of Embree, in an order drawn per round (fixed seed), so drift
+  // hits them alike and round i's times pair up.
   std::vector<double> glMs, embreeMs;
   std::vector<std::vector<double>> copyMs(copies.size());
   std::mt19937_64 order(0x7261795f74726163ull);
@@ -165,21 +165,11 @@ int runTrace(const TraceCommand& c) {
         break;
       }
     }
-    if (copies.size() == 1) {
-      if (order() & 1u) {
-        glMs.push_back(gl.trace());
-        embreeMs.push_back(embreeTrace());
-      } else {
-        embreeMs.push_back(embreeTrace());
-        glMs.push_back(gl.trace());
-      }
-      continue;
-    }
-    // Copies: every copy and Embree once, in a shuffled order (Fisher-Yates on the raw stream); the
-    // round's GLSL time is the median over the copies.
+    // Every copy and Embree once, in a shuffled order; the round's GLSL time is the median over the
+    // copies (one copy: its time).
     std::vector<size_t> slots(copies.size() + 1);  // slot copies.size() is Embree
     for (size_t k = 0; k < slots.size(); ++k) slots[k] = k;
-    for (size_t k = slots.size(); k > 1; --k) std::swap(slots[k - 1], slots[size_t(order() % k)]);
+    shuffleRound(slots, order);
     std::vector<double> round;
     for (size_t slot : slots) {
       if (slot == copies.size()) {

@@ -45,6 +45,23 @@ inline std::string readText(const fs::path& p) {
 
 inline json readJsonFile(const fs::path& p) { return json::parse(readText(p)); }
 
+// Options for a sweep of `configFile` (sweepOptions: of `text`, written there first) into `out`,
+// without a report or progress lines; the caller sets the executor (or a real binary).
+inline RunOptions quietOptions(const fs::path& configFile, const fs::path& out, const KnownNames& names) {
+  RunOptions o;
+  o.config = configFile;
+  o.outDir = out;
+  o.report = false;
+  o.progress = false;
+  o.names = names;
+  return o;
+}
+inline RunOptions sweepOptions(const fs::path& configFile, const std::string& text, const fs::path& out,
+                               const KnownNames& names) {
+  writeText(configFile, text);
+  return quietOptions(configFile, out, names);
+}
+
 // Triangle count from an OFF header ("OFF\nV F E"): lets the fake report mesh/no-mesh scenes.
 inline int offTriangles(const fs::path& p) {
   std::ifstream in(p);
@@ -142,12 +159,7 @@ class Experiments : public ::testing::Test {
   }
 
   RunOptions options(const fs::path& config, const fs::path& out, FakeRenderer& fake) {
-    RunOptions o;
-    o.config = config;
-    o.outDir = out;
-    o.report = false;
-    o.progress = false;
-    o.names = kNames;
+    RunOptions o = quietOptions(config, out, kNames);
     o.executor = [&fake](RunRequest& r) { return fake(r); };
     return o;
   }

@@ -22,6 +22,7 @@
 #include "experiments/runner.hpp"
 #include "experiments/sweep_dir.hpp"
 #include "render/frame_stats.hpp"
+#include "tests/test_experiments_fixture.hpp"
 
 namespace fs = std::filesystem;
 using namespace bvhlab;
@@ -123,14 +124,7 @@ class Measurement : public ::testing::Test {
   }
 
   RunOptions options(const std::string& config, const fs::path& out) {
-    writeText(root / "cfg.toml", config);
-    RunOptions o;
-    o.config = root / "cfg.toml";
-    o.outDir = out;
-    o.report = false;
-    o.progress = false;
-    o.names = kNames;
-    return o;
+    return experiments_test::sweepOptions(root / "cfg.toml", config, out, kNames);
   }
 
   fs::path root;

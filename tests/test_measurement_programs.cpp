@@ -21,13 +21,17 @@ class MeasurementPrograms : public Experiments {
   }
   // A sweep of `config` into `out`, groups measured by the caller's executor (or a real child).
   RunOptions groupOptions(const std::string& config, const fs::path& out) {
-    writeText(root / "cfg.toml", config);
-    RunOptions o;
-    o.config = root / "cfg.toml";
-    o.outDir = out;
-    o.report = false;
-    o.progress = false;
-    o.names = kNames;
+    return sweepOptions(root / "cfg.toml", config, out, kNames);
+  }
+  // The real child on the quad: two builders, one kernel, 6 fixed rounds at 32x18, plus `measure`
+  // (one more [measure] line).
+  RunOptions realOptions(const std::string& measure) {
+    RunOptions o = groupOptions("[render]\nwidth = 32\nheight = 18\nwarmup = 1\nheatmaps = false\n"
+                                "[measure]\nmin_frames = 6\nmax_frames = 6\n" + measure + "\n"
+                                "[axes]\nscenes = \"a.off\"\nbuilders = [\"median\", \"sah-binned\"]\n"
+                                "kernels = \"stack-ordered\"\n",
+                                root / "out");
+    o.binary = BVHLAB_BINARY;
     return o;
   }
 };
@@ -161,23 +165,7 @@ kernels = ["stack-ordered", "stackless"]
 
 // share_programs = false: every run compiles its own program (no `program`, no shared control).
 TEST_F(MeasurementPrograms, RealShareProgramsFalseGivesEveryRunItsOwnProgram) {
-  RunOptions o = groupOptions(R"(
-[render]
-width = 32
-height = 18
-warmup = 1
-heatmaps = false
-[measure]
-min_frames = 6
-max_frames = 6
-share_programs = false
-[axes]
-scenes = "a.off"
-builders = ["median", "sah-binned"]
-kernels = "stack-ordered"
-)",
-                         root / "out");
-  o.binary = BVHLAB_BINARY;
+  RunOptions o = realOptions("share_programs = false");
   ASSERT_EQ(runSweep(o).failed, 0u);
   int controls = 0;
   for (const auto& [key, record] : readRecords(SweepDir{root / "out"})) {
@@ -227,23 +215,7 @@ TEST_F(MeasurementPrograms, SixProgramCopiesGiveAnIntervalAcrossCopies) {
 // The real child with program_copies = 6: six frame lists per run, the run's frames their median per
 // round, findings across the copies; and the config refuses copies without interleaving.
 TEST_F(MeasurementPrograms, RealProgramCopiesAreDrawnAndCombined) {
-  RunOptions o = groupOptions(R"(
-[render]
-width = 32
-height = 18
-warmup = 1
-heatmaps = false
-[measure]
-min_frames = 6
-max_frames = 6
-program_copies = 6
-[axes]
-scenes = "a.off"
-builders = ["median", "sah-binned"]
-kernels = "stack-ordered"
-)",
-                              root / "out");
-  o.binary = BVHLAB_BINARY;
+  RunOptions o = realOptions("program_copies = 6");
   ASSERT_EQ(runSweep(o).failed, 0u);
   for (const auto& [key, record] : readRecords(SweepDir{root / "out"})) {
     ASSERT_EQ(record["status"], "ok") << record.dump();
