@@ -164,12 +164,20 @@ int main(int argc, char** argv) {
   runCmd->add_flag("--no-retry", noRetry, "keep failed runs as failed instead of retrying them");
   runCmd->add_flag("--no-report", noReport, "do not write report.html at the end");
   runCmd->add_option("--binary", binary, "renderer executable (default: this bvhlab)");
+  runCmd->add_option("--replicates", ro.replicates,
+                     "measure the sweep R times over, each pass after the previous one, and pool every comparison "
+                     "over the passes (default: the config's [experiment] replicates, else 1; experiments/README.md)")
+      ->check(CLI::Range(1, kMaxReplicates));
 
   std::vector<std::string> mergeDirs;
   std::string mergeOut;
   auto* mergeCmd = app.add_subcommand("merge", "combine shard output directories and regenerate the report");
   mergeCmd->add_option("dirs", mergeDirs, "shard output directories")->required();
   mergeCmd->add_option("--out", mergeOut, "merged output directory")->required();
+  bool mergeReplicates = false;
+  mergeCmd->add_flag("--replicates", mergeReplicates,
+                     "the directories are repetitions of one sweep: keep each as its own replicates and pool "
+                     "the comparisons over them (--out must be a new directory)");
 
   std::string reportDir;
   auto* reportCmd = app.add_subcommand("report", "regenerate DIR/report.html from DIR/results.json");
@@ -277,7 +285,8 @@ int main(int argc, char** argv) {
       return runCommand(ro);
     }
     if (mergeCmd->parsed())
-      return mergeCommand(std::vector<std::filesystem::path>(mergeDirs.begin(), mergeDirs.end()), mergeOut);
+      return mergeCommand(std::vector<std::filesystem::path>(mergeDirs.begin(), mergeDirs.end()), mergeOut,
+                          mergeReplicates);
     if (reportCmd->parsed()) return reportCommand(reportDir);
     if (hardCmd->parsed()) return runHardCases(hc);
     if (build->parsed()) return buildCommand(bc);

@@ -186,8 +186,9 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         if (ek == "name") cfg.name = r.string(ev, key);
         else if (ek == "description") cfg.description = r.string(ev, key);
         else if (ek == "seed_figures") cfg.seedFigures = r.boolean(ev, key);
+        else if (ek == "replicates") cfg.replicates = int(r.integer(ev, key, 1, kMaxReplicates));
         else if (ek == "reference") referenceTable = &r.table(ev, key);
-        else r.fail(ek.source(), key, "unknown key; [experiment] has name, description, reference, seed_figures");
+        else r.fail(ek.source(), key, "unknown key; [experiment] has name, description, reference, seed_figures, replicates");
       }
     } else if (section == "render") {
       for (auto&& [rk, rv] : r.table(v, section)) {

@@ -106,12 +106,17 @@ struct KnownNames {
 };
 KnownNames registeredNames();  // from bvhlab::builders(), layouts() and the kernel registry when present
 
+// [experiment] replicates: at most this many passes over a sweep.
+constexpr int kMaxReplicates = 1000;
+
 struct ExperimentConfig {
   std::filesystem::path file;
   std::string text;  // the file as read
   std::string hash;  // FNV-1a 64 of text, 16 hex digits
   std::string name, description;
   bool seedFigures = false;       // report adds sections mirroring the seed report's Figs. 8-12
+  int replicates = 1;             // [experiment] replicates: the sweep is measured this many times over
+                                  // (each pass a new child process per group; experiments/replicates.hpp)
   RunRender render;
   nlohmann::json reference;       // [experiment.reference] as written: singular axis -> value, frames, warmup
   std::vector<std::string> sweepNames;

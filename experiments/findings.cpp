@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "experiments/config.hpp"
+#include "experiments/replicates.hpp"
 #include "render/frame_stats.hpp"
 
 namespace bvhlab {
@@ -175,6 +176,15 @@ std::optional<Interval> controlRatio(const json& row, const std::string& prefix 
   return Interval{*ratio, *lo, *hi, kConfidence, original.size()};
 }
 
+// A run's measurements: each replicate's row (results.json `replicate_rows`), or the row itself.
+std::vector<const json*> replicatesOf(const json& row) {
+  std::vector<const json*> out;
+  if (auto it = row.find("replicate_rows"); it != row.end() && it->is_array())
+    for (const json& r : *it) out.push_back(&r);
+  if (out.empty()) out.push_back(&row);
+  return out;
+}
+
 class Finder {
  public:
   Finder(const json& rows, const json& axisOrder) : axisOrder_(axisOrder) {
@@ -182,10 +192,11 @@ class Finder {
       if (r.value("status", "") == "ok" && !r.value("reference_only", false) && number(r, "frame_ms"))
         ok_.push_back(&r);
     // The noise bands of each session: how far its A/A controls' intervals reach from 1.
-    for (const json* r : ok_)
-      for (auto [prefix, bands] : {std::pair{"aa_control", &band_}, std::pair{"aa_shared_control", &sharedBand_}})
-        if (const auto aa = controlRatio(*r, prefix); aa && aa->low > 0.0)
-          (*bands)[session(*r)] = std::max(std::abs(std::log(aa->low)), std::abs(std::log(aa->high)));
+    for (const json* row : ok_)
+      for (const json* r : replicatesOf(*row))
+        for (auto [prefix, bands] : {std::pair{"aa_control", &band_}, std::pair{"aa_shared_control", &sharedBand_}})
+          if (const auto aa = controlRatio(*r, prefix); aa && aa->low > 0.0)
+            (*bands)[session(*r)] = std::max(std::abs(std::log(aa->low)), std::abs(std::log(aa->high)));
   }
 
   json run() {
@@ -247,6 +258,69 @@ class Finder {
     return true;
   }
 
+  // a/b as measured: its interval, what the interval is over, and the A/A band that applies.
+  struct Measured {
+    std::optional<Interval> ratio;
+    double band = 0.0;
+    bool paired = false, sharedProgram = false, viaEmbree = false;
+    std::string over;
+    size_t n = 0;                         // frames behind the ratio when it has no interval
+    std::vector<double> replicateRatios;  // pooled over replicates: each replicate's estimate
+  };
+
+  // Within one replicate (one row each): paired rounds in one session, program copies, or a bootstrap.
+  Measured measuredOnce(const json& a, const json& b) {
+    Measured m;
+    const std::vector<double> fa = frames(a), fb = frames(b);
+    m.paired = !session(a).empty() && session(a) == session(b) && fa.size() == fb.size() && !fa.empty();
+    // Traced runs in two processes: compared through their in-process Embree rounds (drift cancels).
+    const std::vector<double> na = m.paired ? std::vector<double>() : embreeNormalised(a),
+                              nb = m.paired ? std::vector<double>() : embreeNormalised(b);
+    m.viaEmbree = !na.empty() && !nb.empty();
+    // With 6 or more program copies the interval spans code placements, which is what the A/A
+    // bands stand in for otherwise: no band on top.
+    const std::optional<Interval> acrossCopies = m.paired ? ratioAcrossCopies(a, b) : std::nullopt;
+    if (acrossCopies)
+      m.ratio = acrossCopies;
+    else if (m.paired)
+      m.ratio = pairedRatio(fa, fb);
+    else
+      m.ratio = unpairedRatio(m.viaEmbree ? na : fa, m.viaEmbree ? nb : fb,
+                              std::hash<std::string>{}(label(a, "key") + "/" + label(b, "key")));
+    m.band = acrossCopies ? 0.0 : bandOf(a, b);
+    m.over = acrossCopies ? "program copies" : m.paired ? "rounds" : "bootstrap";
+    m.sharedProgram = sharedProgram(a, b);
+    m.n = std::min(fa.size(), fb.size());
+    return m;
+  }
+
+  // Both runs measured in two or more common replicates: the comparison in each, pooled
+  // (experiments/replicates.hpp); else replicate 0's alone.
+  Measured measured(const json& a, const json& b) {
+    const auto ra = a.find("replicate_rows"), rb = b.find("replicate_rows");
+    if (ra == a.end() || rb == b.end() || !ra->is_array() || !rb->is_array()) return measuredOnce(a, b);
+    std::vector<ReplicateRatio> each;
+    Measured pooled;
+    pooled.paired = pooled.sharedProgram = true;
+    for (const json& x : *ra)
+      for (const json& y : *rb) {
+        if (x.value("replicate", -1) != y.value("replicate", -2)) continue;
+        const Measured m = measuredOnce(x, y);
+        each.push_back({m.ratio, m.band});
+        if (m.ratio) pooled.replicateRatios.push_back(m.ratio->estimate);
+        pooled.paired = pooled.paired && m.paired;
+        pooled.sharedProgram = pooled.sharedProgram && m.sharedProgram;
+        pooled.viaEmbree = pooled.viaEmbree || m.viaEmbree;
+        pooled.n = std::max(pooled.n, m.n);
+      }
+    const std::optional<PooledRatio> p = poolReplicateRatios(each);
+    if (!p) return measuredOnce(a, b);
+    pooled.ratio = p->ratio;
+    pooled.band = p->band;
+    pooled.over = p->over;
+    return pooled;
+  }
+
   json compare(const json& a, const json& b, const std::string& scene, const std::string& kind,
                const std::string& axis, const std::string& context) {
     json c = {{"scene", scene},
@@ -260,33 +334,19 @@ class Finder {
               {"b_description", describe(b, contextAxes_)},
               {"context", context},
               {"metric", "frame_ms"}};
-    const std::vector<double> fa = frames(a), fb = frames(b);
-    const bool paired = !session(a).empty() && session(a) == session(b) && fa.size() == fb.size() && !fa.empty();
-    // Traced runs in two processes: compared through their in-process Embree rounds (drift cancels).
-    const std::vector<double> na = paired ? std::vector<double>() : embreeNormalised(a),
-                              nb = paired ? std::vector<double>() : embreeNormalised(b);
-    const bool viaEmbree = !na.empty() && !nb.empty();
-    std::optional<Interval> ratio;
-    // With 6 or more program copies the interval spans code placements, which is what the A/A
-    // bands stand in for otherwise: no band on top.
-    const std::optional<Interval> acrossCopies = paired ? ratioAcrossCopies(a, b) : std::nullopt;
-    if (acrossCopies)
-      ratio = acrossCopies;
-    else if (paired)
-      ratio = pairedRatio(fa, fb);
-    else
-      ratio = unpairedRatio(viaEmbree ? na : fa, viaEmbree ? nb : fb,
-                            std::hash<std::string>{}(label(a, "key") + "/" + label(b, "key")));
-    const double band = acrossCopies ? 0.0 : bandOf(a, b);
-    c["paired"] = paired;
-    c["interval_over"] = acrossCopies ? "program copies" : paired ? "rounds" : "bootstrap";
-    c["shared_program"] = sharedProgram(a, b);
-    c["normalised_by"] = viaEmbree ? json("embree") : json();
-    c["band"] = band;
-    c["n"] = ratio ? ratio->n : std::min(fa.size(), fb.size());
-    c["ratio"] = ratio ? ratio->estimate : *number(a, "frame_ms") / *number(b, "frame_ms");
-    c["ci_low"] = ratio ? json(ratio->low) : json();
-    c["ci_high"] = ratio ? json(ratio->high) : json();
+    const Measured m = measured(a, b);
+    c["paired"] = m.paired;
+    c["interval_over"] = m.over;
+    c["shared_program"] = m.sharedProgram;
+    c["normalised_by"] = m.viaEmbree ? json("embree") : json();
+    c["band"] = m.band;
+    c["n"] = m.ratio ? m.ratio->n : m.n;
+    c["ratio"] = m.ratio ? m.ratio->estimate : *number(a, "frame_ms") / *number(b, "frame_ms");
+    c["ci_low"] = m.ratio ? json(m.ratio->low) : json();
+    c["ci_high"] = m.ratio ? json(m.ratio->high) : json();
+    if (!m.replicateRatios.empty()) c["replicate_ratios"] = m.replicateRatios;
+    const std::optional<Interval>& ratio = m.ratio;
+    const double band = m.band;
     std::string verdict = "no detectable difference";
     if (sameComputation(a, b))
       verdict = "same tree";
@@ -307,18 +367,22 @@ class Finder {
   void sceneFindings(const std::string& scene, const std::vector<const json*>& rows) {
     contextAxes_ = varying(rows);
     // Noise floor: every run that carries an A/A control.
-    for (const json* r : rows)
-      for (const char* control : {"aa_control", "aa_shared_control"})
-        if (const auto aa = controlRatio(*r, control))
-          out_["noise"].push_back({{"scene", scene},
-                                   {"key", (*r)["key"]},
-                                   {"session", session(*r)},
-                                   {"control", std::string(control) == "aa_control" ? "program" : "shared"},
-                                   {"description", describe(*r, contextAxes_)},
-                                   {"ratio", aa->estimate},
-                                   {"ci_low", aa->low},
-                                   {"ci_high", aa->high},
-                                   {"n", aa->n}});
+    for (const json* row : rows)
+      for (const json* r : replicatesOf(*row))
+        for (const char* control : {"aa_control", "aa_shared_control"})
+          if (const auto aa = controlRatio(*r, control)) {
+            json entry = {{"scene", scene},
+                          {"key", (*row)["key"]},
+                          {"session", session(*r)},
+                          {"control", std::string(control) == "aa_control" ? "program" : "shared"},
+                          {"description", describe(*row, contextAxes_)},
+                          {"ratio", aa->estimate},
+                          {"ci_low", aa->low},
+                          {"ci_high", aa->high},
+                          {"n", aa->n}};
+            if (r != row) entry["replicate"] = (*r).value("replicate", 0);
+            out_["noise"].push_back(std::move(entry));
+          }
 
     const bool deep = std::any_of(rows.begin(), rows.end(), [](const json* r) {
       return number(*r, "effective_depth").value_or(2.0) > 1.0;  // unknown: assume it matters

@@ -47,6 +47,32 @@ def _counts(data, c, metric):
     return [ra.get(metric), rb.get(metric)]
 
 
+def _over(c):
+    """What n counts, when not paired rounds: program copies, replicates, or unpaired frames."""
+    over = c.get("interval_over")
+    if over == "program copies":
+        return " copies"
+    if over in ("replicates", "replicates (hull)"):
+        return " " + over
+    return "" if c.get("paired", True) else " (unpaired)"
+
+
+def replicates_note(page, comparisons):
+    """How comparisons pooled over replicates read (experiments/replicates.hpp)."""
+    pooled = [c for c in comparisons if str(c.get("interval_over", "")).startswith("replicates")]
+    if not pooled:
+        return
+    counts = sorted({int(c.get("n") or 0) for c in pooled})
+    page.p("This sweep was measured in %s replicates: every group again, each time in a new process, after the "
+           "whole previous pass. Each comparison is made within every replicate (paired rounds) and pooled: from "
+           "6 replicates the median of their ratios with its 95%% interval across the replicates (no band on "
+           "top: <i>replicates</i>), with fewer the median with the hull of their intervals and the widest band "
+           "(<i>replicates (hull)</i>: a direction needs every replicate's interval beyond its noise floor). "
+           "What a process shares across its rounds (the compiled program's code placement, the machine's "
+           "state) varies between replicates and so shows in these intervals."
+           % html.escape("/".join(str(n) for n in counts)))
+
+
 def _pair(a, b, digits=4):
     if a is None and b is None:
         return "–"
@@ -83,7 +109,8 @@ def noise_floor(page, data, f):
         keys = [k for k in (original, e.get("a") if e.get("b") else None) if k]
         cells.append([html.escape(str(e.get("scene", "?"))),
                       html.escape(str(e.get("group", e.get("session", "–")))) +
-                      (" (%s)" % html.escape(str(e["control"])) if e.get("control") else ""),
+                      (" (%s)" % html.escape(str(e["control"])) if e.get("control") else "") +
+                      (", replicate %s" % html.escape(str(e["replicate"])) if "replicate" in e else ""),
                       _run_text(data, original, e.get("description") or original),
                       " / ".join("<code>%s</code>" % html.escape(str(k)) for k in keys),
                       " / ".join(fmt_ms(data.by_key.get(k) or {}) for k in keys),
@@ -166,7 +193,7 @@ def comparison_table(page, data, scene, entries, tid):
     cells = []
     for c in shown:
         kind = "best builder" if c.get("kind") == "builder-best" else str(c.get("axis") or "?")
-        n = fmt(c.get("n")) + ("" if c.get("paired", True) else " (unpaired)")
+        n = fmt(c.get("n")) + _over(c)
         line = [html.escape(kind), html.escape(str(c.get("context") or "")),
                 html.escape(str(c.get("a_label") or c.get("a"))), html.escape(str(c.get("b_label") or c.get("b"))),
                 fmt_ratio(c.get("ratio"), c.get("ci_low"), c.get("ci_high")), n, fmt_band(c.get("band")),
@@ -243,6 +270,7 @@ def section_findings(page, data):
            "<i>no detectable difference</i>. Everything here is read from <code>findings.json</code>.")
     noise_floor(page, data, f)
     comparisons = [c for c in f.get("comparisons") or [] if c.get("kind") != "aa-control"]
+    replicates_note(page, comparisons)
     if not comparisons:
         page.note("findings.json lists no comparisons (no axis has two values among matched runs).")
     for i, scene in enumerate(_scenes(data, comparisons)):

@@ -223,6 +223,19 @@ SweepOutcome runSweep(const RunOptions& options) {
   outcome.shardRuns = mine.size();
 
   std::map<std::string, json> records = readRecords(dir);
+  ReplicateRecords replicateRecords = readReplicateRecords(dir);
+  const int replicates = options.replicates > 0 ? options.replicates : config.replicates;
+  // A run's record in replicate r (nullptr: not measured there yet).
+  const auto recordOf = [&](const std::string& key, int r) -> const json* {
+    if (r == 0) {
+      auto it = records.find(key);
+      return it == records.end() ? nullptr : &it->second;
+    }
+    auto it = replicateRecords.find(key);
+    if (it == replicateRecords.end()) return nullptr;
+    auto jt = it->second.find(r);
+    return jt == it->second.end() ? nullptr : &jt->second;
+  };
   ImageErrorCache cache;
   // Interleaved groups go to `bvhlab measure` (or an injected group executor); a per-run executor
   // (tests) or [measure] interleave = false gets groups of one run, each its own process.
@@ -234,131 +247,155 @@ SweepOutcome runSweep(const RunOptions& options) {
     return (options.executor && !options.groupExecutor) || !run.render.interleave || run.axis("workload");
   };
 
-  // Pending runs, grouped: runs with the same scene and render settings are timed by one process,
-  // frames interleaved, at most group_size at a time (experiments/README.md, "Measurement").
-  std::vector<std::vector<const RunSpec*>> groups;
-  std::map<std::string, size_t> openGroup;  // group signature -> index of its last (not full) group
-  for (const RunSpec* run : mine) {
-    auto it = records.find(run->key);
-    if (it != records.end() && (it->second["status"] == "ok" || !options.retryFailed)) {
-      ++outcome.skipped;
-      continue;
-    }
-    const AxisValue* scene = run->axis("scene");
-    const std::string signature = (scene ? scene->value.dump() : std::string()) + run->render.groupJson().dump();
-    auto g = openGroup.find(signature);
-    if (g == openGroup.end() || groups[g->second].size() >= size_t(run->render.groupSize) || alone(*run)) {
-      groups.emplace_back();
-      g = openGroup.insert_or_assign(signature, groups.size() - 1).first;
-    }
-    groups[g->second].push_back(run);
-  }
-
-  Progress progress(options.progress, mine.size());
+  Progress progress(options.progress, mine.size() * size_t(replicates));
   double spentSeconds = 0.0;
-  size_t done = outcome.skipped;
-  for (size_t gi = 0; gi < groups.size(); ++gi) {
-    if ((outcome.interrupted = InterruptGuard::interrupted())) break;
-    const std::vector<const RunSpec*>& group = groups[gi];
-    const size_t remaining = mine.size() - done;
-    progress.update(done, outcome.executed ? spentSeconds / double(outcome.executed) : 0.0, remaining,
-                    "group " + std::to_string(gi + 1) + "/" + std::to_string(groups.size()) + ": " +
-                        std::to_string(group.size()) + " runs, " + group.front()->describe());
-
-    GroupRequest request;
-    request.session = newSessionId();
-    request.workDir = dir.root;
-    for (const RunSpec* run : group) {
-      request.runs.push_back(
-          RunRequest{*run, dir.image(run->key), run->render.heatmaps ? dir.visitsImage(run->key) : fs::path(), "", ""});
-      std::error_code ec;
-      fs::remove(request.runs.back().image, ec);  // a stale image from an earlier attempt must not pass as this run's
-      if (!request.runs.back().visitsImage.empty()) fs::remove(request.runs.back().visitsImage, ec);
-    }
-    const std::string startedAt = utcNow();
-    const auto start = std::chrono::steady_clock::now();
-    json results;
-    std::string groupError;
-    try {
-      results = (alone(*group.front()) ? oneByOne : interleaved)(request);
-      if (!results.is_object()) throw RunFailure("the group executor returned no JSON object");
-    } catch (const std::exception& e) {
-      groupError = e.what();
-    }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    // Stopped by SIGINT/SIGTERM: the group's child was killed mid-measurement; its runs stay pending.
-    if ((outcome.interrupted = InterruptGuard::interrupted())) break;
-
-    for (const RunRequest& req : request.runs) {
-      const RunSpec* run = &req.spec;
-      json record = {{"key", run->key},
-                     {"params", run->toJson()},
-                     {"config_name", config.name},
-                     {"config_hash", config.hash},
-                     {"git_commit", commit},
-                     {"machine", machine},
-                     {"started_at", startedAt},
-                     {"session", request.session},
-                     {"group_runs", request.runs.size()}};
-      const json* entry = groupError.empty() && results.contains(run->key) ? &results[run->key] : nullptr;
-      if (!groupError.empty()) {
-        record["status"] = "failed";
-        record["error"] = groupError + (request.runs.size() > 1 ? " (the whole group of " +
-                                                                      std::to_string(request.runs.size()) + " runs)"
-                                                                : std::string());
-      } else if (!entry || !entry->is_object()) {
-        record["status"] = "failed";
-        record["error"] = "the group's result has no entry for this run";
-      } else if (entry->contains("error")) {
-        record["status"] = "failed";
-        record["error"] = (*entry)["error"].is_string() ? (*entry)["error"].get<std::string>() : (*entry)["error"].dump();
-        if (entry->contains("result") && (*entry)["result"].is_object()) record["result"] = (*entry)["result"];
-      } else {
-        record["status"] = "ok";
-        record["result"] = *entry;
+  size_t done = 0;
+  // Replicate 0 is the sweep; replicates 1.. measure every group again, each pass after the whole
+  // previous one, each group in a new child process (experiments/replicates.hpp).
+  for (int replicate = 0; replicate < replicates && !outcome.interrupted; ++replicate) {
+    // Pending runs, grouped: runs with the same scene and render settings are timed by one process,
+    // frames interleaved, at most group_size at a time (experiments/README.md, "Measurement").
+    std::vector<std::vector<const RunSpec*>> groups;
+    std::map<std::string, size_t> openGroup;  // group signature -> index of its last (not full) group
+    for (const RunSpec* run : mine) {
+      const json* record = recordOf(run->key, replicate);
+      if (record && ((*record)["status"] == "ok" || !options.retryFailed)) {
+        ++outcome.skipped;
+        ++done;
+        continue;
       }
-      // The group's wall time is shared by its runs; each run's share is what the ETA needs.
-      record["wall_s"] = seconds / double(request.runs.size());
-      record["group_wall_s"] = seconds;
-      record["command"] = req.command.empty() ? request.command : req.command;
-      record["log"] = tail(req.log.empty() ? request.log : req.log);
-      std::error_code ec;
-      record["image"] = fs::exists(req.image, ec) ? json("images/" + req.image.filename().string()) : json();
-      record["visits_image"] = !req.visitsImage.empty() && fs::exists(req.visitsImage, ec)
-                                   ? json("images/" + req.visitsImage.filename().string())
-                                   : json();
-      writeFileAtomic(dir.record(run->key), record.dump(1) + "\n");
-      records[run->key] = record;
-      ++outcome.executed;
-      ++done;
-      if (record["status"] != "ok") {
-        ++outcome.failed;
-        progress.finish();
-        std::cerr << "bvhlab run: run " << run->index << " (" << run->describe() << ") failed: "
-                  << record["error"].get<std::string>() << "\n";
-      } else {
-        progress.finished(done, *run, record["result"]);
+      // A run that failed (or is missing) in replicate 0 is not measured again in the others.
+      if (replicate > 0) {
+        const json* first = recordOf(run->key, 0);
+        if (!first || (*first)["status"] != "ok") {
+          ++done;
+          continue;
+        }
       }
+      const AxisValue* scene = run->axis("scene");
+      const std::string signature = (scene ? scene->value.dump() : std::string()) + run->render.groupJson().dump();
+      auto g = openGroup.find(signature);
+      if (g == openGroup.end() || groups[g->second].size() >= size_t(run->render.groupSize) || alone(*run)) {
+        groups.emplace_back();
+        g = openGroup.insert_or_assign(signature, groups.size() - 1).first;
+      }
+      groups[g->second].push_back(run);
     }
-    spentSeconds += seconds;
-    outcome.summary = writeResults(dir, plan, records, &cache);
+
+    for (size_t gi = 0; gi < groups.size(); ++gi) {
+      if ((outcome.interrupted = InterruptGuard::interrupted())) break;
+      const std::vector<const RunSpec*>& group = groups[gi];
+      const size_t remaining = mine.size() * size_t(replicates) - done;
+      progress.update(done, outcome.executed ? spentSeconds / double(outcome.executed) : 0.0, remaining,
+                      (replicates > 1 ? "replicate " + std::to_string(replicate + 1) + "/" + std::to_string(replicates) + ", "
+                                      : std::string()) +
+                          "group " + std::to_string(gi + 1) + "/" + std::to_string(groups.size()) + ": " +
+                          std::to_string(group.size()) + " runs, " + group.front()->describe());
+
+      GroupRequest request;
+      request.session = newSessionId();
+      request.workDir = dir.root;
+      for (const RunSpec* run : group) {
+        request.runs.push_back(RunRequest{*run, dir.image(run->key, replicate),
+                                          run->render.heatmaps ? dir.visitsImage(run->key, replicate) : fs::path(), "",
+                                          ""});
+        std::error_code ec;
+        fs::remove(request.runs.back().image, ec);  // a stale image from an earlier attempt must not pass as this run's
+        if (!request.runs.back().visitsImage.empty()) fs::remove(request.runs.back().visitsImage, ec);
+      }
+      const std::string startedAt = utcNow();
+      const auto start = std::chrono::steady_clock::now();
+      json results;
+      std::string groupError;
+      try {
+        results = (alone(*group.front()) ? oneByOne : interleaved)(request);
+        if (!results.is_object()) throw RunFailure("the group executor returned no JSON object");
+      } catch (const std::exception& e) {
+        groupError = e.what();
+      }
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      // Stopped by SIGINT/SIGTERM: the group's child was killed mid-measurement; its runs stay pending.
+      if ((outcome.interrupted = InterruptGuard::interrupted())) break;
+
+      for (const RunRequest& req : request.runs) {
+        const RunSpec* run = &req.spec;
+        json record = {{"key", run->key},
+                       {"params", run->toJson()},
+                       {"config_name", config.name},
+                       {"config_hash", config.hash},
+                       {"git_commit", commit},
+                       {"machine", machine},
+                       {"started_at", startedAt},
+                       {"session", request.session},
+                       {"group_runs", request.runs.size()}};
+        if (replicate > 0) record["replicate"] = replicate;
+        const json* entry = groupError.empty() && results.contains(run->key) ? &results[run->key] : nullptr;
+        if (!groupError.empty()) {
+          record["status"] = "failed";
+          record["error"] = groupError + (request.runs.size() > 1 ? " (the whole group of " +
+                                                                        std::to_string(request.runs.size()) + " runs)"
+                                                                  : std::string());
+        } else if (!entry || !entry->is_object()) {
+          record["status"] = "failed";
+          record["error"] = "the group's result has no entry for this run";
+        } else if (entry->contains("error")) {
+          record["status"] = "failed";
+          record["error"] = (*entry)["error"].is_string() ? (*entry)["error"].get<std::string>() : (*entry)["error"].dump();
+          if (entry->contains("result") && (*entry)["result"].is_object()) record["result"] = (*entry)["result"];
+        } else {
+          record["status"] = "ok";
+          record["result"] = *entry;
+        }
+        // The group's wall time is shared by its runs; each run's share is what the ETA needs.
+        record["wall_s"] = seconds / double(request.runs.size());
+        record["group_wall_s"] = seconds;
+        record["command"] = req.command.empty() ? request.command : req.command;
+        record["log"] = tail(req.log.empty() ? request.log : req.log);
+        std::error_code ec;
+        record["image"] = fs::exists(req.image, ec) ? json("images/" + req.image.filename().string()) : json();
+        record["visits_image"] = !req.visitsImage.empty() && fs::exists(req.visitsImage, ec)
+                                     ? json("images/" + req.visitsImage.filename().string())
+                                     : json();
+        writeFileAtomic(dir.record(run->key, replicate), record.dump(1) + "\n");
+        (replicate == 0 ? records[run->key] : replicateRecords[run->key][replicate]) = record;
+        ++outcome.executed;
+        ++done;
+        if (record["status"] != "ok") {
+          ++outcome.failed;
+          progress.finish();
+          std::cerr << "bvhlab run: run " << run->index << " (" << run->describe() << ")"
+                    << (replicate > 0 ? " in replicate " + std::to_string(replicate) : std::string()) << " failed: "
+                    << record["error"].get<std::string>() << "\n";
+        } else {
+          progress.finished(done, *run, record["result"]);
+        }
+      }
+      spentSeconds += seconds;
+      outcome.summary = writeResults(dir, plan, records, &cache, replicateRecords);
+    }
   }
   progress.finish();
   // Once per sweep (shard 0 of a sharded one), and only when there is a real renderer to ask: the runs
   // go to child processes, or an injected executor (tests) comes with an explicit binary.
   if ((!options.executor || !options.binary.empty()) && options.shardIndex == 0 && !outcome.interrupted)
     recordHardCases(config, dir, options, commit, machine);
-  outcome.summary = writeResults(dir, plan, records, &cache);
+  outcome.summary = writeResults(dir, plan, records, &cache, replicateRecords);
   return outcome;
 }
 
-json mergeSweeps(const std::vector<fs::path>& dirs, const fs::path& out) {
+json mergeSweeps(const std::vector<fs::path>& dirs, const fs::path& out, bool asReplicates) {
   if (dirs.empty()) throw InputError("merge: no input directories");
   SweepDir target{out};
   std::vector<SweepDir> inputs;
   // An existing output directory takes part like an input (merging into it is incremental).
   std::error_code ec;
-  if (fs::exists(target.plan())) inputs.push_back(target);
+  if (fs::exists(target.plan())) {
+    if (asReplicates)
+      throw InputError("merge --replicates: " + out.string() +
+                       " already holds a sweep; merge replicates into a new directory (merging them twice would "
+                       "count them twice)");
+    inputs.push_back(target);
+  }
   for (const fs::path& d : dirs)
     if (!fs::exists(target.plan()) || !fs::equivalent(d, out, ec)) inputs.push_back(SweepDir{d});
 
@@ -376,29 +413,51 @@ json mergeSweeps(const std::vector<fs::path>& dirs, const fs::path& out) {
     }
   }
 
-  // Best record per key: ok beats failed; among equals the first input wins.
-  std::map<std::string, std::pair<json, const SweepDir*>> best;
-  for (const SweepDir& in : inputs)
-    for (auto& [key, record] : readRecords(in)) {
-      auto it = best.find(key);
+  // Best record per (key, replicate): ok beats failed; among equals the first input wins. As
+  // replicates, input i's replicate r becomes replicate offset_i + r.
+  std::map<std::pair<std::string, int>, std::pair<json, const SweepDir*>> best;
+  int offset = 0;
+  for (const SweepDir& in : inputs) {
+    std::vector<std::pair<int, std::pair<std::string, json>>> found;
+    for (auto& [key, record] : readRecords(in)) found.push_back({0, {key, std::move(record)}});
+    for (auto& [key, byReplicate] : readReplicateRecords(in))
+      for (auto& [r, record] : byReplicate) found.push_back({r, {key, std::move(record)}});
+    int count = 0;
+    for (auto& [r, entry] : found) {
+      auto& [key, record] = entry;
+      count = std::max(count, r + 1);
+      const int replicate = asReplicates ? offset + r : r;
+      auto it = best.find({key, replicate});
       if (it == best.end() || (it->second.first["status"] != "ok" && record["status"] == "ok"))
-        best[key] = {record, &in};
+        best[{key, replicate}] = {std::move(record), &in};
     }
+    if (asReplicates) offset += count;
+  }
+  if (asReplicates && offset > kMaxReplicates)
+    throw InputError("merge --replicates: " + std::to_string(offset) + " replicates, more than " +
+                     std::to_string(kMaxReplicates));
 
   fs::create_directories(target.runs());
   fs::create_directories(target.images());
   writePlan(target, plan);
-  for (const auto& [key, entry] : best) {
-    const auto& [record, from] = entry;
-    if (from->root != target.root && !fs::equivalent(from->root, target.root, ec)) {
-      for (const char* field : {"image", "visits_image"})
-        if (record.contains(field) && record[field].is_string()) {
-          const fs::path rel = record[field].get<std::string>();
-          if (fs::exists(from->root / rel)) fs::copy_file(from->root / rel, target.root / rel,
-                                                           fs::copy_options::overwrite_existing);
+  for (auto& [id, entry] : best) {
+    const auto& [key, replicate] = id;
+    auto& [record, from] = entry;
+    if (from->root == target.root || fs::equivalent(from->root, target.root, ec)) continue;
+    // Images keep their names unless the replicate was renumbered.
+    for (const char* field : {"image", "visits_image"})
+      if (record.contains(field) && record[field].is_string()) {
+        const fs::path rel = record[field].get<std::string>();
+        const bool visits = std::string(field) == "visits_image";
+        const fs::path to = (visits ? target.visitsImage(key, replicate) : target.image(key, replicate));
+        if (fs::exists(from->root / rel)) {
+          fs::copy_file(from->root / rel, to, fs::copy_options::overwrite_existing);
+          record[field] = "images/" + to.filename().string();
         }
-      writeFileAtomic(target.record(key), record.dump(1) + "\n");
-    }
+      }
+    if (replicate > 0) record["replicate"] = replicate;
+    else record.erase("replicate");
+    writeFileAtomic(target.record(key, replicate), record.dump(1) + "\n");
   }
   // The hard-case results come with the shard that ran them (shard 0): the first input with an ok one.
   for (const SweepDir& in : inputs) {
@@ -471,9 +530,9 @@ int runCommand(const RunOptions& options) {
   }
 }
 
-int mergeCommand(const std::vector<fs::path>& dirs, const fs::path& out) {
+int mergeCommand(const std::vector<fs::path>& dirs, const fs::path& out, bool asReplicates) {
   try {
-    const json s = mergeSweeps(dirs, out);
+    const json s = mergeSweeps(dirs, out, asReplicates);
     std::cerr << "bvhlab merge: " << out.string() << ": " << s["ok"] << " ok, " << s["failed"] << " failed, "
               << s["pending"] << " pending of " << s["planned"] << "\n";
     try {

@@ -26,6 +26,7 @@ struct RunOptions {
   RunExecutor executor;          // a per-run executor (tests): groups run sequentially, unpaired
   std::optional<KnownNames> names;  // names to validate against; empty = registeredNames()
   bool progress = true;          // progress on stderr: a live line on a terminal, else one line per run
+  int replicates = 0;            // passes over the sweep (experiments/replicates.hpp); 0 = the config's
 };
 
 // Parses "I/N" (0 <= I < N); throws InputError naming the flag.
@@ -34,8 +35,8 @@ std::pair<int, int> parseShard(const std::string& text);
 struct SweepOutcome {
   std::filesystem::path dir;
   size_t shardRuns = 0;  // runs of the plan in this shard
-  size_t executed = 0;   // runs executed now
-  size_t skipped = 0;    // runs already finished (resumed)
+  size_t executed = 0;   // runs executed now (a run measured in R replicates counts R times)
+  size_t skipped = 0;    // runs (per replicate) already finished (resumed)
   size_t failed = 0;     // runs executed now that failed
   nlohmann::json summary;  // writeResults()'s summary of the whole directory
   int interrupted = 0;     // the signal that stopped the sweep (InterruptGuard in runCommand), or 0
@@ -43,9 +44,14 @@ struct SweepOutcome {
 
 // The library entry points (throw InputError for a bad config or directory).
 SweepOutcome runSweep(const RunOptions& options);
-// Combines shard directories into `out` (deduplicated by run key; a finished run beats a failed
-// one) and regenerates results. All inputs must come from the same config (same hash).
-nlohmann::json mergeSweeps(const std::vector<std::filesystem::path>& dirs, const std::filesystem::path& out);
+// Combines shard directories into `out` (deduplicated by run key and replicate; a finished run beats
+// a failed one) and regenerates results. All inputs must come from the same config (same hash).
+// `asReplicates`: the inputs are repetitions of one sweep (e.g. `bvhlab run` of one config at two
+// times): each input's replicates are appended after the previous inputs' (input 0 keeps 0..R0-1,
+// input 1 gets R0.., ...), so findings pool them (experiments/replicates.hpp). `out` must then be a
+// new directory.
+nlohmann::json mergeSweeps(const std::vector<std::filesystem::path>& dirs, const std::filesystem::path& out,
+                           bool asReplicates = false);
 // Runs experiments/report.py on `dir` (results.json -> report.html). Throws std::runtime_error with
 // the script's complaint when it fails (e.g. matplotlib missing).
 std::filesystem::path writeReport(const std::filesystem::path& dir);
@@ -54,7 +60,8 @@ std::filesystem::path writeReport(const std::filesystem::path& dir);
 // A sweep whose runs were all attempted returns 0 even if some runs failed: failures are data,
 // recorded with their error and listed in the report.
 int runCommand(const RunOptions& options);
-int mergeCommand(const std::vector<std::filesystem::path>& dirs, const std::filesystem::path& out);
+int mergeCommand(const std::vector<std::filesystem::path>& dirs, const std::filesystem::path& out,
+                 bool asReplicates = false);
 int reportCommand(const std::filesystem::path& dir);
 
 }  // namespace bvhlab

@@ -92,23 +92,45 @@ json readPlan(const SweepDir& dir) {
   return plan;
 }
 
-std::map<std::string, json> readRecords(const SweepDir& dir) {
-  std::map<std::string, json> records;
+namespace {
+
+// Every parseable record file under runs/, with the replicate its name gives.
+template <class F>
+void forEachRecord(const SweepDir& dir, F f) {
   std::error_code ec;
-  if (!fs::is_directory(dir.runs(), ec)) return records;
+  if (!fs::is_directory(dir.runs(), ec)) return;
   for (const fs::directory_entry& e : fs::directory_iterator(dir.runs())) {
     const fs::path p = e.path();
     if (p.extension() != ".json" || p.filename().string().front() == '.') continue;  // skip temporaries
+    const std::optional<int> replicate = replicateOfStem(p.stem().string());
+    if (!replicate) continue;  // not a record of ours
     try {
       json record = readJson(p);
       if (!record.is_object() || !record.contains("key") || !record.contains("status"))
         throw InputError(p.string() + ": not a run record");
       const std::string key = record["key"].get<std::string>();  // before the move below
-      records[key] = std::move(record);
+      f(key, *replicate, std::move(record));
     } catch (const std::exception& ex) {
       std::cerr << "bvhlab: warning: ignoring " << ex.what() << " (the run will be redone)\n";
     }
   }
+}
+
+}  // namespace
+
+std::map<std::string, json> readRecords(const SweepDir& dir) {
+  std::map<std::string, json> records;
+  forEachRecord(dir, [&](const std::string& key, int replicate, json record) {
+    if (replicate == 0) records[key] = std::move(record);
+  });
+  return records;
+}
+
+ReplicateRecords readReplicateRecords(const SweepDir& dir) {
+  ReplicateRecords records;
+  forEachRecord(dir, [&](const std::string& key, int replicate, json record) {
+    if (replicate > 0) records[key][replicate] = std::move(record);
+  });
   return records;
 }
 
@@ -124,6 +146,7 @@ const std::vector<std::string>& resultColumns() {
       "frame_ms", "frame_ms_ci_low", "frame_ms_ci_high", "ci_pct", "ci_target_met", "measure_stop", "frame_ms_min",
       "frame_ms_max", "fps", "aa_control_ratio", "aa_control_ci_low", "aa_control_ci_high",
       "aa_shared_control_ratio", "aa_shared_control_ci_low", "aa_shared_control_ci_high", "session", "program",
+      "replicates",
       "bvh_stack_size",
       "build_ms", "sah_cost", "epo", "tree_hash", "references", "sah_before_optimize", "optimize_ms", "nodes",
       "leaves", "bvh_depth",
@@ -257,14 +280,14 @@ void addImageError(const SweepDir& dir, json& row, const std::map<std::string, j
 }  // namespace
 
 json writeResults(const SweepDir& dir, ImageErrorCache* cache) {
-  return writeResults(dir, readPlan(dir), readRecords(dir), cache);
+  return writeResults(dir, readPlan(dir), readRecords(dir), cache, readReplicateRecords(dir));
 }
 
 json writeResults(const SweepDir& dir, const json& plan, const std::map<std::string, json>& records,
-                  ImageErrorCache* cache) {
+                  ImageErrorCache* cache, const ReplicateRecords& replicates) {
   std::set<std::string> planned;
   json rows = json::array();
-  size_t ok = 0, failed = 0;
+  size_t ok = 0, failed = 0, replicateRuns = 0;
   std::set<std::string> commits, renderers, configHashes;
   std::map<std::string, json> machines;
   for (const json& run : plan["runs"]) {
@@ -276,6 +299,21 @@ json writeResults(const SweepDir& dir, const json& plan, const std::map<std::str
     record["params"] = run;  // the plan's view (index, sweeps, reference) is authoritative
     json row = flattenRecord(record);
     addImageError(dir, row, records, cache);
+    // Replicates 1.. of a finished run: pooled into its row (experiments/replicates.hpp).
+    std::vector<json> replicateRows;
+    if (auto rep = replicates.find(key); row["status"] == "ok" && rep != replicates.end()) {
+      replicateRows.push_back(row);
+      replicateRows.back()["replicate"] = 0;
+      for (const auto& [r, rec] : rep->second) {
+        if (rec.value("status", "") != "ok") continue;
+        json copy = rec;
+        copy["params"] = run;
+        replicateRows.push_back(flattenRecord(copy));
+        replicateRows.back()["replicate"] = r;
+        ++replicateRuns;
+      }
+    }
+    poolReplicateRows(row, replicateRows);
     (row["status"] == "ok" ? ok : failed)++;
     if (row["git_commit"].is_string()) commits.insert(row["git_commit"]);
     if (row["gl_renderer"].is_string()) renderers.insert(row["gl_renderer"]);
@@ -290,7 +328,8 @@ json writeResults(const SweepDir& dir, const json& plan, const std::map<std::str
                   {"ok", ok},
                   {"failed", failed},
                   {"pending", planned.size() - ok - failed},
-                  {"stale", stale}};
+                  {"stale", stale},
+                  {"replicate_runs", replicateRuns}};
 
   // Columns: the fixed ones, then any other scalar keys the renderer reported, sorted.
   std::vector<std::string> columns = resultColumns();
