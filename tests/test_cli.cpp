@@ -335,3 +335,19 @@ TEST(Cli, UnknownOrMissingCommandListsTheCommandsAndVersionPrintsTheCommit) {
   EXPECT_EQ(version.out.rfind("bvhlab ", 0), 0u) << version.out;
   EXPECT_NE(version.out.find("(commit "), std::string::npos) << version.out;
 }
+
+TEST(Cli, ReplicatesOutOfRangeAreRefusedAndMergeReplicatesNeedsANewDirectory) {
+  const fs::path dir = testDir() / "replicates";
+  fs::create_directories(dir);
+  std::ofstream(dir / "cfg.toml") << "[axes]\nscenes = \"a.off\"\n";
+  Result zero = run("run " + (dir / "cfg.toml").string() + " --out " + (dir / "out").string() + " --replicates 0");
+  EXPECT_NE(zero.code, 0);
+  EXPECT_NE(zero.err.find("--replicates"), std::string::npos) << zero.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  // An existing sweep as --out: merging replicates into it would count them twice.
+  fs::create_directories(dir / "old");
+  std::ofstream(dir / "old" / "plan.json") << "{}";
+  Result into = run("merge --replicates " + (dir / "a").string() + " --out " + (dir / "old").string());
+  EXPECT_EQ(into.code, 2);
+  EXPECT_NE(into.err.find("new directory"), std::string::npos) << into.err;
+}
