@@ -165,6 +165,38 @@ TEST(TraceWorkloads, BadRequestsAreRefused) {
                InputError);
 }
 
+// Embree's threads share the rays in chunks (traversal/embree_tracer.cpp): every ray answered, the
+// same answers for any thread count, also when the count is not a multiple of the chunk or is
+// smaller than one chunk per thread.
+TEST(TraceWorkloads, EmbreeAnswersEveryRayWhateverItsThreads) {
+  auto p = prepared(makeUvSphere(32, 16));
+  const glm::vec3 centre(0.0f);
+  for (size_t count : {size_t(1), size_t(65), size_t(1000)}) {
+    std::vector<BatchRay> rays(count);
+    for (size_t i = 0; i < count; ++i) {  // from a ring outside the sphere, through its centre: all hit
+      const float a = 6.2831853f * float(i) / float(count);
+      rays[i].origin = glm::vec3(5.0f * std::cos(a), 0.3f, 5.0f * std::sin(a));
+      rays[i].dir = glm::normalize(centre - rays[i].origin);
+      rays[i].tMin = 0.0f;
+      rays[i].tMax = 100.0f;
+    }
+    std::vector<BatchHit> one;
+    EmbreeTracer(p->soup, 1).closest(rays, one);
+    ASSERT_EQ(one.size(), count);
+    for (size_t i = 0; i < count; ++i) ASSERT_TRUE(one[i].hit) << "ray " << i << " of " << count;
+    for (unsigned threads : {2u, 3u}) {
+      std::vector<BatchHit> many;
+      EmbreeTracer(p->soup, threads).closest(rays, many);
+      ASSERT_EQ(many.size(), count);
+      for (size_t i = 0; i < count; ++i) {
+        EXPECT_EQ(many[i].hit, one[i].hit) << threads << " threads, ray " << i << " of " << count;
+        EXPECT_EQ(many[i].prim, one[i].prim) << threads << " threads, ray " << i << " of " << count;
+        EXPECT_EQ(many[i].t, one[i].t) << threads << " threads, ray " << i << " of " << count;
+      }
+    }
+  }
+}
+
 // Rays answered differently: hit vs miss, or (closest hit) different triangles at different distances;
 // different triangles at the same distance (through a shared edge) are a tie, not a mismatch. 1e-5
 // relative: far above both tracers' rounding of t (a few ulps), far below any gap between surfaces here.
