@@ -21,13 +21,14 @@ std::optional<int> replicateOfStem(const std::string& stem) {
   const size_t dot = stem.rfind(kReplicateInfix);
   if (dot == std::string::npos) return stem.find('.') == std::string::npos ? std::optional<int>(0) : std::nullopt;
   const std::string digits = stem.substr(dot + 2);
-  if (digits.empty() || digits.size() > 4 || !std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c) != 0; })) return std::nullopt;
+  const auto digit = [](unsigned char c) { return std::isdigit(c) != 0; };
+  if (digits.empty() || digits.size() > 4 || !std::all_of(digits.begin(), digits.end(), digit)) return std::nullopt;
   const int r = std::stoi(digits);
   return r >= 1 ? std::optional<int>(r) : std::nullopt;
 }
 
 void poolReplicateRows(json& row, const std::vector<json>& replicateRows) {
-  row["replicates"] = std::max<size_t>(1, replicateRows.size());
+  row["replicates"] = 1;
   if (replicateRows.size() < 2) return;
   std::vector<double> medians;
   double low = kInfinity, high = -kInfinity;
@@ -47,6 +48,7 @@ void poolReplicateRows(json& row, const std::vector<json>& replicateRows) {
     }
     rows.push_back(x);
   }
+  row["replicates"] = replicateRows.size();
   row["replicate_rows"] = std::move(rows);
   row["frame_ms_replicates"] = medians;
   const double pooled = medianOf(medians);

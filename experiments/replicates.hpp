@@ -36,7 +36,7 @@ std::optional<int> replicateOfStem(const std::string& stem);
 // more, `row` (replicate 0's) gets `replicate_rows` (every replicate's row, each with its
 // `replicate`), `frame_ms_replicates` (their medians), `frame_ms` = the median of those,
 // `frame_ms_ci_low/high` = the hull of their intervals and `fps` from the new median. Always sets
-// `replicates` (how many rows were pooled).
+// `replicates` (how many rows were pooled: 1 when fewer than two, or when one has no time).
 void poolReplicateRows(nlohmann::json& row, const std::vector<nlohmann::json>& replicateRows);
 
 // One comparison a/b within one replicate: its ratio (paired, over program copies, or bootstrap)

@@ -21,6 +21,7 @@
 #include "experiments/process.hpp"
 #include "experiments/runner.hpp"
 #include "experiments/sweep_dir.hpp"
+#include "render/frame_stats.hpp"
 
 namespace fs = std::filesystem;
 using namespace bvhlab;
@@ -131,6 +132,18 @@ struct FakeRenderer {
                 {"aa_ms", aa == "smaa" ? json(0.1 * ms) : json(nullptr)}};
   }
 };
+
+// What a fake `bvhlab measure` reports for one run of a group session: the frames of its rounds,
+// their median with its interval, and the session (the fields findings pair runs by).
+inline json fakeMeasuredRun(const std::vector<double>& ms, const std::string& session) {
+  const auto ci = medianInterval(ms);
+  return {{"frame_ms", medianOf(ms)},
+          {"frame_ms_ci_low", ci->low},
+          {"frame_ms_ci_high", ci->high},
+          {"frame_ms_all", ms},
+          {"frames", ms.size()},
+          {"session", session}};
+}
 
 // Death-test children are fresh processes (threadsafe style re-executes the test binary); this
 // variable hands them the parent's directory.

@@ -81,18 +81,12 @@ struct FakeClock {
     for (size_t i = 0; i < g.runs.size(); ++i) {
       const RunSpec& s = g.runs[i].spec;
       ++calls[s.key];
-      const auto ci = medianInterval(ms[i]);
-      json r = {{"frame_ms", medianOf(ms[i])},
-                {"frame_ms_ci_low", ci->low},
-                {"frame_ms_ci_high", ci->high},
-                {"frame_ms_all", ms[i]},
-                {"frames", rounds},
-                {"session", g.session},
-                {"tree_hash", treeHash(s)},
+      json r = experiments_test::fakeMeasuredRun(ms[i], g.session);
+      r.update({{"tree_hash", treeHash(s)},
                 {"sah_cost", s.axis("builder")->value["name"] == "median" ? 44.0 : 34.0},
                 {"node_visits_per_ray", s.axis("builder")->value["name"] == "median" ? 12.0 : 9.0},
                 {"triangle_tests_per_ray", 3.0},
-                {"effective_depth", 1}};
+                {"effective_depth", 1}});
       if (i == 0) {
         const auto aa = pairedRatio(ms[0], ms.back());
         r["aa_control_ratio"] = aa->estimate;

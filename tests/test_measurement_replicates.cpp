@@ -58,17 +58,11 @@ struct ProcessClock {
         continue;
       }
       const std::string builder = s.axis("builder")->value["name"];
-      const auto ci = medianInterval(ms[i]);
-      json r = {{"frame_ms", medianOf(ms[i])},
-                {"frame_ms_ci_low", ci->low},
-                {"frame_ms_ci_high", ci->high},
-                {"frame_ms_all", ms[i]},
-                {"frames", rounds},
-                {"session", g.session},
-                {"program", 0},
+      json r = fakeMeasuredRun(ms[i], g.session);
+      r.update({{"program", 0},
                 {"tree_hash", builder + "-tree"},
                 {"sah_cost", builder == "median" ? 44.0 : 34.0},
-                {"effective_depth", 1}};
+                {"effective_depth", 1}});
       if (i == 0) r["aa_shared_control_frame_ms_all"] = ms.back();
       out[s.key] = r;
     }
