@@ -19,7 +19,7 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
   uint link = 0u;
   uint count = kBvh2cbInner;
   while (true) {
-    if (count == kBvh2cbInner) {
+    while (count == kBvh2cbInner) {
       vec3 aMin, aMax, bMin, bMax;
       uint aLink, aCount, bLink, bCount;
       float aEnter, bEnter;
@@ -46,23 +46,21 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
         count = hitA ? aCount : hitB ? bCount : 0u;
       }
     }
-    if (count != kBvh2cbInner) {
-      for (uint i = 0u; i < count; ++i) {
-        int tri = int(link + i);
-        float t;
-        vec2 bary;
-        c.triTests++;
-        if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
-          hit = MeshHit{t, tri, bary};
-          if (anyHit) return true;
-        }
+    for (uint i = 0u; i < count; ++i) {
+      int tri = int(link + i);
+      float t;
+      vec2 bary;
+      c.triTests++;
+      if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
+        hit = MeshHit{t, tri, bary};
+        if (anyHit) return true;
       }
-      while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
-      if (sp == 0) break;
-      sp--;
-      link = stackLink[sp];
-      count = stackCount[sp];
     }
+    while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+    if (sp == 0) break;
+    sp--;
+    link = stackLink[sp];
+    count = stackCount[sp];
   }
   return hit.tri >= 0;
 }

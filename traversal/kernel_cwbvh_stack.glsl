@@ -23,6 +23,9 @@
 // (W - 1)(d - 1); the node adds at most W - 1: (W - 1) d <= (W - 1)(D - 1). stackSizeFor(const
 // PackedBvh&) (traversal/kernels.hpp) returns max(1, (W - 1)(D - 1)).
 //
+// Loop shape: "if-if", as kernel_wide_stack.glsl and for its reason (while-while: 1.22x the time
+// on the bunny's diffuse rays, docs/layouts.md "Loop shape").
+//
 // Order and NaN: the box tests never return a NaN entry for a finite ray (ray_box*.glsl), and a
 // decoded box is finite for a finite scene. Should a NaN appear anyway, `enter < nearEnter` and the
 // insertion's `<=` are false (a NaN child is pushed, and stays above the entries it meets) and the pop

@@ -24,18 +24,9 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
   c.boxTests++;
   if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
   while (true) {
-    if (count > 0u) {
-      for (uint i = 0u; i < count; ++i) {
-        int tri = int(a + i);
-        float t;
-        vec2 bary;
-        c.triTests++;
-        if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
-          hit = MeshHit{t, tri, bary};
-          if (anyHit) return true;
-        }
-      }
-    } else {
+    // Inner loop: descend while the current node is inner and a child is met.
+    bool met = true;
+    while (count == 0u && met) {
       int left = node + 1;
       int right = int(a);
       uint leftA, leftCount, rightA, rightCount;
@@ -60,13 +51,22 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
         node = leftFirst ? left : right;
         a = leftFirst ? leftA : rightA;
         count = leftFirst ? leftCount : rightCount;
-        continue;
-      }
-      if (hitLeft || hitRight) {
+      } else {
+        met = hitLeft || hitRight;
         node = hitLeft ? left : right;
         a = hitLeft ? leftA : rightA;
-        count = hitLeft ? leftCount : rightCount;
-        continue;
+        count = hitLeft ? leftCount : hitRight ? rightCount : 0u;
+      }
+    }
+    // Leaf: its triangles (none when the inner loop ended on a node whose children both miss).
+    for (uint i = 0u; i < count; ++i) {
+      int tri = int(a + i);
+      float t;
+      vec2 bary;
+      c.triTests++;
+      if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
+        hit = MeshHit{t, tri, bary};
+        if (anyHit) return true;
       }
     }
     while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;

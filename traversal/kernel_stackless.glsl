@@ -8,31 +8,40 @@
 // Counters: g_nodeVisits += 1 per node record fetched (loadNode), i.e. per node the walk reaches;
 // each has its box tested once. g_triTests += 1 per testTriangle call;
 // g_boxTests += 1 per intersectAabb call.
+//
+// Loop shape: box steps in an inner loop until a leaf whose box the ray meets, then its triangles
+// (the "while-while" shape of kernel_bvh2cb_stack.glsl, and for its reason: llvmpipe runs every
+// branch of a loop body under a mask, so a triangle test inside the box-step loop is paid by every
+// step). The walk and its counters are those of the one-loop form it replaced.
 
 bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
   vec3 invDir = rayInverseDirection(ray.dir);
   uint node = 0u;
-  while (node != kEscapeEnd) {
-    vec3 bmin, bmax;
+  while (true) {
     uint a, escape, count;
-    float tEnter;
-    g_nodeVisits++;
-    loadNode(int(node), bmin, bmax, a, escape, count);
-    g_boxTests++;
-    if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
-      // A valid tree's escape link points past its node (every step moves to a higher index); a
-      // record whose link does not ends the walk instead of looping. In a fragment shader llvmpipe
-      // hands helper invocations zeros from storage buffers (--storage ssbo; docs/layouts.md), and a
-      // record of zeros would spin until the driver's loop limit cut the whole quad short.
-      if (escape <= node) break;
-      node = escape;
-      continue;
+    // Box steps: follow child and escape links until a leaf whose box the ray meets, or the end.
+    bool atLeaf = false;
+    while (!atLeaf && node != kEscapeEnd) {
+      vec3 bmin, bmax;
+      float tEnter;
+      g_nodeVisits++;
+      loadNode(int(node), bmin, bmax, a, escape, count);
+      g_boxTests++;
+      if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
+        // A valid tree's escape link points past its node (every step moves to a higher index); a
+        // record whose link does not ends the walk (kEscapeEnd) instead of looping. In a fragment
+        // shader llvmpipe hands helper invocations zeros from storage buffers (--storage ssbo;
+        // docs/layouts.md), and a record of zeros would spin until the driver's loop limit cut the
+        // whole quad short.
+        node = escape <= node ? kEscapeEnd : escape;
+      } else if (count == 0u) {
+        node = node + 1u;
+      } else {
+        atLeaf = true;
+      }
     }
-    if (count == 0u) {
-      node = node + 1u;
-      continue;
-    }
+    if (!atLeaf) break;
     for (uint i = 0u; i < count; ++i) {
       int tri = int(a + i);
       float t;
@@ -43,8 +52,7 @@ bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit
         if (anyHit) return true;
       }
     }
-    if (escape <= node) break;
-    node = escape;
+    node = escape <= node ? kEscapeEnd : escape;
   }
   return hit.tri >= 0;
 }

@@ -12,26 +12,30 @@ inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax,
   hit = MeshHit{tMax, -1, vec2(0.0f)};
   vec3 invDir = Tests::rayInverseDirection(ray.dir);
   uint node = 0u;
-  while (node != kEscapeEnd) {
-    vec3 bmin, bmax;
+  while (true) {
     uint a, escape, count;
-    float tEnter;
-    c.nodeVisits++;
-    loadNode(s, int(node), bmin, bmax, a, escape, count);
-    c.boxTests++;
-    if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
-      // A valid tree's escape link points past its node (every step moves to a higher index); a
-      // record whose link does not ends the walk instead of looping. In a fragment shader llvmpipe
-      // hands helper invocations zeros from storage buffers (--storage ssbo; docs/layouts.md), and a
-      // record of zeros would spin until the driver's loop limit cut the whole quad short.
-      if (escape <= node) break;
-      node = escape;
-      continue;
+    // Box steps: follow child and escape links until a leaf whose box the ray meets, or the end.
+    bool atLeaf = false;
+    while (!atLeaf && node != kEscapeEnd) {
+      vec3 bmin, bmax;
+      float tEnter;
+      c.nodeVisits++;
+      loadNode(s, int(node), bmin, bmax, a, escape, count);
+      c.boxTests++;
+      if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
+        // A valid tree's escape link points past its node (every step moves to a higher index); a
+        // record whose link does not ends the walk (kEscapeEnd) instead of looping. In a fragment
+        // shader llvmpipe hands helper invocations zeros from storage buffers (--storage ssbo;
+        // docs/layouts.md), and a record of zeros would spin until the driver's loop limit cut the
+        // whole quad short.
+        node = escape <= node ? kEscapeEnd : escape;
+      } else if (count == 0u) {
+        node = node + 1u;
+      } else {
+        atLeaf = true;
+      }
     }
-    if (count == 0u) {
-      node = node + 1u;
-      continue;
-    }
+    if (!atLeaf) break;
     for (uint i = 0u; i < count; ++i) {
       int tri = int(a + i);
       float t;
@@ -42,8 +46,7 @@ inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax,
         if (anyHit) return true;
       }
     }
-    if (escape <= node) break;
-    node = escape;
+    node = escape <= node ? kEscapeEnd : escape;
   }
   return hit.tri >= 0;
 }
