@@ -1,6 +1,7 @@
 #include "traversal/embree_tracer.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <stdexcept>
 #include <string>
@@ -42,27 +43,31 @@ RTCRay toEmbree(const BatchRay& r) {
   return ray;
 }
 
-// Rays per share. Threads take chunks of consecutive rays in turn: neighbouring rays cost alike, so
-// interleaved chunks balance the threads, and each chunk writes its own 768 bytes of hits. Ray i on
-// thread i mod threads (the earlier share) had both threads writing into every cache line of the
-// hits: on this 2-core machine that false sharing made Embree's time multimodal from process to
-// process (bunny close view, 131,072 rays, medians of 7 rounds in 11 alternating processes each:
-// primary 12.2-12.7 ms in 7 of them and 17.5-19.1 ms in 4, diffuse 14.6-27.7 ms, against 12.2-13.0
-// and 14.4-21.4 ms with chunks of 64, which never showed the slow mode; docs/layouts.md).
+// Rays per share. Threads take chunks of consecutive rays, each the next one not yet taken (one
+// atomic counter): a thread that meets costlier rays, or starts late, takes fewer chunks, and each
+// chunk writes its own 768 bytes of hits. Ray i on thread i mod threads (the first share) had both
+// threads writing into every cache line of the hits: on this 2-core machine that false sharing made
+// Embree's time multimodal from process to process (bunny close view, 131,072 rays, medians of 7
+// rounds in 11 alternating processes each: primary 12.2-12.7 ms in 7 of them and 17.5-19.1 ms in 4,
+// diffuse 14.6-27.7 ms, against 12.2-13.0 and 14.4-21.4 ms with chunks of 64). Chunks taken in turn
+// (the second share: chunk c on thread c mod threads) left the threads unbalanced where the image
+// is: on the report scene's primary rays one thread took 9.8-10.7 ms and the other 7.4-8.4 ms in
+// every round (docs/layouts.md).
 constexpr size_t kRaysPerChunk = 64;
 
-// Runs body(i) for every ray index on `threads` threads, chunk c of kRaysPerChunk rays on thread
-// c mod threads.
+// Runs body(i) for every ray index on `threads` threads, each taking the next free chunk of
+// kRaysPerChunk rays. Which thread traces a ray does not change its answer.
 template <class Body>
 double parallelRays(size_t n, unsigned threads, const Body& body) {
   const auto start = Clock::now();
-  const auto share = [&](unsigned t) {
-    for (size_t first = size_t(t) * kRaysPerChunk; first < n; first += size_t(threads) * kRaysPerChunk)
+  std::atomic<size_t> next{0};
+  const auto share = [&] {
+    for (size_t first; (first = next.fetch_add(kRaysPerChunk, std::memory_order_relaxed)) < n;)
       for (size_t i = first, end = std::min(n, first + kRaysPerChunk); i < end; ++i) body(i);
   };
   std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back([&, t] { share(t); });
-  share(0);
+  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(share);
+  share();
   for (std::thread& t : pool) t.join();
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
