@@ -281,8 +281,10 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         else if (tk == "ao_radius") {
           out.aoRadius = r.number(tv, key);
           if (!(out.aoRadius > 0.0 && out.aoRadius <= 1.0)) r.fail(tv.source(), key, "must be in (0, 1]");
+        } else if (tk == "embree_threads") {
+          out.embreeThreads = int(r.integer(tv, key, 0, 256));
         } else {
-          r.fail(tk.source(), key, "unknown key; [trace] has count, seed, ao_radius");
+          r.fail(tk.source(), key, "unknown key; [trace] has count, seed, ao_radius, embree_threads");
         }
       }
     } else if (section == "axes") {

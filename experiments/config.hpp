@@ -61,6 +61,10 @@ struct RunRender {
   int traceCount = 65536;  // rays per workload
   uint64_t traceSeed = 1;
   double aoRadius = 0.1;   // ao ray length, fraction of the scene's diagonal
+  // Embree's threads beside the kernel (`trace --embree-threads`; 0 = every core). With llvmpipe held
+  // to one thread too (env LP_NUM_THREADS = "1"), each side runs on one core: the yardstick that holds
+  // on a machine whose two virtual CPUs sometimes share a physical core (docs/layouts.md).
+  int embreeThreads = 0;
 
   nlohmann::json keyJson() const;
   // Runs with the same scene and equal groupJson() are timed together, frames interleaved.

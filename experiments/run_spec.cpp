@@ -82,6 +82,7 @@ json RunRender::groupJson() const {
   g["trace_count"] = traceCount;
   g["trace_seed"] = traceSeed;
   g["ao_radius"] = aoRadius;
+  g["embree_threads"] = embreeThreads;
   return g;
 }
 
@@ -107,8 +108,11 @@ json RunSpec::keyJson() const {
   json a = json::object();
   for (const auto& [name, value] : axes) a[name] = value.value;
   json key{{"axes", a}, {"render", render.keyJson()}};
-  if (axis("workload"))  // only trace runs: the keys of render runs stay as they were
+  if (axis("workload")) {  // only trace runs: the keys of render runs stay as they were
     key["trace"] = {{"count", render.traceCount}, {"seed", render.traceSeed}, {"ao_radius", render.aoRadius}};
+    // Only when set: the keys of configs without it stay as they were.
+    if (render.embreeThreads != 0) key["trace"]["embree_threads"] = render.embreeThreads;
+  }
   return key;
 }
 
@@ -156,6 +160,7 @@ RunSpec RunSpec::fromJson(const json& j) {
   s.render.traceCount = r.value("trace_count", s.render.traceCount);
   s.render.traceSeed = r.value("trace_seed", s.render.traceSeed);
   s.render.aoRadius = r.value("ao_radius", s.render.aoRadius);
+  s.render.embreeThreads = r.value("embree_threads", s.render.embreeThreads);
   s.render.cameraPath = r.value("camera_path", "");
   s.render.cameraPathHash = r.value("camera_path_hash", "");
   s.render.cameraPathFile = r.value("camera_path_file", "");

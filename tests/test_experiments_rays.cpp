@@ -59,6 +59,7 @@ TEST(ExperimentRays, ValidationNamesTheKey) {
       {"[trace]\ncount = 0\n[axes]\nscenes = 'm.off'\n", {"cfg.toml:2", "trace.count"}},
       {"[trace]\nao_radius = 2.0\n[axes]\nscenes = 'm.off'\n", {"cfg.toml:2", "trace.ao_radius", "(0, 1]"}},
       {"[trace]\ncolor = 1\n[axes]\nscenes = 'm.off'\n", {"cfg.toml:2", "trace.color", "unknown key"}},
+      {"[trace]\nembree_threads = -1\n[axes]\nscenes = 'm.off'\n", {"cfg.toml:2", "trace.embree_threads"}},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.text);
@@ -98,7 +99,29 @@ rays = "ao"
                            "--max-frames 20 --target-ci-pct 4", "--eye 1,2,3", "--builder sah-binned --bins 16",
                            "--kernel stackless", "--leaf-size 2", "--robust fast", "--rays ao"})
     EXPECT_NE(line.find(part), std::string::npos) << part << " not in: " << line;
-  for (const char* absent : {" -o ", "--visits-out", "--width"}) EXPECT_EQ(line.find(absent), std::string::npos) << line;
+  for (const char* absent : {" -o ", "--visits-out", "--width", "--embree-threads"})
+    EXPECT_EQ(line.find(absent), std::string::npos) << line;
+}
+
+// [trace] embree_threads (with env LP_NUM_THREADS, one core per tracer): on the trace command line and
+// in the keys of trace runs only when set, so configs without it keep their keys.
+TEST(ExperimentRays, EmbreeThreadsReachTheTraceCommandAndOnlyTraceKeys) {
+  const char* base = "[axes]\nscenes = 'm.off'\n[[sweep]]\nname = 'a'\nrays = 'primary'\n[[sweep]]\nname = 'b'\n";
+  const ExperimentConfig plain = parse(base);
+  const ExperimentConfig oneCore = parse(std::string("[render]\nenv = { LP_NUM_THREADS = '1' }\n[trace]\nembree_threads = 1\n") + base);
+  const ExperimentConfig oneThread = parse(std::string("[trace]\nembree_threads = 1\n") + base);
+  ASSERT_EQ(plain.runs.size(), 2u);
+  ASSERT_EQ(oneThread.runs.size(), 2u);
+  ASSERT_TRUE(oneThread.runs[0].axis("workload"));
+  ASSERT_FALSE(oneThread.runs[1].axis("workload"));
+  EXPECT_NE(plain.runs[0].key, oneThread.runs[0].key);  // the traced run: another yardstick, another run
+  EXPECT_EQ(plain.runs[1].key, oneThread.runs[1].key);  // the rendered run: unchanged
+  const std::string line =
+      shellQuote(renderCommandLine("/bin/bvhlab", RunRequest{oneCore.runs[0], testDir() / "i.png", "", "", ""}));
+  EXPECT_NE(line.find("--embree-threads 1"), std::string::npos) << line;
+  EXPECT_EQ(oneCore.runs[0].render.env.at("LP_NUM_THREADS"), "1");
+  // The setting survives the plan file (runs are read back from plan.json on resume).
+  EXPECT_EQ(RunSpec::fromJson(oneThread.runs[0].toJson()).render.embreeThreads, 1);
 }
 
 // A real sweep: a generated mesh, two builders, two workloads, through `bvhlab run`.
