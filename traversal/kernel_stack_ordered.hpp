@@ -52,6 +52,8 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
         a = leftFirst ? leftA : rightA;
         count = leftFirst ? leftCount : rightCount;
       } else {
+        // Neither child met: count 0 ends this loop with no triangles; node and a are not read again
+        // before the pop reloads them.
         met = hitLeft || hitRight;
         node = hitLeft ? left : right;
         a = hitLeft ? leftA : rightA;
