@@ -3,6 +3,7 @@
 // extension's. Each check here is a crash, an unbounded allocation or a memory error that fuzzing
 // found inside libassimp (tests/fuzz/README.md lists them; each has a regression file under
 // tests/fuzz/regressions/); the file is refused with a named error before assimp reads it.
+#include <nlohmann/json.hpp>
 #include <pugixml.hpp>
 
 #include <algorithm>
@@ -300,6 +301,166 @@ void checkAc3d(std::string_view text) {
   close();
 }
 
+// glTF 2.0 JSON as assimp's glTF 2 reader must accept it. Its CanRead (assimp 5.2.5) loads the
+// document: when that throws, assimp offers the file to every other reader, and fuzz_glb found two of
+// them reading past the buffer (ASan heap-buffer-overflow in strncmp inside libassimp). So the checks
+// here are the conditions of that load: JSON (rapidjson stops at the first NUL of its buffer, so the
+// text ends there), an object, and asset.version "2.x"; plus a nesting bound, since rapidjson parses
+// recursively.
+// Element `i` of an index accessor (componentType UNSIGNED_BYTE, SHORT or INT: glTF 2.0 spec, 3.7.2.1)
+// when its bytes are at hand: the GLB's BIN chunk, or a buffer file beside the document; nullopt when
+// they are not (a data: URI, a missing file) or the accessor does not cover element i. Any malformed
+// member throws nlohmann's exception, which the caller reports.
+std::optional<uint64_t> indexValue(const nlohmann::json& doc, const nlohmann::json& accessor, uint64_t i,
+                                   const std::optional<std::string>& bin, const fs::path& folder) {
+  const uint64_t componentType = accessor.at("componentType").get<uint64_t>();
+  const uint64_t size = componentType == 5121 ? 1 : componentType == 5123 ? 2 : componentType == 5125 ? 4 : 0;
+  if (size == 0 || i >= accessor.at("count").get<uint64_t>() || !accessor.contains("bufferView")) return std::nullopt;
+  const nlohmann::json& view = doc.at("bufferViews").at(accessor.at("bufferView").get<size_t>());
+  const nlohmann::json& buffer = doc.at("buffers").at(view.at("buffer").get<size_t>());
+  const uint64_t stride = view.contains("byteStride") ? view.at("byteStride").get<uint64_t>() : size;
+  const uint64_t at = view.value("byteOffset", uint64_t(0)) + accessor.value("byteOffset", uint64_t(0)) + i * stride;
+  if (at + size > view.at("byteLength").get<uint64_t>() + view.value("byteOffset", uint64_t(0))) return std::nullopt;
+  std::string bytes(size, '\0');
+  if (!buffer.contains("uri")) {
+    if (!bin || at + size > bin->size()) return std::nullopt;
+    bytes = bin->substr(at, size);
+  } else {
+    const std::string uri = buffer.at("uri").get<std::string>();
+    if (uri.rfind("data:", 0) == 0) return std::nullopt;
+    std::ifstream in(folder / uri, std::ios::binary);
+    if (!in.seekg(std::streamoff(at)) || !in.read(bytes.data(), std::streamsize(size))) return std::nullopt;
+  }
+  uint64_t v = 0;
+  for (uint64_t k = size; k-- > 0;) v = v << 8 | uint8_t(bytes[k]);  // little-endian
+  return v;
+}
+
+// assimp 5.2.5 turns a LINE_LOOP primitive (mode 2) into segments, dropping a segment with an index
+// past the vertices, then closes the loop with the first segment's first index: when that segment was
+// dropped (or the loop has fewer than 2 vertices) it reads through a null pointer (fuzz_glb, SIGSEGV in
+// plain assimp too). bvhlab skips lines anyway; such a loop is refused, as is an indexed loop whose
+// first two indices cannot be read here.
+void checkLineLoops(const nlohmann::json& doc, const std::string& what, const std::optional<std::string>& bin,
+                    const fs::path& folder) {
+  if (!doc.contains("meshes")) return;
+  const nlohmann::json& meshes = doc.at("meshes");
+  for (size_t m = 0; m < meshes.size(); ++m) {
+    const nlohmann::json& primitives = meshes.at(m).at("primitives");
+    for (size_t p = 0; p < primitives.size(); ++p) {
+      const nlohmann::json& prim = primitives.at(p);
+      if (prim.value("mode", uint64_t(4)) != 2) continue;
+      const std::string where = what + ": meshes[" + std::to_string(m) + "].primitives[" + std::to_string(p) + "]";
+      // Without POSITION assimp makes a mesh of 0 vertices, and drops every segment.
+      const nlohmann::json& attributes = prim.at("attributes");
+      const uint64_t vertices =
+          attributes.contains("POSITION")
+              ? doc.at("accessors").at(attributes.at("POSITION").get<size_t>()).at("count").get<uint64_t>()
+              : 0;
+      if (!prim.contains("indices")) {
+        if (vertices < 2) fail(where + ": a LINE_LOOP of " + std::to_string(vertices) + " vertices (needs 2)");
+        continue;
+      }
+      const nlohmann::json& indices = doc.at("accessors").at(prim.at("indices").get<size_t>());
+      for (uint64_t i = 0; i < 2; ++i) {
+        const std::optional<uint64_t> v = indexValue(doc, indices, i, bin, folder);
+        if (!v) fail(where + ": a LINE_LOOP whose index " + std::to_string(i) + " cannot be read");
+        if (*v >= vertices)
+          fail(where + ": a LINE_LOOP whose index " + std::to_string(i) + " is " + std::to_string(*v) + " but it has " +
+               std::to_string(vertices) + " vertices");
+      }
+    }
+  }
+}
+
+void checkGltfJson(std::string_view text, const std::string& what, const std::optional<std::string>& bin,
+                   const fs::path& folder) {
+  text = text.substr(0, text.find('\0'));
+  // A glTF 2.0 document nests about 6 levels (extensions and extras a few more); 256 keeps any real
+  // document and bounds rapidjson's recursion far below a stack's size.
+  constexpr int kMaxDepth = 256;
+  int depth = 0;
+  bool inString = false, escaped = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (inString) {
+      if (escaped) escaped = false;
+      else if (c == '\\') escaped = true;
+      else if (c == '"') inString = false;
+    } else if (c == '"') {
+      inString = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxDepth)
+        fail(what + ": JSON nested deeper than " + std::to_string(kMaxDepth) + " levels at byte " + std::to_string(i));
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    fail(what + ": not valid JSON (" + e.what() + ")");
+  }
+  if (!doc.is_object()) fail(what + ": the JSON is not an object");
+  const auto asset = doc.find("asset");
+  if (asset == doc.end() || !asset->is_object()) fail(what + ": no \"asset\" object (glTF 2.0 requires one)");
+  const auto version = asset->find("version");
+  if (version == asset->end() || !version->is_string() || version->get_ref<const std::string&>().rfind('2', 0) != 0)
+    fail(what + ": asset.version is not \"2.x\" (only glTF 2.0 is read; convert glTF 1.0 files)");
+  try {
+    checkLineLoops(doc, what, bin, folder);
+  } catch (const nlohmann::json::exception& e) {
+    fail(what + ": malformed mesh, accessor or buffer (" + e.what() + ")");
+  }
+}
+
+// A .glb (glTF 2.0 spec, "GLB File Format Specification"): a 12-byte header (magic "glTF", version 2,
+// total length), a JSON chunk (length, type "JSON", text padded to 4 bytes), then an optional BIN
+// chunk. assimp 5.2.5 sizes its buffers by the chunk lengths before reading them (fuzz_glb: a JSON
+// chunk claiming gigabytes in a small file exhausted memory), and reads a BIN chunk header whenever the
+// header's length leaves room for one; it reads no more of the header's length. Each is checked
+// against the file's size, and the JSON chunk as above.
+void checkGlb(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const uint64_t size = fs::file_size(path);
+  auto u32 = [&](uint64_t at, const char* field) {
+    uint8_t b[4] = {};
+    if (at + 4 > size || !in.seekg(std::streamoff(at)) || !in.read(reinterpret_cast<char*>(b), 4))
+      fail("binary glTF: the file ends before its " + std::string(field) + " (byte " + std::to_string(at) + ")");
+    return uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;  // little-endian
+  };
+  constexpr uint32_t kJson = 0x4E4F534Au, kBin = 0x004E4942u;  // "JSON", "BIN\0" read as little-endian
+  const uint32_t version = u32(4, "header version");
+  if (version != 2) fail("binary glTF version " + std::to_string(version) + " (only version 2 is read)");
+  const uint64_t length = u32(8, "header length");
+  if (length > size)
+    fail("binary glTF header length " + std::to_string(length) + " but the file has " + std::to_string(size) + " bytes");
+  const uint64_t jsonLength = u32(12, "JSON chunk length");
+  if (u32(16, "JSON chunk type") != kJson) fail("binary glTF: the first chunk is not of type JSON");
+  if (20 + jsonLength > size)
+    fail("binary glTF JSON chunk of " + std::to_string(jsonLength) + " bytes but " + std::to_string(size - 20) +
+         " follow its header");
+  std::string json(jsonLength, '\0');
+  in.seekg(20);
+  in.read(json.data(), std::streamsize(jsonLength));
+  const uint64_t body = 20 + (jsonLength + 3) / 4 * 4 + 8;  // assimp's test for a BIN chunk
+  if (length >= body) {
+    const uint64_t binLength = u32(body - 8, "BIN chunk length");
+    if (u32(body - 4, "BIN chunk type") != kBin) fail("binary glTF: the second chunk is not of type BIN");
+    if (body + binLength > size)
+      fail("binary glTF BIN chunk of " + std::to_string(binLength) + " bytes but " + std::to_string(size - body) +
+           " follow its header");
+  }
+  std::optional<std::string> bin;
+  if (length >= body) {
+    bin.emplace(u32(body - 8, "BIN chunk length"), '\0');
+    in.seekg(std::streamoff(body));
+    in.read(bin->data(), std::streamsize(bin->size()));
+  }
+  checkGltfJson(json, "binary glTF JSON chunk", bin, fs::path(path).parent_path());
+}
+
 // What assimp would read through a reader other than the extension's: when that reader refuses the
 // content, assimp tries every reader on it, so a COLLADA document named .gltf reaches the COLLADA
 // reader (it accepts any file with "<collada" in its first 200 bytes, NULs dropped, any case), and a
@@ -316,6 +477,8 @@ void checkBeforeAssimp(const std::string& path) {
   // assimp's other readers, one of which read past a buffer on an 85-byte file (fuzz_glb, ASan
   // heap-buffer-overflow in strncmp inside libassimp).
   if (ext == ".glb" && head.rfind("glTF", 0) != 0) fail("not a binary glTF file (no 'glTF' magic)");
+  if (ext == ".glb") checkGlb(path);
+  if (ext == ".gltf") checkGltfJson(readAll(path), "glTF", std::nullopt, fs::path(path).parent_path());
   std::erase(head, '\0');
   std::transform(head.begin(), head.end(), head.begin(), [](char c) { return char(std::tolower(uint8_t(c))); });
   if (ext == ".dae" || head.find("<collada") != std::string::npos) checkCollada(path);

@@ -404,8 +404,9 @@ TEST(AssimpErrors, MalformedAc3dSurfacesAreRefusedWithTheirLine) {
       {"mat-out-of-range.ac", edit("SURF 0x02\nmat 0", "SURF 0x02\nmat 1"), 22, "defines 1 MATERIAL"},
       {"surf-type-5.ac", edit("SURF 0x02", "SURF 0x05"), 21, "unknown surface type 5"},
       {"surf-no-flags.ac", edit("SURF 0x02", "SURF zz"), 21, "expected flags"},
-      // assimp's reader takes any file starting with "AC3D", whatever its name.
-      {"ac3d-named.gltf", edit("SURF 0x02\nmat 0", "SURF 0x02\nmat 7"), 22, "defines 1 MATERIAL"},
+      // assimp's reader takes any file starting with "AC3D", whatever its name (here one the FBX reader
+      // refuses; a .gltf or .glb must now be glTF before assimp sees it).
+      {"ac3d-named.fbx", edit("SURF 0x02\nmat 0", "SURF 0x02\nmat 7"), 22, "defines 1 MATERIAL"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);

@@ -115,9 +115,10 @@ TEST(ImporterGuards, ColladaInstancingIsBoundedBeforeAssimp) {
   const fs::path dae = kRegressions / "dae";
   EXPECT_NE(loadError(dae / "instance-node-chain-doubles-40-times.dae").find("(kMaxColladaNodes)"), std::string::npos);
   EXPECT_NE(loadError(dae / "instance-node-cycle.dae").find("<instance_node> cycle: node 'n0'"), std::string::npos);
-  // assimp falls back to its COLLADA reader when the glTF reader refuses the content.
-  EXPECT_NE(loadError(kRegressions / "gltf/collada-instance-chain-named-gltf.gltf").find("(kMaxColladaNodes)"),
-            std::string::npos);
+  // assimp falls back to its COLLADA reader when the glTF reader refuses the content: a .gltf must now
+  // be glTF JSON before assimp sees it, so the COLLADA inside never reaches that reader.
+  const std::string named = loadError(kRegressions / "gltf/collada-instance-chain-named-gltf.gltf");
+  EXPECT_NE(named.find("glTF: not valid JSON"), std::string::npos) << named;
   // Two instances of a two-triangle quad, one of them through a nested node.
   const Mesh m = loadMesh(fs::path(BVHLAB_SOURCE_DIR) / "tests/fuzz/seeds/dae/instanced_quad.dae");
   EXPECT_EQ(m.triangles.size(), 4u);
@@ -136,6 +137,83 @@ TEST(ImporterGuards, Ac3dFindingsAreRefusedBeforeAssimp) {
   EXPECT_NE(e.find(":39: SURF without a 'refs' line"), std::string::npos) << e;
   e = loadError(ac / "fuzzer-found-kids-count-inside-refs-rows-reserves-212gb.ac");
   EXPECT_NE(e.find(":23: kids 666666666666 but only 16 non-blank lines follow"), std::string::npos) << e;
+}
+
+// The fuzz_glb findings: files assimp's glTF 2 reader refuses while probing them (then every other
+// reader is tried, and two read past the buffer), or whose JSON chunk length made it allocate
+// gigabytes. Each is refused by the GLB and glTF JSON checks, naming what is wrong; a well-formed file
+// written by assimp still loads (AssimpFormats.BinaryFormatsWrittenByAssimpReadBack).
+TEST(ImporterGuards, GlbContainerAndGltfJsonAreCheckedBeforeAssimp) {
+  const fs::path glb = kRegressions / "glb";
+  std::string e = loadError(glb / "fuzzer-found-json-chunk-past-the-end-overreads-in-another-reader.glb");
+  EXPECT_NE(e.find("binary glTF header length 1932 but the file has 98 bytes"), std::string::npos) << e;
+  e = loadError(glb / "fuzzer-found-bad-version-overreads-in-another-reader.glb");
+  EXPECT_NE(e.find("binary glTF version 126627839 (only version 2 is read)"), std::string::npos) << e;
+
+  ScratchDir dir;
+  auto le32 = [](uint32_t v) { return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)}; };
+  const std::string json = R"({"asset":{"version":"2.0"}})";  // 27 bytes, padded to 28
+  auto writeGlb = [&](const std::string& name, uint32_t jsonLength, const std::string& tail) {
+    const std::string body = le32(jsonLength) + "JSON" + json + " " + tail;
+    std::ofstream(dir.path / name, std::ios::binary) << "glTF" << le32(2) << le32(uint32_t(12 + body.size())) << body;
+    return loadError(dir.path / name);
+  };
+  // A JSON chunk that claims 4 GB (assimp 5.2.5 resizes a buffer to it first).
+  e = writeGlb("huge-json.glb", 0xFFFFFFF0u, "");
+  EXPECT_NE(e.find("binary glTF JSON chunk of 4294967280 bytes but 28 follow its header"), std::string::npos) << e;
+  // A BIN chunk that claims more than the file holds (assimp allocates its length).
+  e = writeGlb("huge-bin.glb", 27, le32(1u << 30) + std::string("BIN\0", 4) + "abcd");
+  EXPECT_NE(e.find("binary glTF BIN chunk of 1073741824 bytes but 4 follow its header"), std::string::npos) << e;
+  e = writeGlb("bad-bin-type.glb", 27, le32(4) + "XYZ!" + "abcd");
+  EXPECT_NE(e.find("the second chunk is not of type BIN"), std::string::npos) << e;
+  // The JSON itself: not an object, no asset version 2, nested past the bound, not JSON at all.
+  auto writeGltf = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir.path / name) << text;
+    return loadError(dir.path / name);
+  };
+  e = writeGltf("array.gltf", "[1, 2]");
+  EXPECT_NE(e.find("glTF: the JSON is not an object"), std::string::npos) << e;
+  e = writeGltf("v1.gltf", R"({"asset": {"version": "1.0"}})");
+  EXPECT_NE(e.find("asset.version is not \"2.x\""), std::string::npos) << e;
+  e = writeGltf("deep.gltf", R"({"asset": {"version": "2.0"}, "extras": )" + std::string(300, '[') + std::string(300, ']') + "}");
+  EXPECT_NE(e.find("JSON nested deeper than 256 levels"), std::string::npos) << e;
+  e = writeGltf("prose.gltf", "glTF is a format");
+  EXPECT_NE(e.find("glTF: not valid JSON"), std::string::npos) << e;
+  // A LINE_LOOP whose first segment assimp drops (an index past the vertices; or a loop of 1 vertex):
+  // assimp 5.2.5 then closes the loop through a null pointer. The fuzzer's .glb (index in its BIN
+  // chunk), and .gltf files with the indices in a buffer file beside them and in a data: URI.
+  e = loadError(glb / "fuzzer-found-line-loop-index-past-vertices-segv.glb");
+  EXPECT_NE(e.find("meshes[0].primitives[0]: a LINE_LOOP whose index 0 is 63 but it has 4 vertices"), std::string::npos) << e;
+  std::ofstream(dir.path / "idx.bin", std::ios::binary) << le32(7) << le32(1);
+  const std::string loop = R"({"asset": {"version": "2.0"}, "buffers": [{"uri": "URI", "byteLength": 8}],
+      "bufferViews": [{"buffer": 0, "byteLength": 8}],
+      "accessors": [{"bufferView": 0, "componentType": 5125, "count": 2, "type": "SCALAR"},
+                    {"componentType": 5126, "count": COUNT, "type": "VEC3"}],
+      "meshes": [{"primitives": [{"mode": 2, "attributes": {"POSITION": 1}INDICES}]}]})";
+  auto loopFile = [&](const std::string& uri, const std::string& count, const std::string& indices) {
+    std::string t = loop;
+    for (const auto& [key, value] : {std::pair<std::string, std::string>{"URI", uri}, {"COUNT", count}, {"INDICES", indices}})
+      t.replace(t.find(key), key.size(), value);
+    return t;
+  };
+  e = writeGltf("loop-file.gltf", loopFile("idx.bin", "4", R"(, "indices": 0)"));
+  EXPECT_NE(e.find("glTF: meshes[0].primitives[0]: a LINE_LOOP whose index 0 is 7 but it has 4 vertices"), std::string::npos) << e;
+  e = writeGltf("loop-data-uri.gltf", loopFile("data:application/octet-stream;base64,AAAAAAEAAAA=", "4", R"(, "indices": 0)"));
+  EXPECT_NE(e.find("a LINE_LOOP whose index 0 cannot be read"), std::string::npos) << e;
+  e = writeGltf("loop-one-vertex.gltf", loopFile("idx.bin", "1", ""));
+  EXPECT_NE(e.find("a LINE_LOOP of 1 vertices (needs 2)"), std::string::npos) << e;
+  // Without POSITION (the fuzzer's second file: a misspelt attribute name) the loop has 0 vertices.
+  e = loadError(glb / "fuzzer-found-line-loop-without-position-segv.glb");
+  EXPECT_NE(e.find("a LINE_LOOP whose index 0 is 0 but it has 0 vertices"), std::string::npos) << e;
+  // Within range, the loop passes the check and assimp reads it (the file has no triangles).
+  e = writeGltf("loop-ok.gltf", loopFile("idx.bin", "8", R"(, "indices": 0)"));
+  EXPECT_EQ(e.find("LINE_LOOP"), std::string::npos) << e;
+  e = writeGltf("loop-bad-member.gltf", loopFile("idx.bin", "\"four\"", R"(, "indices": 0)"));
+  EXPECT_NE(e.find("glTF: malformed mesh, accessor or buffer"), std::string::npos) << e;
+  // Brackets inside strings do not count as nesting, and a NUL ends the text as it does for assimp.
+  e = writeGltf("strings.gltf", R"({"asset": {"version": "2.0", "generator": ")" + std::string(300, '[') + "\"}}" +
+                                    std::string(1, '\0') + "garbage");
+  EXPECT_EQ(e.find("JSON"), std::string::npos) << e;
 }
 
 TEST(ImporterGuards, AZipArchiveIsNotReadAsAModel) {
