@@ -336,31 +336,40 @@ std::optional<uint64_t> indexValue(const nlohmann::json& doc, const nlohmann::js
   return v;
 }
 
-// assimp 5.2.5 turns a LINE_LOOP primitive (mode 2) into segments, dropping a segment with an index
-// past the vertices, then closes the loop with the first segment's first index: when that segment was
-// dropped (or the loop has fewer than 2 vertices) it reads through a null pointer (fuzz_glb, SIGSEGV in
-// plain assimp too). bvhlab skips lines anyway; such a loop is refused, as is an indexed loop whose
-// first two indices cannot be read here.
-void checkLineLoops(const nlohmann::json& doc, const std::string& what, const std::optional<std::string>& bin,
-                    const fs::path& folder) {
+// What assimp 5.2.5 does with a primitive's mode (glTF 2.0 spec, 3.7.2.1: 0 points, 1 lines, 2 line
+// loop, 3 line strip, 4 triangles, 5 triangle strip, 6 triangle fan), read here before it does:
+// - strips and fans get count - 1 (line strip) or count - 2 faces in unsigned arithmetic, so fewer
+//   vertices (or indices) than a segment or a triangle wrap to 2^32 faces (fuzz_glb: a fan without
+//   attributes asked for 64 GB); a loop reads its indices 0 and 1 whatever its count;
+// - a LINE_LOOP drops a segment with an index past the vertices, then closes the loop with the first
+//   segment's first index: when that segment was dropped it reads through a null pointer (fuzz_glb,
+//   SIGSEGV in plain assimp too). Its first two indices are read here (bvhlab skips lines anyway),
+//   and an indexed loop whose indices cannot be read here is refused.
+void checkPrimitives(const nlohmann::json& doc, const std::string& what, const std::optional<std::string>& bin,
+                     const fs::path& folder) {
   if (!doc.contains("meshes")) return;
   const nlohmann::json& meshes = doc.at("meshes");
   for (size_t m = 0; m < meshes.size(); ++m) {
     const nlohmann::json& primitives = meshes.at(m).at("primitives");
     for (size_t p = 0; p < primitives.size(); ++p) {
       const nlohmann::json& prim = primitives.at(p);
-      if (prim.value("mode", uint64_t(4)) != 2) continue;
+      const uint64_t mode = prim.value("mode", uint64_t(4));
+      const char* const names[] = {"", "", "LINE_LOOP", "LINE_STRIP", "", "TRIANGLE_STRIP", "TRIANGLE_FAN"};
+      const uint64_t minimum = mode == 2 || mode == 3 ? 2 : mode == 5 || mode == 6 ? 3 : 0;
+      if (minimum == 0) continue;
       const std::string where = what + ": meshes[" + std::to_string(m) + "].primitives[" + std::to_string(p) + "]";
-      // Without POSITION assimp makes a mesh of 0 vertices, and drops every segment.
-      const nlohmann::json& attributes = prim.at("attributes");
+      // Without POSITION assimp makes a mesh of 0 vertices (and drops every segment of a loop).
+      const bool hasPosition = prim.contains("attributes") && prim.at("attributes").contains("POSITION");
       const uint64_t vertices =
-          attributes.contains("POSITION")
-              ? doc.at("accessors").at(attributes.at("POSITION").get<size_t>()).at("count").get<uint64_t>()
-              : 0;
-      if (!prim.contains("indices")) {
-        if (vertices < 2) fail(where + ": a LINE_LOOP of " + std::to_string(vertices) + " vertices (needs 2)");
-        continue;
-      }
+          hasPosition ? doc.at("accessors").at(prim.at("attributes").at("POSITION").get<size_t>()).at("count").get<uint64_t>()
+                      : 0;
+      const bool indexed = prim.contains("indices");
+      const uint64_t elements =
+          indexed ? doc.at("accessors").at(prim.at("indices").get<size_t>()).at("count").get<uint64_t>() : vertices;
+      if (elements < minimum)
+        fail(where + ": a " + names[mode] + " of " + std::to_string(elements) + (indexed ? " indices" : " vertices") +
+             " (needs " + std::to_string(minimum) + ")");
+      if (mode != 2 || !indexed) continue;
       const nlohmann::json& indices = doc.at("accessors").at(prim.at("indices").get<size_t>());
       for (uint64_t i = 0; i < 2; ++i) {
         const std::optional<uint64_t> v = indexValue(doc, indices, i, bin, folder);
@@ -409,7 +418,7 @@ void checkGltfJson(std::string_view text, const std::string& what, const std::op
   if (version == asset->end() || !version->is_string() || version->get_ref<const std::string&>().rfind('2', 0) != 0)
     fail(what + ": asset.version is not \"2.x\" (only glTF 2.0 is read; convert glTF 1.0 files)");
   try {
-    checkLineLoops(doc, what, bin, folder);
+    checkPrimitives(doc, what, bin, folder);
   } catch (const nlohmann::json::exception& e) {
     fail(what + ": malformed mesh, accessor or buffer (" + e.what() + ")");
   }

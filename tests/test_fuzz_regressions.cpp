@@ -202,6 +202,9 @@ TEST(ImporterGuards, GlbContainerAndGltfJsonAreCheckedBeforeAssimp) {
   EXPECT_NE(e.find("a LINE_LOOP whose index 0 cannot be read"), std::string::npos) << e;
   e = writeGltf("loop-one-vertex.gltf", loopFile("idx.bin", "1", ""));
   EXPECT_NE(e.find("a LINE_LOOP of 1 vertices (needs 2)"), std::string::npos) << e;
+  // A fan without attributes (the fuzzer's third file): 0 - 2 faces, in unsigned arithmetic.
+  e = loadError(glb / "fuzzer-found-fan-of-0-vertices-allocates-64gb.glb");
+  EXPECT_NE(e.find("meshes[0].primitives[0]: a TRIANGLE_FAN of 0 vertices (needs 3)"), std::string::npos) << e;
   // Without POSITION (the fuzzer's second file: a misspelt attribute name) the loop has 0 vertices.
   e = loadError(glb / "fuzzer-found-line-loop-without-position-segv.glb");
   EXPECT_NE(e.find("a LINE_LOOP whose index 0 is 0 but it has 0 vertices"), std::string::npos) << e;
