@@ -159,17 +159,22 @@ RunExecutor subprocessExecutor(fs::path binary) {
 json measureSpec(const fs::path& binary, const GroupRequest& request) {
   if (request.runs.empty()) throw std::invalid_argument("an empty group");
   const RunRender& r = request.runs.front().spec.render;
+  // Runs on the rays axis make a trace group (the runner groups them apart from rendered runs).
+  const bool trace = request.runs.front().spec.axis("workload") != nullptr;
   json runs = json::array();
   for (const RunRequest& run : request.runs) {
+    if ((run.spec.axis("workload") != nullptr) != trace) throw std::invalid_argument("a group mixes traced and rendered runs");
     std::vector<std::string> argv = renderCommandLine(binary, run);
-    argv.erase(argv.begin(), argv.begin() + 2);  // the binary and "render": measure takes render's arguments
+    argv.erase(argv.begin(), argv.begin() + 2);  // the binary and "render" or "trace": measure takes their arguments
     runs.push_back({{"key", run.spec.key}, {"args", argv}});
   }
-  return {{"session", request.session},         {"min_frames", r.frames},
-          {"max_frames", r.maxFrames},          {"target_ci_pct", r.targetCiPct},
-          {"max_seconds", r.maxSeconds},        {"aa_control", r.aaControl},
-          {"share_programs", r.sharePrograms},   {"program_copies", r.programCopies},
-          {"runs", runs}};
+  json spec = {{"session", request.session},         {"min_frames", r.frames},
+               {"max_frames", r.maxFrames},          {"target_ci_pct", r.targetCiPct},
+               {"max_seconds", r.maxSeconds},        {"aa_control", r.aaControl},
+               {"share_programs", r.sharePrograms},   {"program_copies", r.programCopies},
+               {"runs", runs}};
+  if (trace) spec["command"] = "trace";
+  return spec;
 }
 
 GroupExecutor subprocessGroupExecutor(fs::path binary) {

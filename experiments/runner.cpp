@@ -242,9 +242,11 @@ SweepOutcome runSweep(const RunOptions& options) {
   const GroupExecutor interleaved = options.groupExecutor ? options.groupExecutor : subprocessGroupExecutor(options.binary);
   const GroupExecutor oneByOne =
       sequentialGroupExecutor(options.executor ? options.executor : subprocessExecutor(options.binary));
-  // A trace run interleaves its own rounds with Embree's in one process (`bvhlab trace`): alone.
+  // Traced runs (the rays axis) go to trace groups (`measure` with "command": "trace"), but with
+  // program copies, which only `bvhlab trace` has: alone.
   const auto alone = [&](const RunSpec& run) {
-    return (options.executor && !options.groupExecutor) || !run.render.interleave || run.axis("workload");
+    return (options.executor && !options.groupExecutor) || !run.render.interleave ||
+           (run.axis("workload") && run.render.programCopies > 1);
   };
 
   Progress progress(options.progress, mine.size() * size_t(replicates));
@@ -273,7 +275,8 @@ SweepOutcome runSweep(const RunOptions& options) {
         }
       }
       const AxisValue* scene = run->axis("scene");
-      const std::string signature = (scene ? scene->value.dump() : std::string()) + run->render.groupJson().dump();
+      const std::string signature = std::string(run->axis("workload") ? "trace " : "render ") +
+                                    (scene ? scene->value.dump() : std::string()) + run->render.groupJson().dump();
       auto g = openGroup.find(signature);
       if (g == openGroup.end() || groups[g->second].size() >= size_t(run->render.groupSize) || alone(*run)) {
         groups.emplace_back();
@@ -317,8 +320,14 @@ SweepOutcome runSweep(const RunOptions& options) {
       // Stopped by SIGINT/SIGTERM: the group's child was killed mid-measurement; its runs stay pending.
       if ((outcome.interrupted = InterruptGuard::interrupted())) break;
 
+      std::vector<const RunSpec*> deferred;  // handed back by a trace group (memory): traced in a later group
       for (const RunRequest& req : request.runs) {
         const RunSpec* run = &req.spec;
+        if (groupError.empty() && results.contains(run->key) && results[run->key].is_object() &&
+            results[run->key].contains("deferred") && results[run->key].size() == 1) {
+          deferred.push_back(run);
+          continue;
+        }
         json record = {{"key", run->key},
                        {"params", run->toJson()},
                        {"config_name", config.name},
@@ -372,6 +381,8 @@ SweepOutcome runSweep(const RunOptions& options) {
       }
       spentSeconds += seconds;
       outcome.summary = writeResults(dir, plan, records, &cache, replicateRecords);
+      // A group traces at least its first run, so a deferred rest is smaller: this ends.
+      if (!deferred.empty() && deferred.size() < request.runs.size()) groups.push_back(std::move(deferred));
     }
   }
   progress.finish();

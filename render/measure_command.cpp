@@ -16,6 +16,7 @@
 #include "render/render_cli.hpp"
 #include "render/program_cache.hpp"
 #include "render/render_job.hpp"
+#include "render/trace_group.hpp"
 #include "traversal/kernels.hpp"
 
 namespace bvhlab {
@@ -115,6 +116,10 @@ json measureGroup(const json& spec) {
   // runs of one shader text): the findings' intervals then span code placements (6 or more copies).
   const int programCopies = intField(spec, "program_copies", 1, 1, 64);
   const std::string session = spec.value("session", std::string("unnamed"));
+  const std::string command = spec.value("command", std::string("render"));
+  if (command == "trace")
+    return traceGroup(spec, GroupSettings{minFrames, maxFrames, targetPct, maxSeconds, wantControl, programCopies, session});
+  if (command != "render") throw std::invalid_argument("group file: command: \"" + command + "\" (render | trace)");
   const auto start = std::chrono::steady_clock::now();
 
   // ---- set up and build every run (CPU): one scene load per input, one tree per tree key --------

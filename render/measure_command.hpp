@@ -13,6 +13,9 @@
 // rounds, or (max_seconds > 0) once the rounds have taken that long; at least min_frames rounds. With aa_control, the first run is drawn a second time as an
 // A/A control: its own GL program and frames, paired with the original's.
 //
+// "command": "trace" makes it a trace group: every run's `args` are `bvhlab trace`'s arguments
+// (render/trace_group.hpp); "render" (the default) is what the rest of this comment describes.
+//
 // Prints one JSON object: {"session", "rounds", "stop": "target"|"max_frames"|"max_seconds"|"fixed",
 // "renderer", "wall_s", "runs": {"K": render's JSON object (+ session, rounds, aa_control_* for the
 // controlled run) or {"error": "...", "result": partial object}}}.
@@ -25,6 +28,15 @@ namespace bvhlab {
 
 struct MeasureCommand {
   std::string spec;  // the group file
+};
+
+// The group file's settings common to rendered and traced groups (checked by measureGroup).
+struct GroupSettings {
+  int minFrames = 10, maxFrames = 10;
+  double targetPct = 2.0, maxSeconds = 0.0;
+  bool wantControl = true;  // aa_control, and enough rounds for its interval
+  int programCopies = 1;
+  std::string session = "unnamed";
 };
 
 // The measurement itself (the CLI prints what it returns). Throws std::invalid_argument for a bad

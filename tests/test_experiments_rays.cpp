@@ -1,6 +1,9 @@
 // The rays axis of experiment configs: runs that trace a ray workload (`bvhlab trace`) instead of
 // rendering frames: config parsing and validation, the command line, and a real sweep through the
 // runner to results, findings and the report's ray sections.
+#include <fstream>
+#include <map>
+#include <set>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -171,6 +174,135 @@ rays = ["primary", "diffuse"]
   const std::string html((std::istreambuf_iterator<char>(hin)), {});
   for (const char* id : {"id=\"rays\"", "id=\"rays-table-cloud\"", "visits vs sah-binned", "id=\"plot-scaling\""})
     EXPECT_NE(html.find(id), std::string::npos) << id;
+}
+
+// Traced runs of one scene and settings are ONE trace group (`bvhlab measure` with "command":
+// "trace"): one session, the same rounds for every run, runs with the same rays share one Embree
+// batch (`yardstick`), the first run carries the A/A control, and the findings pair the runs' rounds
+// directly (not through Embree).
+TEST(ExperimentRays, TraceRunsAreOneGroupWhoseRoundsPair) {
+  const fs::path cfg = writeTemp("rays-group/cfg.toml", R"(
+[experiment]
+name = "rays-group"
+description = "a trace group"
+[render]
+warmup = 1
+[measure]
+min_frames = 8
+max_frames = 8
+[trace]
+count = 2000
+[axes]
+scenes = { generate = "large", triangles = 5000, seed = 3, name = "cloud" }
+builders = ["median", "sah-binned"]
+rays = ["primary", "diffuse"]
+)");
+  const fs::path out = testDir() / "rays-group/out";
+  Result r = run("run " + cfg.string() + " --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::ifstream in(out / "results.json");
+  const json results = json::parse(in);
+  std::set<std::string> sessions;
+  std::map<std::string, std::set<int>> yardsticks;  // workload -> yardstick indices
+  int controls = 0, rows = 0;
+  for (const json& row : results["rows"]) {
+    ASSERT_EQ(row["status"], "ok") << row.dump();
+    ++rows;
+    sessions.insert(row["session"].get<std::string>());
+    yardsticks[row["workload"].get<std::string>()].insert(row["yardstick"].get<int>());
+    EXPECT_EQ(row["rounds"], 8);
+    EXPECT_EQ(row["frame_ms_all"].size(), 8u);
+    EXPECT_EQ(row["embree_ms_all"].size(), 8u);
+    EXPECT_EQ(row["hit_mismatches"], 0);
+    if (row.contains("aa_control_frame_ms_all")) {
+      ++controls;
+      EXPECT_EQ(row["aa_control_frame_ms_all"].size(), 8u);
+      EXPECT_TRUE(row.contains("aa_control_ratio"));
+    }
+  }
+  EXPECT_EQ(rows, 4);
+  EXPECT_EQ(sessions.size(), 1u);
+  EXPECT_EQ(controls, 1);
+  ASSERT_EQ(yardsticks.size(), 2u);
+  EXPECT_EQ(yardsticks["primary"].size(), 1u);  // both builders traced the same primary rays
+  EXPECT_EQ(yardsticks["diffuse"].size(), 1u);
+  EXPECT_NE(*yardsticks["primary"].begin(), *yardsticks["diffuse"].begin());
+  std::ifstream fin(out / "findings.json");
+  const json findings = json::parse(fin);
+  size_t builderComparisons = 0;
+  for (const json& c : findings["comparisons"]) {
+    if (c["axis"] != "builder") continue;
+    ++builderComparisons;
+    EXPECT_TRUE(c["paired"]) << c.dump();
+    EXPECT_EQ(c["interval_over"], "rounds") << c.dump();
+    EXPECT_TRUE(c["normalised_by"].is_null()) << c.dump();
+  }
+  EXPECT_GE(builderComparisons, 2u) << findings.dump();  // per workload (and "each at its best")
+  EXPECT_EQ(findings["noise"].size(), 1u) << findings.dump();
+}
+
+// A trace group hands back the runs that would pass its memory budget (render/trace_group.cpp), and
+// the runner traces them in later groups: with a budget of one byte's worth, every group keeps only
+// its first run, and every run still ends ok, each in its own session.
+TEST(ExperimentRays, RunsATraceGroupHandsBackAreTracedInLaterGroups) {
+  const fs::path cfg = writeTemp("rays-deferred/cfg.toml", R"(
+[experiment]
+name = "rays-deferred"
+description = "deferred trace runs"
+[render]
+warmup = 1
+env = { BVHLAB_TRACE_GROUP_MEMORY_FRACTION = "1e-12" }
+[measure]
+min_frames = 3
+max_frames = 3
+aa_control = false
+[trace]
+count = 500
+[axes]
+scenes = { generate = "large", triangles = 2000, seed = 3, name = "cloud" }
+builders = ["median", "sah-binned", "lbvh"]
+rays = "primary"
+)");
+  const fs::path out = testDir() / "rays-deferred/out";
+  Result r = run("run " + cfg.string() + " --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::ifstream in(out / "results.json");
+  const json results = json::parse(in);
+  std::set<std::string> sessions;
+  for (const json& row : results["rows"]) {
+    ASSERT_EQ(row["status"], "ok") << row.dump();
+    sessions.insert(row["session"].get<std::string>());
+    EXPECT_EQ(row["frame_ms_all"].size(), 3u);
+  }
+  EXPECT_EQ(results["rows"].size(), 3u);
+  EXPECT_EQ(sessions.size(), 3u);
+}
+
+// A trace group's file: a run that cannot be traced fails alone; program copies (which only `bvhlab
+// trace` has) and an unknown command are refused with the key.
+TEST(ExperimentRays, TraceGroupFileErrors) {
+  writeTemp("rays-group-file/m.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 1 3 2\n");
+  const std::string mesh = (testDir() / "rays-group-file/m.off").string();
+  auto group = [&](const std::string& extra) {
+    json spec = {{"session", "s"}, {"min_frames", 3}, {"max_frames", 3}, {"aa_control", false},
+                 {"runs", {{{"key", "good"}, {"args", {mesh, "--json", "--count", "64", "--rays", "primary"}}},
+                           {{"key", "bad"}, {"args", {mesh, "--json", "--kernel", "no-such-kernel"}}}}}};
+    spec.update(json::parse(extra));
+    return writeTemp("rays-group-file/g.json", spec.dump());
+  };
+  Result r = run("measure " + group(R"({"command": "trace"})").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json out = json::parse(r.out);
+  EXPECT_EQ(out["command"], "trace");
+  EXPECT_EQ(out["runs"]["good"]["frame_ms_all"].size(), 3u) << r.out;
+  EXPECT_EQ(out["runs"]["good"]["rays"], 64);
+  EXPECT_NE(out["runs"]["bad"]["error"].get<std::string>().find("no-such-kernel"), std::string::npos) << r.out;
+  r = run("measure " + group(R"({"command": "trace", "program_copies": 2})").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("program_copies"), std::string::npos) << r.err;
+  r = run("measure " + group(R"({"command": "draw"})").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("command: \"draw\" (render | trace)"), std::string::npos) << r.err;
 }
 
 }  // namespace

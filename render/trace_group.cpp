@@ -1,0 +1,283 @@
+#include "render/trace_group.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "datasets/scene_io.hpp"
+#include "render/frame_stats.hpp"
+#include "render/gl_context.hpp"
+#include "render/ray_tracer_gl.hpp"
+#include "render/trace_run.hpp"
+
+namespace bvhlab {
+
+using nlohmann::json;
+
+namespace {
+
+// A run of the group (or the A/A control of the first run that works): its kernel over its tree,
+// tracing its yardstick's batch.
+struct Run {
+  std::string key;
+  TraceCommand cmd;
+  std::optional<TraceSetup> setup;
+  size_t yardstick = 0;
+  std::unique_ptr<GlRayTracer> gl;
+  std::vector<double> ms;
+  std::string error;
+  bool control = false;
+  bool alive() const { return gl != nullptr && error.empty(); }
+};
+
+struct Yardstick {
+  std::unique_ptr<TraceYardstick> tracer;
+  std::vector<double> ms;
+};
+
+// A trace group holds every run's tree and GL buffers at once (llvmpipe's buffers are host memory),
+// where runs traced alone held one each: a 10M-triangle tree takes gigabytes on the CPU and its packed
+// bytes again in GL. So a run set up once the group's resident memory plus the GL uploads to come
+// would pass this fraction of the machine's physical memory is handed back to the runner
+// ("deferred"), which traces it in a later group; the first run is always kept. Half leaves room
+// for llvmpipe's compiled code, Embree's builds and the runner beside the group. The environment
+// variable BVHLAB_TRACE_GROUP_MEMORY_FRACTION (in (0, 1]) replaces it: for a machine shared with other
+// work, and for the test that checks the hand-back.
+constexpr double kGroupMemoryFraction = 0.5;
+
+double groupMemoryFraction() {
+  const char* text = std::getenv("BVHLAB_TRACE_GROUP_MEMORY_FRACTION");
+  if (!text || !*text) return kGroupMemoryFraction;
+  char* end = nullptr;
+  const double f = std::strtod(text, &end);
+  if (*end != '\0' || !(f > 0.0 && f <= 1.0))
+    throw std::invalid_argument(std::string("BVHLAB_TRACE_GROUP_MEMORY_FRACTION: '") + text + "' is not in (0, 1]");
+  return f;
+}
+
+uint64_t residentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  uint64_t size = 0, resident = 0;
+  statm >> size >> resident;  // pages
+  return resident * uint64_t(sysconf(_SC_PAGESIZE));
+}
+
+double intervalPct(const std::vector<double>& ms) {
+  const auto ci = medianInterval(ms);
+  if (!ci || !(ci->estimate > 0.0)) return std::numeric_limits<double>::infinity();
+  return 50.0 * (ci->high - ci->low) / ci->estimate;
+}
+
+}  // namespace
+
+json traceGroup(const json& spec, const GroupSettings& g) {
+  if (g.programCopies > 1)
+    throw std::invalid_argument("group file: program_copies: a trace group traces one program per run (trace such runs alone)");
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&start] {
+    return std::to_string(int(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() + 0.5)) + " s";
+  };
+
+  // ---- set up every run (CPU): one scene load per input, its tree, its batch (shared when equal) ----
+  std::vector<std::unique_ptr<Run>> runs;
+  std::vector<Yardstick> yardsticks;
+  std::map<std::string, Scene> scenes;
+  std::map<std::string, std::shared_ptr<const PreparedScene>> trees;  // runs with one treeKey share it
+  json deferred = json::object();
+  const double fraction = groupMemoryFraction();
+  const double budget = fraction * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+  uint64_t uploads = 0;  // GL bytes the runs set up so far will upload (tree and rays)
+  for (const json& item : spec["runs"]) {
+    auto r = std::make_unique<Run>();
+    r->key = item.value("key", std::string());
+    if (r->key.empty()) throw std::invalid_argument("group file: a run without a \"key\"");
+    try {
+      std::vector<std::string> args;
+      for (const json& a : item.at("args")) args.push_back(a.get<std::string>());
+      r->cmd = parseTraceArgs(args);
+      auto scene = scenes.find(r->cmd.render.input);
+      if (scene == scenes.end()) scene = scenes.emplace(r->cmd.render.input, loadInput(r->cmd.render.input)).first;
+      r->setup.emplace(setupTrace(r->cmd, &scene->second, &trees));
+      const uint64_t upload = r->setup->prepared->stats.bytes + uint64_t(r->cmd.count) * 2 * sizeof(BatchRay);
+      if (!runs.empty() && double(residentBytes() + uploads + upload) > budget) {
+        deferred[r->key] = {{"deferred", "the group's memory would pass " + std::to_string(100 * fraction) +
+                                             "% of physical memory"}};
+        continue;  // its tree stays in `trees` only if another run of the group uses it too
+      }
+      uploads += upload;
+      for (const std::string& w : r->setup->setup.buildReview.warnings)
+        std::fprintf(stderr, "bvhlab: warning: run %s: %s\n", r->key.c_str(), w.c_str());
+      auto candidate = std::make_unique<TraceYardstick>(r->cmd, *r->setup);
+      auto same = std::find_if(yardsticks.begin(), yardsticks.end(),
+                               [&](const Yardstick& y) { return y.tracer->sameAs(*candidate); });
+      if (same == yardsticks.end()) {
+        yardsticks.push_back(Yardstick{std::move(candidate), {}});
+        same = yardsticks.end() - 1;
+      }
+      r->yardstick = size_t(same - yardsticks.begin());
+    } catch (const std::exception& ex) {
+      r->error = ex.what();
+    }
+    runs.push_back(std::move(r));
+  }
+  scenes.clear();  // every tree holds its own copy
+  trees.clear();   // the runs hold theirs
+  if (!deferred.empty())
+    std::cerr << "bvhlab measure: " << deferred.size() << " runs handed back for a later group (memory)\n";
+
+  // ---- GL: one context, one program per run -----------------------------------------------------------
+  const auto firstSet = std::find_if(runs.begin(), runs.end(), [](const auto& r) { return r->error.empty(); });
+  const Backend backend = firstSet != runs.end() ? (*firstSet)->setup->setup.backend : Backend::OSMesa;
+  std::unique_ptr<GlContext> ctx = createContext(backend);
+  const std::string renderer = ctx->renderer();
+  auto makeTracer = [&](Run& r) {
+    try {
+      if (r.setup->setup.backend != backend) throw std::invalid_argument("a group shares one GL context: every run needs the same --backend");
+      r.gl = std::make_unique<GlRayTracer>(r.setup->prepared->packed, r.setup->tracer);
+      r.gl->setRays(yardsticks[r.yardstick].tracer->rays().rays);
+    } catch (const std::exception& ex) {
+      r.error = ex.what();
+      r.gl.reset();
+    }
+  };
+  for (auto& r : runs)
+    if (r->error.empty()) makeTracer(*r);
+  // The A/A control: the first run that works, traced a second time by a second compiled program.
+  Run* controlled = nullptr;
+  if (g.wantControl) {
+    auto first = std::find_if(runs.begin(), runs.end(), [](const auto& r) { return r->alive(); });
+    if (first != runs.end()) {
+      controlled = first->get();
+      auto c = std::make_unique<Run>();
+      c->key = controlled->key;
+      c->cmd = controlled->cmd;
+      c->setup = controlled->setup;
+      c->yardstick = controlled->yardstick;
+      c->control = true;
+      makeTracer(*c);
+      if (c->alive())
+        runs.push_back(std::move(c));
+      else
+        std::cerr << "bvhlab measure: warning: no A/A control: " << c->error << "\n";
+    }
+  }
+  std::cerr << "bvhlab measure: " << runs.size() << " traced entries and " << yardsticks.size() << " Embree batches ready ("
+            << elapsed() << ")\n";
+
+  // ---- warm-up, then rounds in a shuffled order until every interval is narrow enough --------------
+  auto traceRun = [](Run& r, bool timed) {
+    try {
+      const double ms = r.gl->trace();
+      if (timed) r.ms.push_back(ms);
+    } catch (const std::exception& ex) {
+      r.error = std::string("trace failed: ") + ex.what();
+      r.gl.reset();
+    }
+  };
+  int warmup = 0;
+  for (auto& r : runs)
+    if (r->alive()) warmup = std::max(warmup, r->cmd.render.warmup);
+  for (int w = 0; w < warmup; ++w) {
+    for (auto& r : runs)
+      if (r->alive()) traceRun(*r, false);
+    for (Yardstick& y : yardsticks) y.tracer->trace();
+  }
+  // Slots 0..runs-1 are the runs, then one per yardstick.
+  std::vector<size_t> order(runs.size() + yardsticks.size());
+  std::iota(order.begin(), order.end(), size_t(0));
+  std::mt19937_64 rng(0x7472616365677270ull);  // fixed: the same group traces in the same orders every time
+  int rounds = 0;
+  std::string stop = g.minFrames == g.maxFrames ? "fixed" : "max_frames";
+  const auto roundsStart = std::chrono::steady_clock::now();
+  while (rounds < g.maxFrames) {
+    shuffleRound(order, rng);
+    for (size_t slot : order) {
+      if (slot >= runs.size())
+        yardsticks[slot - runs.size()].ms.push_back(yardsticks[slot - runs.size()].tracer->trace());
+      else if (runs[slot]->alive())
+        traceRun(*runs[slot], true);
+    }
+    ++rounds;
+    if (rounds < g.minFrames || g.minFrames == g.maxFrames) continue;
+    double widest = 0.0;
+    for (auto& r : runs)
+      if (r->alive()) widest = std::max(widest, intervalPct(r->ms));
+    if (rounds % 10 == 0)
+      std::cerr << "bvhlab measure: round " << rounds << ": widest interval ±" << widest << "% (" << elapsed() << ")\n";
+    if (widest <= g.targetPct) {
+      stop = "target";
+      break;
+    }
+    if (g.maxSeconds > 0.0 &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - roundsStart).count() >= g.maxSeconds) {
+      stop = "max_seconds";
+      break;
+    }
+  }
+
+  // ---- counts, answers, JSON ----------------------------------------------------------------------------
+  json out = {{"session", g.session}, {"rounds", rounds}, {"stop", stop}, {"renderer", renderer},
+              {"gpu", !isSoftwareRenderer(renderer)}, {"command", "trace"}, {"yardsticks", yardsticks.size()}};
+  json results = json::object();
+  const Run* control = nullptr;
+  for (auto& r : runs) {
+    if (r->control) {
+      control = r.get();
+      continue;
+    }
+    if (!r->error.empty()) {
+      results[r->key] = {{"error", r->error}};
+      continue;
+    }
+    try {
+      TraceRounds tr;
+      tr.glMs = r->ms;
+      tr.embreeMs = yardsticks[r->yardstick].ms;
+      tr.stop = stop;
+      tr.targetCiPct = g.minFrames == g.maxFrames ? 0.0 : g.targetPct;
+      tr.warmup = warmup;
+      uint64_t overflows = 0;
+      json j = traceResult(r->cmd, *r->setup, *yardsticks[r->yardstick].tracer, *r->gl, tr, renderer, overflows);
+      j["session"] = g.session;
+      j["rounds"] = rounds;
+      j["program"] = nullptr;  // every run of a trace group compiles its own program
+      j["yardstick"] = r->yardstick;
+      if (overflows > 0)
+        results[r->key] = {{"error", "traversal stack overflowed on " + std::to_string(overflows) + " rays"}, {"result", j}};
+      else
+        results[r->key] = std::move(j);
+    } catch (const std::exception& ex) {
+      results[r->key] = {{"error", ex.what()}};
+    }
+  }
+  if (controlled && control && control->error.empty() && results[controlled->key].contains("frame_ms")) {
+    // original / control from paired rounds: its interval is the session's noise band (findings).
+    json& j = results[controlled->key];
+    j["aa_control_frame_ms_all"] = control->ms;
+    if (const auto ratio = pairedRatio(controlled->ms, control->ms)) {
+      j["aa_control_ratio"] = ratio->estimate;
+      j["aa_control_ci_low"] = ratio->low;
+      j["aa_control_ci_high"] = ratio->high;
+    }
+  }
+  for (auto& r : runs) r->gl.reset();  // before the context goes
+  results.update(deferred);
+  out["runs"] = std::move(results);
+  out["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace bvhlab

@@ -1,0 +1,81 @@
+// The parts of one traced run (render/trace_command.hpp), shared by `bvhlab trace` and by trace groups
+// (`bvhlab measure` with "command": "trace", render/trace_group.hpp): the run set up and its tree
+// built; its ray batch and the Embree yardstick over the same triangles; and the JSON object that
+// `trace --json` prints, made from the run's timed rounds.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "render/prepared_scene.hpp"
+#include "render/ray_tracer_gl.hpp"
+#include "render/render_job.hpp"
+#include "render/trace_command.hpp"
+#include "render/workloads.hpp"
+#include "traversal/embree_tracer.hpp"
+
+namespace bvhlab {
+
+// `bvhlab trace`'s arguments (without "trace"), parsed by its own CLI; throws std::invalid_argument.
+TraceCommand parseTraceArgs(const std::vector<std::string>& args);
+
+// A run checked (bad workload names and round counts fail first), its scene loaded (or `loaded`
+// reused) and its tree built and packed, or taken from `trees` (keyed by treeKey(), filled here).
+struct TraceSetup {
+  RenderSetup setup;  // its scene moved into `prepared`
+  std::shared_ptr<const PreparedScene> prepared;
+  Workload workload = Workload::Primary;
+  RayTracerOptions tracer;  // kernel, storage, robustness, any hit
+};
+TraceSetup setupTrace(const TraceCommand& c, const Scene* loaded = nullptr,
+                      std::map<std::string, std::shared_ptr<const PreparedScene>>* trees = nullptr);
+
+// The run's ray batch and the yardstick that traces it. The workload's secondary rays start from
+// Embree's robust-mode hits whatever --robust says, so every setting traces the same rays; the
+// yardstick then runs Embree in the mode that matches the kernel's triangle test (robust against
+// watertight, its default test against the fast one: each costs its tracer about the same,
+// docs/layouts.md), a second scene only when they differ.
+class TraceYardstick {
+ public:
+  TraceYardstick(const TraceCommand& c, const TraceSetup& s);
+  const RayWorkload& rays() const { return rays_; }
+  const EmbreeTracer& embree() const { return matching_ ? *matching_ : *generator_; }
+  bool anyHit() const { return anyHit_; }
+  // One timed pass over the batch (ms); its answers in hits().
+  double trace();
+  const std::vector<BatchHit>& hits() const { return hits_; }
+  // Traces exactly what `other` traces: the same triangles, rays, any-hit mode, Embree mode and threads.
+  bool sameAs(const TraceYardstick& other) const;
+
+ private:
+  std::unique_ptr<EmbreeTracer> generator_;
+  std::optional<EmbreeTracer> matching_;
+  RayWorkload rays_;
+  bool anyHit_ = false;
+  size_t triangles_ = 0;
+  std::string input_;
+  std::vector<BatchHit> hits_;
+};
+
+// What a run measured: round i gave glMs[i] (with program copies, the median over them; each copy's
+// own in copyMs) and, for its yardstick, embreeMs[i].
+struct TraceRounds {
+  std::vector<double> glMs, embreeMs;
+  std::vector<std::vector<double>> copyMs;  // empty with one copy
+  std::string stop = "fixed";               // fixed | target | max_frames | max_seconds
+  double targetCiPct = 0.0;                 // 0: none
+  int warmup = 0;
+};
+
+// The object `trace --json` prints. Traces once more with the counters (`gl` must be copy 0, whose
+// last timed pass gave the answers compared with the yardstick's). `overflows`: rays whose stack
+// overflowed (the caller fails the run on any).
+nlohmann::json traceResult(const TraceCommand& c, const TraceSetup& s, const TraceYardstick& y, GlRayTracer& gl,
+                           const TraceRounds& rounds, const std::string& renderer, uint64_t& overflows);
+
+}  // namespace bvhlab
