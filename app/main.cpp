@@ -127,8 +127,8 @@ int main(int argc, char** argv) {
 
   MeasureCommand mc;
   auto* measureCmd = app.add_subcommand(
-      "measure", "time a group of renders interleaved in one process (what `bvhlab run` calls; experiments/README.md)");
-  measureCmd->add_option("spec", mc.spec, "group file (JSON: the runs' render arguments and the [measure] settings)")
+      "measure", "time a group of renders, or of traced runs (\"command\": \"trace\"), interleaved in one process (what `bvhlab run` calls; experiments/README.md)");
+  measureCmd->add_option("spec", mc.spec, "group file (JSON: the runs' render or trace arguments and the [measure] settings)")
       ->required()
       ->check(notADirectory("a group file (JSON)"));
 

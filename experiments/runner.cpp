@@ -242,12 +242,8 @@ SweepOutcome runSweep(const RunOptions& options) {
   const GroupExecutor interleaved = options.groupExecutor ? options.groupExecutor : subprocessGroupExecutor(options.binary);
   const GroupExecutor oneByOne =
       sequentialGroupExecutor(options.executor ? options.executor : subprocessExecutor(options.binary));
-  // Traced runs (the rays axis) go to trace groups (`measure` with "command": "trace"), but with
-  // program copies, which only `bvhlab trace` has: alone.
-  const auto alone = [&](const RunSpec& run) {
-    return (options.executor && !options.groupExecutor) || !run.render.interleave ||
-           (run.axis("workload") && run.render.programCopies > 1);
-  };
+  // Traced runs (the rays axis) go to trace groups (`measure` with "command": "trace") like rendered ones.
+  const auto alone = [&](const RunSpec& run) { return (options.executor && !options.groupExecutor) || !run.render.interleave; };
 
   Progress progress(options.progress, mine.size() * size_t(replicates));
   double spentSeconds = 0.0;

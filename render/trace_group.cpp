@@ -11,7 +11,6 @@
 #include <limits>
 #include <map>
 #include <memory>
-#include <numeric>
 #include <optional>
 #include <random>
 #include <string>
@@ -30,17 +29,24 @@ using nlohmann::json;
 namespace {
 
 // A run of the group (or the A/A control of the first run that works): its kernel over its tree,
-// tracing its yardstick's batch.
+// tracing its yardstick's batch, by one or more separately compiled copies of its program.
 struct Run {
   std::string key;
   TraceCommand cmd;
   std::optional<TraceSetup> setup;
   size_t yardstick = 0;
-  std::unique_ptr<GlRayTracer> gl;
-  std::vector<double> ms;
+  std::vector<std::unique_ptr<GlRayTracer>> copies;  // copy 0 gives the answers and the counts
+  std::vector<std::vector<double>> copyMs;           // per copy, its timed passes
+  std::vector<double> ms;                            // per round, the median over the copies
   std::string error;
   bool control = false;
-  bool alive() const { return gl != nullptr && error.empty(); }
+  bool alive() const { return !copies.empty() && error.empty(); }
+};
+
+// One trace of a round: copy `copy` of run `run`, or (embree) yardstick `run`.
+struct Slot {
+  size_t run = 0, copy = 0;
+  bool embree = false;
 };
 
 struct Yardstick {
@@ -84,8 +90,6 @@ double intervalPct(const std::vector<double>& ms) {
 }  // namespace
 
 json traceGroup(const json& spec, const GroupSettings& g) {
-  if (g.programCopies > 1)
-    throw std::invalid_argument("group file: program_copies: a trace group traces one program per run (trace such runs alone)");
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&start] {
     return std::to_string(int(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() + 0.5)) + " s";
@@ -111,11 +115,14 @@ json traceGroup(const json& spec, const GroupSettings& g) {
       auto scene = scenes.find(r->cmd.render.input);
       if (scene == scenes.end()) scene = scenes.emplace(r->cmd.render.input, loadInput(r->cmd.render.input)).first;
       r->setup.emplace(setupTrace(r->cmd, &scene->second, &trees));
-      const uint64_t upload = r->setup->prepared->stats.bytes + uint64_t(r->cmd.count) * 2 * sizeof(BatchRay);
+      const uint64_t upload = (r->setup->prepared->stats.bytes + uint64_t(r->cmd.count) * 2 * sizeof(BatchRay)) *
+                              uint64_t(g.programCopies);
       if (!runs.empty() && double(residentBytes() + uploads + upload) > budget) {
         deferred[r->key] = {{"deferred", "the group's memory would pass " + std::to_string(100 * fraction) +
                                              "% of physical memory"}};
-        continue;  // its tree stays in `trees` only if another run of the group uses it too
+        // Its tree goes too, unless a run kept before shares it.
+        if (auto t = trees.find(treeKey(r->cmd.render)); t != trees.end() && t->second.use_count() <= 2) trees.erase(t);
+        continue;
       }
       uploads += upload;
       for (const std::string& w : r->setup->setup.buildReview.warnings)
@@ -143,18 +150,21 @@ json traceGroup(const json& spec, const GroupSettings& g) {
   const Backend backend = firstSet != runs.end() ? (*firstSet)->setup->setup.backend : Backend::OSMesa;
   std::unique_ptr<GlContext> ctx = createContext(backend);
   const std::string renderer = ctx->renderer();
-  auto makeTracer = [&](Run& r) {
+  auto makeTracers = [&](Run& r, int copies) {
     try {
       if (r.setup->setup.backend != backend) throw std::invalid_argument("a group shares one GL context: every run needs the same --backend");
-      r.gl = std::make_unique<GlRayTracer>(r.setup->prepared->packed, r.setup->tracer);
-      r.gl->setRays(yardsticks[r.yardstick].tracer->rays().rays);
+      for (int k = 0; k < copies; ++k) {
+        r.copies.push_back(std::make_unique<GlRayTracer>(r.setup->prepared->packed, r.setup->tracer));
+        r.copies.back()->setRays(yardsticks[r.yardstick].tracer->rays().rays);
+      }
+      r.copyMs.resize(r.copies.size());
     } catch (const std::exception& ex) {
       r.error = ex.what();
-      r.gl.reset();
+      r.copies.clear();
     }
   };
   for (auto& r : runs)
-    if (r->error.empty()) makeTracer(*r);
+    if (r->error.empty()) makeTracers(*r, g.programCopies);
   // The A/A control: the first run that works, traced a second time by a second compiled program.
   Run* controlled = nullptr;
   if (g.wantControl) {
@@ -167,7 +177,7 @@ json traceGroup(const json& spec, const GroupSettings& g) {
       c->setup = controlled->setup;
       c->yardstick = controlled->yardstick;
       c->control = true;
-      makeTracer(*c);
+      makeTracers(*c, 1);  // repeats the run's copy 0
       if (c->alive())
         runs.push_back(std::move(c));
       else
@@ -178,13 +188,13 @@ json traceGroup(const json& spec, const GroupSettings& g) {
             << elapsed() << ")\n";
 
   // ---- warm-up, then rounds in a shuffled order until every interval is narrow enough --------------
-  auto traceRun = [](Run& r, bool timed) {
+  auto traceCopy = [](Run& r, size_t copy, bool timed) {
     try {
-      const double ms = r.gl->trace();
-      if (timed) r.ms.push_back(ms);
+      const double ms = r.copies[copy]->trace();
+      if (timed) r.copyMs[copy].push_back(ms);
     } catch (const std::exception& ex) {
       r.error = std::string("trace failed: ") + ex.what();
-      r.gl.reset();
+      r.copies.clear();
     }
   };
   int warmup = 0;
@@ -192,23 +202,32 @@ json traceGroup(const json& spec, const GroupSettings& g) {
     if (r->alive()) warmup = std::max(warmup, r->cmd.render.warmup);
   for (int w = 0; w < warmup; ++w) {
     for (auto& r : runs)
-      if (r->alive()) traceRun(*r, false);
+      for (size_t k = 0; r->alive() && k < r->copies.size(); ++k) traceCopy(*r, k, false);
     for (Yardstick& y : yardsticks) y.tracer->trace();
   }
-  // Slots 0..runs-1 are the runs, then one per yardstick.
-  std::vector<size_t> order(runs.size() + yardsticks.size());
-  std::iota(order.begin(), order.end(), size_t(0));
+  std::vector<Slot> order;
+  for (size_t i = 0; i < runs.size(); ++i)
+    for (size_t k = 0; k < runs[i]->copies.size(); ++k) order.push_back(Slot{i, k, false});
+  for (size_t y = 0; y < yardsticks.size(); ++y) order.push_back(Slot{y, 0, true});
   std::mt19937_64 rng(0x7472616365677270ull);  // fixed: the same group traces in the same orders every time
   int rounds = 0;
   std::string stop = g.minFrames == g.maxFrames ? "fixed" : "max_frames";
   const auto roundsStart = std::chrono::steady_clock::now();
+  std::vector<double> round;
   while (rounds < g.maxFrames) {
     shuffleRound(order, rng);
-    for (size_t slot : order) {
-      if (slot >= runs.size())
-        yardsticks[slot - runs.size()].ms.push_back(yardsticks[slot - runs.size()].tracer->trace());
-      else if (runs[slot]->alive())
-        traceRun(*runs[slot], true);
+    for (const Slot& slot : order) {
+      if (slot.embree)
+        yardsticks[slot.run].ms.push_back(yardsticks[slot.run].tracer->trace());
+      else if (runs[slot.run]->alive())
+        traceCopy(*runs[slot.run], slot.copy, true);
+    }
+    // A run's time of the round: the median over its copies (one copy: its time).
+    for (auto& r : runs) {
+      if (!r->alive()) continue;
+      round.clear();
+      for (const std::vector<double>& ms : r->copyMs) round.push_back(ms.back());
+      r->ms.push_back(medianOf(round));
     }
     ++rounds;
     if (rounds < g.minFrames || g.minFrames == g.maxFrames) continue;
@@ -245,12 +264,16 @@ json traceGroup(const json& spec, const GroupSettings& g) {
     try {
       TraceRounds tr;
       tr.glMs = r->ms;
+      if (r->copies.size() > 1) tr.copyMs = r->copyMs;
       tr.embreeMs = yardsticks[r->yardstick].ms;
       tr.stop = stop;
       tr.targetCiPct = g.minFrames == g.maxFrames ? 0.0 : g.targetPct;
       tr.warmup = warmup;
       uint64_t overflows = 0;
-      json j = traceResult(r->cmd, *r->setup, *yardsticks[r->yardstick].tracer, *r->gl, tr, renderer, overflows);
+      json j = traceResult(r->cmd, *r->setup, *yardsticks[r->yardstick].tracer, *r->copies.front(), tr, renderer, overflows);
+      // With copies, findings take a comparison's interval across them (per copy the paired ratio of
+      // two runs' rounds): `frame_ms_copies` as `measure` writes it, copy 0 first.
+      if (r->copies.size() > 1) j["frame_ms_copies"] = r->copyMs;
       j["session"] = g.session;
       j["rounds"] = rounds;
       j["program"] = nullptr;  // every run of a trace group compiles its own program
@@ -266,14 +289,15 @@ json traceGroup(const json& spec, const GroupSettings& g) {
   if (controlled && control && control->error.empty() && results[controlled->key].contains("frame_ms")) {
     // original / control from paired rounds: its interval is the session's noise band (findings).
     json& j = results[controlled->key];
+    // The control repeats copy 0 (findings compare it with copy 0's rounds, as for `measure`).
     j["aa_control_frame_ms_all"] = control->ms;
-    if (const auto ratio = pairedRatio(controlled->ms, control->ms)) {
+    if (const auto ratio = pairedRatio(controlled->copyMs.front(), control->ms)) {
       j["aa_control_ratio"] = ratio->estimate;
       j["aa_control_ci_low"] = ratio->low;
       j["aa_control_ci_high"] = ratio->high;
     }
   }
-  for (auto& r : runs) r->gl.reset();  // before the context goes
+  for (auto& r : runs) r->copies.clear();  // before the context goes
   results.update(deferred);
   out["runs"] = std::move(results);
   out["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

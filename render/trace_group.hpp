@@ -10,7 +10,9 @@
 // yardstick's rounds of the same session. A run's JSON is `trace --json`'s object plus "session",
 // "rounds", "yardstick" (the index of its yardstick: equal means the same rays) and, for the first run
 // with the A/A control, aa_control_* (its kernel traced a second time by a separately compiled program).
-// Program copies are not traced in groups (a run asking for them is traced alone by the runner).
+// With program_copies K, every run is traced by K separately compiled copies of its program, each once
+// a round (a run's round time is their median; `frame_ms_copies` keeps each copy's rounds, so findings
+// take a comparison's interval across the copies from 6 of them, as for rendered groups).
 #pragma once
 #include <nlohmann/json.hpp>
 
