@@ -171,6 +171,11 @@ Scanned scanPly(std::string_view text) {
             ++k;
           }
         }
+        // OpenMesh reads an ASCII body as one stream of values, not line by line: an extra value shifts
+        // every later record (fuzz_ply: a face line with one value too many made the next face's list
+        // length read "-1", and OpenMesh looped pushing 2^32 vertex handles).
+        if (k != t.size())
+          failAt(sc.lineNo, e.name + ": " + std::to_string(t.size() - k) + " value(s) more than its properties declare");
         if (e.name == "vertex") out.positions.push_back(position);
       }
     return out;
