@@ -52,6 +52,7 @@ struct Slot {
 struct Yardstick {
   std::unique_ptr<TraceYardstick> tracer;
   std::vector<double> ms;
+  std::vector<std::string> keys;  // TraceYardstick::key of every run that shares it
 };
 
 // A trace group holds every run's tree and GL buffers at once (llvmpipe's buffers are host memory),
@@ -127,12 +128,21 @@ json traceGroup(const json& spec, const GroupSettings& g) {
       uploads += upload;
       for (const std::string& w : r->setup->setup.buildReview.warnings)
         std::fprintf(stderr, "bvhlab: warning: run %s: %s\n", r->key.c_str(), w.c_str());
-      auto candidate = std::make_unique<TraceYardstick>(r->cmd, *r->setup);
-      auto same = std::find_if(yardsticks.begin(), yardsticks.end(),
-                               [&](const Yardstick& y) { return y.tracer->sameAs(*candidate); });
+      // A run whose batch follows from the same inputs shares its yardstick without building one;
+      // otherwise a candidate is built and compared bit for bit (different inputs, same rays).
+      const std::string key = TraceYardstick::key(r->cmd, *r->setup);
+      auto same = std::find_if(yardsticks.begin(), yardsticks.end(), [&](const Yardstick& y) {
+        return std::find(y.keys.begin(), y.keys.end(), key) != y.keys.end();
+      });
       if (same == yardsticks.end()) {
-        yardsticks.push_back(Yardstick{std::move(candidate), {}});
-        same = yardsticks.end() - 1;
+        auto candidate = std::make_unique<TraceYardstick>(r->cmd, *r->setup);
+        same = std::find_if(yardsticks.begin(), yardsticks.end(),
+                            [&](const Yardstick& y) { return y.tracer->sameAs(*candidate); });
+        if (same == yardsticks.end()) {
+          yardsticks.push_back(Yardstick{std::move(candidate), {}, {}});
+          same = yardsticks.end() - 1;
+        }
+        same->keys.push_back(key);
       }
       r->yardstick = size_t(same - yardsticks.begin());
     } catch (const std::exception& ex) {

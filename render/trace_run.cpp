@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
+#include <string_view>
 
 #include "render/frame_stats.hpp"
 #include "render/gl_context.hpp"
@@ -87,6 +89,26 @@ TraceYardstick::TraceYardstick(const TraceCommand& c, const TraceSetup& s)
     generator.closest(r, hits);
     return hits;
   });
+}
+
+std::string TraceYardstick::key(const TraceCommand& c, const TraceSetup& s) {
+  const TriangleSoup& soup = s.prepared->soup;
+  const Scene& scene = s.prepared->scene;
+  const Camera& cam = scene.camera;
+  auto bytesHash = [](const auto& v) {
+    return std::hash<std::string_view>{}(std::string_view(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(v[0])));
+  };
+  nlohmann::json k = {
+      {"input", c.render.input},
+      {"triangles", {soup.size(), bytesHash(soup.v0), bytesHash(soup.v1), bytesHash(soup.v2)}},
+      {"camera", {cam.eye.x, cam.eye.y, cam.eye.z, cam.target.x, cam.target.y, cam.target.z, cam.up.x, cam.up.y, cam.up.z,
+                  cam.fovDeg, scene.settings.width, scene.settings.height}},
+      {"workload", {c.rays, c.count, c.seed, c.aoRadius}},
+      {"embree", {c.embreeThreads, s.setup.shader.robust.triangle != TriangleTest::Watertight}},
+  };
+  for (const Light& l : scene.lights)
+    k["lights"].push_back({int(l.kind), l.position.x, l.position.y, l.position.z, l.direction.x, l.direction.y, l.direction.z});
+  return k.dump();
 }
 
 double TraceYardstick::trace() { return anyHit_ ? embree().occluded(rays_.rays, hits_) : embree().closest(rays_.rays, hits_); }

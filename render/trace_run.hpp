@@ -43,6 +43,13 @@ TraceSetup setupTrace(const TraceCommand& c, const Scene* loaded = nullptr,
 class TraceYardstick {
  public:
   TraceYardstick(const TraceCommand& c, const TraceSetup& s);
+  // Everything the batch and its tracer follow from, without building anything: the triangles'
+  // positions (hashed), the scene's camera and lights, the workload request, any-hit, the Embree mode
+  // and threads. The generator is deterministic, so two runs with equal keys get the same batch bit
+  // for bit, and a trace group gives the second the first's yardstick instead of building another
+  // Embree scene (seconds at 10M triangles). Unequal keys may still give the same rays (a seed that
+  // primary rays ignore): sameAs() decides those after construction.
+  static std::string key(const TraceCommand& c, const TraceSetup& s);
   const RayWorkload& rays() const { return rays_; }
   const EmbreeTracer& embree() const { return matching_ ? *matching_ : *generator_; }
   bool anyHit() const { return anyHit_; }
