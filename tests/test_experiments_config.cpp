@@ -191,6 +191,8 @@ TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
   // layouts.toml sweeps `layouts = "all"`: (3 scenes x 2 workloads + the report scene + the bunny's diffuse
   // rays with indexed triangles) per registered layout.
   expectedRuns["layouts.toml"] = 8 * layouts().size();
+  // layouts-gpu.toml: 3 scenes x 2 workloads per registered layout, on the EGL backend.
+  expectedRuns["layouts-gpu.toml"] = 6 * layouts().size();
   std::set<std::string> seen;
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (entry.path().extension() != ".toml") continue;
