@@ -98,7 +98,7 @@ Bvh buildLbvh(const BuildInput& input, const BuildOptions& options) {
       node.bounds.grow(full[node.right].bounds);
     }
   }
-  return detail::collapseLeavesBySah(full, options, detail::resolveThreads(options.threads));
+  return detail::collapseLeavesBySah(full, options);
 }
 
 }  // namespace bvhlab

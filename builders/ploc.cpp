@@ -531,7 +531,7 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
 
   // 3. Leaves.
   return detail::emitCollapsed([&](uint32_t i) -> const BvhNode& { return full[i].node; },
-                               [&](uint32_t i) -> const detail::CollapseInfo& { return full[i].info; }, threads);
+                               [&](uint32_t i) -> detail::CollapseInfo& { return full[i].info; });
 }
 
 }  // namespace bvhlab

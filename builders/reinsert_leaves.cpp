@@ -141,7 +141,7 @@ Bvh collapse(const Bvh& single, const BuildOptions& options) {
     stack.push_back({n.right, left + 1});
     stack.push_back({n.left, left});
   }
-  return detail::collapseLeavesBySah(full, options, detail::resolveThreads(options.threads));
+  return detail::collapseLeavesBySah(full, options);
 }
 
 }  // namespace

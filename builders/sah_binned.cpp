@@ -42,17 +42,7 @@ detail::NodeStep<Task> BinnedStepper::step(const Task& task, const Aabb& box) {
   if (n == 1) return step;
 
   const BinMapping mapping(task.centroids, bins_);
-  Split split;
-  if (mapping.anyUsable()) {
-    if (n == 2) {
-      split = splitPair(task, mapping);
-    } else if (n <= kTinyMax) {
-      split = tinySplit(task, mapping);
-    } else {
-      reserveScratch(n);
-      split = n < bins_ ? findSplitSmall(task, mapping) : findSplitLarge(task, mapping);
-    }
-  }
+  const Split split = mapping.anyUsable() ? findSplit(task, mapping) : Split{};
 
   const CostModel& c = options_.cost;
   const double area = box.halfArea();
@@ -81,6 +71,17 @@ detail::NodeStep<Task> BinnedStepper::step(const Task& task, const Aabb& box) {
   step.child[0] = {0, task.begin, mid, leftCentroids};
   step.child[1] = {0, mid, task.end, rightCentroids};
   return step;
+}
+
+// Each branch returns its finder's result as is, so that it is built where `step` keeps it: assigning
+// it to a Split declared before would copy it, 16 bytes at a time, right after the finder stored its
+// fields 4 bytes at a time (a failed store-to-load forward per node; measured 1-2% of a bunny build).
+Split BinnedStepper::findSplit(const Task& task, const BinMapping& mapping) {
+  const uint32_t n = task.end - task.begin;
+  if (n == 2) return splitPair(task, mapping);
+  if (n <= kTinyMax) return tinySplit(task, mapping);
+  reserveScratch(n);
+  return n < bins_ ? findSplitSmall(task, mapping) : findSplitLarge(task, mapping);
 }
 
 void BinnedStepper::reserveScratch(uint32_t n) {

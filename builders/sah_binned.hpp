@@ -86,6 +86,8 @@ class BinnedStepper {
 
  private:
   void reserveScratch(uint32_t n);
+  // The split finder for the node's size (2, 3..kTinyMax, fewer references than bins, the rest).
+  Split findSplit(const Task& task, const BinMapping& mapping);
 
   // ---- small nodes (sah_binned_small.cpp)
   // 3..kTinyMax references: per axis, the references ordered by (bin, position) and swept in that
