@@ -507,24 +507,29 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
     topOptions.threads = options.threads;
     const Bvh top = buildBvh("sah-binned", BuildInput{boxes, centres}, topOptions);
     uint32_t nextFree = m - 1;  // one past the next index to give
-    std::vector<uint32_t> made(top.nodes.size());  // top's node -> the full tree's
+    // Top's node -> the full tree's, and its collapse entry: kept by top index, so that making a node
+    // reads its children's entries from here (near, in top's depth-first order) rather than from the
+    // full tree, where they lie anywhere (a cache miss each: 4% of a bunny build with F = 4). A top
+    // node's box is its children's union already (sah-binned's boxes are exact unions of the
+    // clusters' boxes, with one cluster per leaf), so it is taken as is.
+    std::vector<uint32_t> made(top.nodes.size());
+    std::vector<detail::CollapseInfo> madeInfo(top.nodes.size());
     std::vector<std::pair<uint32_t, bool>> stack{{0u, false}};  // (node, children made)
     while (!stack.empty()) {
       const auto [i, childrenMade] = stack.back();
       stack.pop_back();
       const BvhNode& t = top.nodes[i];
       if (t.isLeaf()) {
-        made[i] = clusters.node[top.primIndices[t.first]];
+        const uint32_t c = top.primIndices[t.first];
+        made[i] = clusters.node[c];
+        madeInfo[i] = clusters.info[c];
       } else if (!childrenMade) {
         stack.push_back({i, true});
         stack.push_back({t.right, false});
         stack.push_back({t.left, false});
       } else {
-        const uint32_t l = made[t.left], r = made[t.right];
-        Aabb box = full[l].node.bounds;
-        box.grow(full[r].node.bounds);
         made[i] = --nextFree;
-        makeInner(made[i], l, r, box, full[l].info, full[r].info);
+        madeInfo[i] = makeInner(made[i], made[t.left], made[t.right], t.bounds, madeInfo[t.left], madeInfo[t.right]);
       }
     }
   }
