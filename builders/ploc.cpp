@@ -507,12 +507,14 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
     topOptions.threads = options.threads;
     const Bvh top = buildBvh("sah-binned", BuildInput{boxes, centres}, topOptions);
     uint32_t nextFree = m - 1;  // one past the next index to give
-    // Top's node -> the full tree's, and its collapse entry: kept by top index, so that making a node
-    // reads its children's entries from here (near, in top's depth-first order) rather than from the
-    // full tree, where they lie anywhere (a cache miss each: 4% of a bunny build with F = 4). A top
-    // node's box is its children's union already (sah-binned's boxes are exact unions of the
-    // clusters' boxes, with one cluster per leaf), so it is taken as is.
+    // Top's node -> the full tree's, its box and its collapse entry: kept by top index, so that making
+    // a node reads its children's from here (near, in top's depth-first order) rather than from the
+    // full tree, where they lie anywhere (a cache miss each: 4% of a bunny build with F = 4). The box
+    // is the union of the children's, as the full tree's other inner nodes have it: sah-binned's own
+    // box of the node has the same value, but min and max of -0 and +0 depend on the order of the
+    // operands, so its zeros may carry other signs (makeLargeMesh's tree changed bits that way).
     std::vector<uint32_t> made(top.nodes.size());
+    std::vector<Aabb> madeBox(top.nodes.size());
     std::vector<detail::CollapseInfo> madeInfo(top.nodes.size());
     std::vector<std::pair<uint32_t, bool>> stack{{0u, false}};  // (node, children made)
     while (!stack.empty()) {
@@ -522,14 +524,18 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
       if (t.isLeaf()) {
         const uint32_t c = top.primIndices[t.first];
         made[i] = clusters.node[c];
+        madeBox[i] = clusters.bounds(c);
         madeInfo[i] = clusters.info[c];
       } else if (!childrenMade) {
         stack.push_back({i, true});
         stack.push_back({t.right, false});
         stack.push_back({t.left, false});
       } else {
+        Aabb box = madeBox[t.left];
+        box.grow(madeBox[t.right]);
         made[i] = --nextFree;
-        madeInfo[i] = makeInner(made[i], made[t.left], made[t.right], t.bounds, madeInfo[t.left], madeInfo[t.right]);
+        madeBox[i] = box;
+        madeInfo[i] = makeInner(made[i], made[t.left], made[t.right], box, madeInfo[t.left], madeInfo[t.right]);
       }
     }
   }

@@ -1,6 +1,7 @@
 // PLOC-specific properties (builders/ploc.cpp). The invariants every builder keeps (boxes, ranges,
 // leaf sizes, degenerate inputs) are checked for ploc too by tests/test_builders.cpp's registry tests.
 #include <algorithm>
+#include <cstring>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -359,6 +360,33 @@ TEST(Ploc, TopDownSameTreeForAnyThreadCount) {
             << "top-down " << fraction << ", " << threads << " threads";
     }
   }
+}
+
+// Every inner node's box is its children's union, left.grow(right), bit for bit, the top's nodes
+// as much as the clustered ones: with coordinates of -0 and +0 side by side, a union taken in another
+// order (sah-binned's own box of a top node) keeps the same value but may flip a zero's sign.
+TEST(Ploc, TopDownInnerBoxesAreTheirChildrensUnions) {
+  PrimitiveSet zeros;
+  for (int i = 0; i < 20000; ++i) {
+    const float z = i % 3 ? 0.0f : -0.0f, t = float(i % 97) - 48.0f, u = float(i % 89) - 44.0f;
+    zeros.addBox({glm::vec3(z, t, u), glm::vec3(i % 5 ? z : 1.0f, t, u + 0.5f)}, glm::vec3(z, t, u));
+  }
+  zeros.name = "signed-zeros";
+  for (const PrimitiveSet& set : {zeros, testing::randomSoup(20000, 12)})
+    for (uint32_t fraction : {2u, 4u, 16u}) {
+      SCOPED_TRACE(set.name + " top-down " + std::to_string(fraction));
+      const Bvh bvh = buildBvh("ploc", set.input(), withTopDown(fraction, 1, 1));  // leaf 1: no collapse
+      size_t inner = 0, differ = 0;
+      for (const BvhNode& node : bvh.nodes) {
+        if (node.isLeaf()) continue;
+        Aabb u = bvh.nodes[node.left].bounds;
+        u.grow(bvh.nodes[node.right].bounds);
+        ++inner;
+        differ += std::memcmp(&u, &node.bounds, sizeof u) != 0;
+      }
+      EXPECT_EQ(inner, set.size() - 1);
+      EXPECT_EQ(differ, 0u);
+    }
 }
 
 TEST(Ploc, TopDownReferencesEveryPrimitiveOnce) {
