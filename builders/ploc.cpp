@@ -509,7 +509,7 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
     uint32_t nextFree = m - 1;  // one past the next index to give
     // Top's node -> the full tree's, its box and its collapse entry: kept by top index, so that making
     // a node reads its children's from here (near, in top's depth-first order) rather than from the
-    // full tree, where they lie anywhere (a cache miss each: 4% of a bunny build with F = 4). The box
+    // full tree, where they lie anywhere (a cache miss each: 2-3% of a bunny build with F = 4). The box
     // is the union of the children's, as the full tree's other inner nodes have it: sah-binned's own
     // box of the node has the same value, but min and max of -0 and +0 depend on the order of the
     // operands, so its zeros may carry other signs (makeLargeMesh's tree changed bits that way).

@@ -92,7 +92,9 @@ void BinnedStepper::reserveScratch(uint32_t n) {
 }
 
 // Four partial boxes, merged at the end: one box would chain every reference's min and max through
-// the previous one (4 cycles each); min and max are exact, so the order does not change the result.
+// the previous one (4 cycles each). Min and max are exact, so the order changes no value; it may
+// change the sign of a zero bound (min of -0 and +0 returns either, by operand order), which no bin
+// index, extent or median split depends on: the trees are those of one box, bit for bit.
 void BinnedStepper::centroidBounds(uint32_t begin, uint32_t end, Box4& centroids) const {
   Box4 part[4];
   uint32_t i = begin;
