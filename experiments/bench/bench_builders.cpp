@@ -40,8 +40,15 @@
 // estimates with its order-statistic interval across processes (6 or more), which, unlike one
 // process's interval, covers what differs from process to process (experiments/bench/across_processes.hpp).
 // Each process's full output is kept in a file whose path is printed.
+// --heap=warm|cold|adaptive: the heap policy (experiments/bench/heap_policy.hpp). warm, the default:
+// memory a build frees is reused by the next one, as embree-raw's own allocator reuses its blocks
+// (one RTCBVH for all its builds; 0 page faults per build here, as for every builder of ours warm),
+// so the times are the builders' work and the ratios hold from process to process. cold: every big
+// block fresh, faulted in per build (a one-off build in a new process); adaptive: glibc's default,
+// whose choice between the two depends on the process's history (this program's default before
+// 4 December 2026). Printed in the output's first line; each table gives the page faults per build.
 //   bench_builders [--reps=N] [--curve] [--ploc-top-down=F] [--ploc-radius=R] [--processes=K]
-//                  [--paired-out=FILE] [--benchmark_filter=...]   (meshes: `bash datasets/fetch.sh`)
+//                  [--heap=P] [--paired-out=FILE] [--benchmark_filter=...]   (meshes: `bash datasets/fetch.sh`)
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -70,12 +77,15 @@
 #include "datasets/procedural.hpp"
 #include "layout/layout.hpp"
 #include "experiments/bench/builders_report.hpp"
+#include "experiments/bench/embree_raw.hpp"
+#include "experiments/bench/heap_policy.hpp"
 #include "experiments/process.hpp"
 
 namespace {
 
 using namespace bvhlab;
 using bvhlab::testing::PrimitiveSet;
+using bench::RawNode, bench::rawCreateNode, bench::rawSetChildren, bench::rawSetBounds, bench::rawCreateLeaf, bench::rawStats;
 
 constexpr uint32_t kLeafSize = 4;
 
@@ -138,59 +148,7 @@ const PrimitiveSet& sphereMesh() {  // 1000 x 500 quads: 1,000,000 triangles
   return set;
 }
 
-// ---- Embree MEDIUM, raw: the nodes Embree's own tutorial would make, no conversion ----------------
-
-struct RawNode {
-  bool leaf;
-};
-struct RawInner : RawNode {
-  RTCBounds bounds[2];
-  RawNode* children[2];
-};
-struct RawLeaf : RawNode {
-  uint32_t count;
-  uint32_t ids[1];  // `count` ids follow in the same allocation
-};
-
-void* rawCreateNode(RTCThreadLocalAllocator alloc, unsigned int, void*) {
-  return new (rtcThreadLocalAlloc(alloc, sizeof(RawInner), 16)) RawInner{{false}, {}, {nullptr, nullptr}};
-}
-void rawSetChildren(void* node, void** children, unsigned int count, void*) {
-  for (unsigned int i = 0; i < count; ++i) static_cast<RawInner*>(node)->children[i] = static_cast<RawNode*>(children[i]);
-}
-void rawSetBounds(void* node, const RTCBounds** bounds, unsigned int count, void*) {
-  for (unsigned int i = 0; i < count; ++i) static_cast<RawInner*>(node)->bounds[i] = *bounds[i];
-}
-void* rawCreateLeaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* prims, size_t count, void*) {
-  auto* leaf = new (rtcThreadLocalAlloc(alloc, sizeof(RawLeaf) + count * sizeof(uint32_t), 16)) RawLeaf{{true}, uint32_t(count), {0}};
-  for (size_t i = 0; i < count; ++i) leaf->ids[i] = prims[i].primID;
-  return leaf;
-}
-
-double halfArea(const RTCBounds& b) {
-  const double x = b.upper_x - b.lower_x, y = b.upper_y - b.lower_y, z = b.upper_z - b.lower_z;
-  return x * y + y * z + z * x;
-}
-
-// SAH (Ct = Ci = 1, normalised by the root) and node count of a raw tree, from Embree's own bounds.
-void rawStats(const RawNode* root, const RTCBounds& rootBounds, double& sah, size_t& nodes) {
-  double sum = 0.0;
-  nodes = 0;
-  std::vector<std::pair<const RawNode*, RTCBounds>> stack{{root, rootBounds}};
-  while (!stack.empty()) {
-    auto [node, bounds] = stack.back();
-    stack.pop_back();
-    ++nodes;
-    if (node->leaf) {
-      sum += halfArea(bounds) * static_cast<const RawLeaf*>(node)->count;
-    } else {
-      sum += halfArea(bounds);
-      const auto* inner = static_cast<const RawInner*>(node);
-      for (int i = 0; i < 2; ++i) stack.push_back({inner->children[i], inner->bounds[i]});
-    }
-  }
-  sah = sum / halfArea(rootBounds);
-}
+// ---- Embree MEDIUM, raw (the tree and its callbacks: experiments/bench/embree_raw.hpp) ---------
 
 // One Embree device per thread count ("threads=N"; see the note at the top: the count is per process).
 RTCDevice embreeDevice(unsigned threads) {
@@ -218,6 +176,7 @@ void embreeRaw(benchmark::State& state, MeshFn mesh, unsigned threads) {
   }
   RTCBVH bvh = rtcNewBVH(device);
   const RawNode* root = nullptr;
+  const long faults = bench::minorPageFaults();
   for (auto _ : state) {
     prims = source;  // Embree reorders its input: every build starts from a fresh copy (timed)
     RTCBuildArguments args = rtcDefaultBuildArguments();
@@ -240,6 +199,7 @@ void embreeRaw(benchmark::State& state, MeshFn mesh, unsigned threads) {
       break;
     }
   }
+  state.counters["faults"] = double(bench::minorPageFaults() - faults) / double(std::max<int64_t>(1, state.iterations()));
   if (root) {  // the last build's nodes live until the RTCBVH is released
     double sah = 0.0;
     size_t nodes = 0;
@@ -265,10 +225,12 @@ void buildWith(benchmark::State& state, std::string builder, MeshFn mesh, uint32
   validateBuildInput(input, options);  // once, outside the timed loop (buildBvh does it per call)
   const BuilderInfo& info = findBuilder(builder);
   Bvh bvh;
+  const long faults = bench::minorPageFaults();
   for (auto _ : state) {
     bvh = info.build(input, options);
     benchmark::DoNotOptimize(bvh.nodes.data());
   }
+  state.counters["faults"] = double(bench::minorPageFaults() - faults) / double(std::max<int64_t>(1, state.iterations()));
   const BuildStats stats = computeStats(bvh, options.cost);
   state.counters["sah"] = stats.sahCost;
   state.counters["nodes"] = double(stats.nodes);
@@ -483,6 +445,7 @@ int main(int argc, char** argv) {
   uint32_t plocTopDown = 4;  // the extra ploc row: `--ploc-top-down 4` (0: no such row)
   uint32_t plocRadius = BuildOptions{}.plocRadius;  // and its search radius
   int processes = 1;
+  bench::HeapPolicy heap = bench::HeapPolicy::Warm;
   std::string pairedOut;
   std::vector<std::string> childArgs;  // every argument but --processes (and argv[0])
   for (int i = 1; i < argc; ++i)
@@ -516,6 +479,15 @@ int main(int argc, char** argv) {
         return 2;
       }
       plocRadius = uint32_t(r);
+      continue;
+    }
+    if (std::strncmp(argv[i], "--heap=", 7) == 0) {
+      const std::optional<bench::HeapPolicy> policy = bench::parseHeapPolicy(argv[i] + 7);
+      if (!policy) {
+        std::fprintf(stderr, "bench_builders: --heap=%s: expected warm, cold or adaptive\n", argv[i] + 7);
+        return 2;
+      }
+      heap = *policy;
       continue;
     }
     if (std::strcmp(argv[i], "--curve") == 0) {
@@ -562,7 +534,12 @@ int main(int argc, char** argv) {
                                                buildWith, "ploc", set, threads, plocTopDown, plocRadius));
     }
   }
+  std::printf("heap policy: %s\n", bench::heapPolicyName(heap));
   if (processes > 1) return runProcesses(processes, childArgs);
+  if (!bench::applyHeapPolicy(heap)) {
+    std::fprintf(stderr, "bench_builders: --heap=%s: the C library refused the policy\n", bench::heapPolicyName(heap));
+    return 2;
+  }
   benchmark::Initialize(&count, args.data());
   if (benchmark::ReportUnrecognizedArguments(count, args.data())) return 1;
   bench::RatioReporter reporter(curve, plocTopDown, plocRadius, pairedOut);

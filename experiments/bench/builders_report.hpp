@@ -71,6 +71,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
       if (run.aggregate_name == "median") {
         r.time[threads] = t, r.cpu[threads] = cpu;
         r.sah = counter("sah"), r.epo = counter("epo"), r.rayCost = counter("ray_cost");
+        r.faults[threads] = counter("faults");
       } else if (run.aggregate_name == "min") {
         r.low[threads] = t, r.cpuLow[threads] = cpu;
       } else if (run.aggregate_name == "max") {
@@ -87,8 +88,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
       if (key.first != mesh) {
         mesh = key.first;
         std::printf("\n%s: median of the repetitions [min, max], ms; ratios against embree-raw with 2 threads\n", mesh.c_str());
-        std::printf("%-14s %26s %26s %9s %9s %9s %9s %9s %24s %24s\n", "builder", "1 thread", "2 threads", "x t(1)", "x t(2)", "SAH",
-                    "x SAH", "x b. SAH", "x sah-binned t(1) [95%]", "x sah-binned t(2) [95%]");
+        std::printf("%-14s %26s %26s %9s %9s %9s %9s %9s %24s %24s %17s\n", "builder", "1 thread", "2 threads", "x t(1)", "x t(2)", "SAH",
+                    "x SAH", "x b. SAH", "x sah-binned t(1) [95%]", "x sah-binned t(2) [95%]", "faults/build 1t 2t");
       }
       const Result* binned = find(mesh, "sah-binned");
       const Result* ref = find(mesh, "embree-raw");
@@ -102,11 +103,13 @@ class RatioReporter : public benchmark::ConsoleReporter {
       };
       auto ratio = [&](double x) { return ref && ref->time[1] > 0 && x > 0 ? x / ref->time[1] : NAN; };
       auto versusBinned = [&](int k) { return binned && key.second != "sah-binned" ? paired(r.rounds[k], binned->rounds[k]) : "-"; };
-      std::printf("%-14s %26s %26s %9.3f %9.3f %9.3f %9.4f %9.4f %24s %24s\n", key.second.c_str(), cell(r, 0).c_str(),
+      std::printf("%-14s %26s %26s %9.3f %9.3f %9.3f %9.4f %9.4f %24s %24s %8.0f %8.0f\n", key.second.c_str(), cell(r, 0).c_str(),
                   cell(r, 1).c_str(), ratio(r.time[0]), ratio(r.time[1]), r.sah, ref && ref->sah > 0 ? r.sah / ref->sah : NAN,
-                  binned && binned->sah > 0 ? r.sah / binned->sah : NAN, versusBinned(0).c_str(), versusBinned(1).c_str());
+                  binned && binned->sah > 0 ? r.sah / binned->sah : NAN, versusBinned(0).c_str(), versusBinned(1).c_str(),
+                  r.faults[0], r.faults[1]);
     }
-    std::printf("\n(x SAH: against embree-raw's tree; x b. SAH: against sah-binned's.)\n");
+    std::printf("\n(x SAH: against embree-raw's tree; x b. SAH: against sah-binned's; faults/build: minor page faults "
+                "of the process per build, all threads, median over the repetitions: the heap policy's effect.)\n");
     std::printf("\nTarget (issue 15): sah-binned with 1 thread <= 0.5x embree-raw (MEDIUM) with 2 threads, SAH <= 1.01x\n");
     for (const auto& [key, r] : results_) {
       if (key.second != "sah-binned") continue;
@@ -144,6 +147,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
     double time[2] = {0, 0}, low[2] = {0, 0}, high[2] = {0, 0};  // [1 thread, 2 threads], wall ms
     double cpu[2] = {0, 0}, cpuLow[2] = {0, 0}, cpuHigh[2] = {0, 0};  // process CPU ms (--curve)
     double sah = 0, epo = 0, rayCost = 0;
+    double faults[2] = {NAN, NAN};  // minor page faults per build, median over the repetitions
     std::vector<double> rounds[2];  // wall ms of each repetition, by round (NaN: none that round)
   };
 

@@ -16,6 +16,7 @@
 #include "builders/builder.hpp"
 #include "builders/test_inputs.hpp"
 #include "datasets/procedural.hpp"
+#include "experiments/bench/heap_policy.hpp"
 #include "layout/layout.hpp"
 
 extern "C" double abBuildA(const char* builder, const void* input, const void* options, bool wall, uint64_t* hash);
@@ -39,7 +40,14 @@ int main(int argc, char** argv) {
   app.add_option("--ploc-radius", options.plocRadius, "BuildOptions::plocRadius");
   app.add_option("--ploc-top-down", options.plocTopDown, "BuildOptions::plocTopDown");
   app.add_flag("--wall", wall, "wall time (for several threads) instead of the thread's CPU time");
+  std::string heap = "adaptive";
+  app.add_option("--heap", heap, "heap policy: adaptive (glibc's), warm or cold (experiments/bench/heap_policy.hpp)")
+      ->check(CLI::IsMember({"adaptive", "warm", "cold"}));
   CLI11_PARSE(app, argc, argv);
+  if (!bench::applyHeapPolicy(*bench::parseHeapPolicy(heap))) {
+    std::fprintf(stderr, "ab: --heap %s: the C library refused the policy\n", heap.c_str());
+    return 2;
+  }
 
   testing::PrimitiveSet set;
   if (mesh == "large1M") {
@@ -82,8 +90,8 @@ int main(int argc, char** argv) {
   const double half = 0.98 * std::sqrt(double(rounds));
   const size_t lo = size_t(std::max(0.0, std::floor(rounds / 2.0 - half)));
   const size_t hi = std::min(size_t(rounds) - 1, size_t(std::ceil(rounds / 2.0 + half)));
-  std::printf("%s on %s (%zu triangles), %u rounds, %s ms: A %.3f, B %.3f; B / A %.4f [%.4f, %.4f]; trees %s\n",
-              builder.c_str(), mesh.c_str(), boxes.size(), rounds, wall ? "wall" : "thread CPU", a[rounds / 2],
+  std::printf("%s on %s (%zu triangles), %u rounds, heap %s, %s ms: A %.3f, B %.3f; B / A %.4f [%.4f, %.4f]; trees %s\n",
+              builder.c_str(), mesh.c_str(), boxes.size(), rounds, heap.c_str(), wall ? "wall" : "thread CPU", a[rounds / 2],
               b[rounds / 2], ratio[rounds / 2], ratio[lo], ratio[hi], hashA == hashB ? "identical" : "DIFFER");
   return 0;
 }
