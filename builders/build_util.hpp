@@ -13,11 +13,8 @@
 #include <type_traits>
 #include <vector>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
 #include "builders/bvh.hpp"
+#include "builders/scratch.hpp"
 
 namespace bvhlab::detail {
 
@@ -65,51 +62,6 @@ inline void objectMedianSplit(std::span<PrimRef> refs, size_t mid, int axis) {
     return a.centroid[axis] < b.centroid[axis] || (a.centroid[axis] == b.centroid[axis] && a.id < b.id);
   });
 }
-
-// Advises the kernel (Linux) that the 2 MiB-aligned part of [data, data + bytes) may use
-// transparent huge pages. Before the memory is touched, that turns a page fault per 4 KiB into one
-// per 2 MiB. Harmless elsewhere or when refused.
-inline void adviseHugePages(void* data, size_t bytes) {
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
-  const uintptr_t begin = (reinterpret_cast<uintptr_t>(data) + kHuge - 1) & ~(kHuge - 1);
-  const uintptr_t end = (reinterpret_cast<uintptr_t>(data) + bytes) & ~(kHuge - 1);
-  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
-#endif
-}
-
-// An uninitialised array for a builder's per-build working set (trivial types only). Arrays of 2 MiB
-// and more are 2 MiB-aligned and, on Linux, advised as transparent-huge-page candidates: a fresh
-// array of a million references otherwise takes a page fault per 4 KiB on every build (Embree's
-// allocator asks for huge pages the same way).
-template <class T>
-class ScratchArray {
-  static_assert(std::is_trivially_default_constructible_v<T> && std::is_trivially_destructible_v<T>);
-
- public:
-  explicit ScratchArray(size_t n) : size_(n) {
-    constexpr size_t kHuge = size_t(2) << 20;
-    const size_t bytes = std::max<size_t>(n, 1) * sizeof(T);
-    const size_t align = bytes >= kHuge ? kHuge : std::max<size_t>(alignof(T), alignof(std::max_align_t));
-    data_ = static_cast<T*>(std::aligned_alloc(align, (bytes + align - 1) / align * align));
-    if (!data_) throw std::bad_alloc();
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    if (bytes >= kHuge) madvise(data_, (bytes + kHuge - 1) / kHuge * kHuge, MADV_HUGEPAGE);  // a hint: failure is harmless
-#endif
-  }
-  ScratchArray(const ScratchArray&) = delete;
-  ScratchArray& operator=(const ScratchArray&) = delete;
-  ~ScratchArray() { std::free(data_); }
-  T* data() { return data_; }
-  const T* data() const { return data_; }
-  T& operator[](size_t i) { return data_[i]; }
-  const T& operator[](size_t i) const { return data_[i]; }
-  size_t size() const { return size_; }
-
- private:
-  T* data_ = nullptr;
-  size_t size_ = 0;
-};
 
 inline unsigned resolveThreads(uint32_t requested) {
   if (requested) return requested;

@@ -120,7 +120,7 @@ Bvh emitCollapsed(NodeAt nodeAt, InfoAt infoAt) {
 
 // The whole collapse for a tree whose boxes are all set (a bottom-up pass, then the emission).
 inline Bvh collapseLeavesBySah(const std::vector<BvhNode>& full, const BuildOptions& options) {
-  std::vector<CollapseInfo> info(full.size());
+  ScratchVector<CollapseInfo> info(full.size());
   for (size_t i = full.size(); i-- > 0;) {  // children before parents
     const BvhNode& node = full[i];
     info[i] = node.isLeaf() ? collapseLeafInfo(node, options)

@@ -22,8 +22,8 @@ using detail::Keyed;
 
 // LSD radix sort on the code, 8 bits per pass; stable, so equal codes keep their input order.
 // Passes whose digit is the same for every key are skipped.
-void radixSort(std::vector<Keyed>& keys) {
-  std::vector<Keyed> other(keys.size());
+void radixSort(detail::ScratchVector<Keyed>& keys) {
+  detail::ScratchVector<Keyed> other(keys.size());
   for (int shift = 0; shift < 64; shift += 8) {
     std::array<size_t, 256> count{};
     for (const Keyed& k : keys) ++count[(k.code >> shift) & 0xff];
@@ -43,7 +43,7 @@ struct Task {
 // bit set (binary search: codes in the range share every bit above it).
 class MortonStepper {
  public:
-  explicit MortonStepper(const std::vector<Keyed>& keys) : keys_(keys) {}
+  explicit MortonStepper(const detail::ScratchVector<Keyed>& keys) : keys_(keys) {}
 
   detail::NodeStep<Task> step(const Task& task, const Aabb&) {
     detail::NodeStep<Task> step;
@@ -71,7 +71,7 @@ class MortonStepper {
   }
 
  private:
-  const std::vector<Keyed>& keys_;
+  const detail::ScratchVector<Keyed>& keys_;
 };
 
 }  // namespace
@@ -79,7 +79,7 @@ class MortonStepper {
 Bvh buildLbvh(const BuildInput& input, const BuildOptions& options) {
   const uint32_t n = uint32_t(input.boxes.size());
   const detail::MortonEncoder encoder(input, options.mortonSizeBits, options.mortonGrid);
-  std::vector<Keyed> keys(n);
+  detail::ScratchVector<Keyed> keys(n);
   for (uint32_t i = 0; i < n; ++i) keys[i] = {encoder.code(i), i};
   radixSort(keys);
 

@@ -73,12 +73,12 @@ using detail::Keyed;
 // the order is unique: chunks and threads only split the work). Per pass, each chunk of kChunk keys
 // counts its digits, the counts become offsets (digit-major, chunk-minor), and each chunk scatters
 // its keys. Passes whose digit is the same for every key are skipped.
-void radixSort(std::vector<Keyed>& keys, unsigned threads) {
+void radixSort(detail::ScratchVector<Keyed>& keys, unsigned threads) {
   const size_t n = keys.size(), chunks = (n + kChunk - 1) / kChunk;
   // Up to 16 thread starts per pass pair: worth it only when a pass is long against a start (tens
   // of microseconds): from 16 chunks (131072 keys) on. The result is the same either way.
   if (chunks < 16) threads = 1;
-  std::vector<Keyed> other(n);
+  detail::ScratchVector<Keyed> other(n);
   std::vector<std::array<uint32_t, 256>> count(chunks);
   for (int shift = 0; shift < 64; shift += 8) {
     auto digit = [shift](const Keyed& k) { return (k.code >> shift) & 0xff; };
@@ -165,10 +165,10 @@ struct alignas(64) FullNode {
   BvhNode node;
   detail::CollapseInfo info;
 };
-// Frees what ::operator new allocated (FullNode is trivially destructible: nothing to destroy).
+// Frees what detail::allocateScratch allocated (FullNode is trivially destructible: nothing to destroy).
 static_assert(std::is_trivially_destructible_v<FullNode>);
 struct FreeStorage {
-  void operator()(FullNode* p) const { ::operator delete(p, std::align_val_t(alignof(FullNode))); }
+  void operator()(FullNode* p) const { detail::freeScratch(p); }
 };
 
 // Scratch for one search job: the ring of recent forward areas (vector path), the nearest neighbours.
@@ -328,7 +328,7 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
 
   // 1. Morton order.
   const detail::MortonEncoder encoder(input, options.mortonSizeBits, options.mortonGrid);
-  std::vector<Keyed> keys(n);
+  detail::ScratchVector<Keyed> keys(n);
   detail::runJobs(jobs, threads, [&](size_t job) {
     for (uint32_t i = uint32_t(job) * kChunk, end = std::min(n, i + kChunk); i < end; ++i) keys[i] = {encoder.code(i), i};
   });
@@ -341,8 +341,7 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
   // that makes it), instead of being initialised first and then overwritten.
   const size_t nodes = 2 * size_t(n) - 1;
   std::unique_ptr<FullNode[], FreeStorage> full(
-      static_cast<FullNode*>(::operator new(nodes * sizeof(FullNode), std::align_val_t(alignof(FullNode)))));
-  detail::adviseHugePages(full.get(), nodes * sizeof(FullNode));  // fresh memory: fewer page faults
+      static_cast<FullNode*>(detail::allocateScratch(nodes * sizeof(FullNode), alignof(FullNode))));
   auto makeInner = [&](uint32_t index, uint32_t left, uint32_t right, const Aabb& box, const detail::CollapseInfo& l,
                        const detail::CollapseInfo& r) -> const detail::CollapseInfo& {
     const BvhNode& node = *new (&full[index].node) BvhNode{box, left, right, 0, 0};
@@ -414,7 +413,7 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
   // clusters written at those offsets. Merges are numbered in order, so the tree is that of a
   // sequential pass, whichever thread does which chunk.
   const uint32_t stopAt = options.plocTopDown ? std::max(1u, n / options.plocTopDown) : 1u;
-  std::vector<uint32_t> partner(n);  // the nearest neighbour when mutual, else kNone
+  detail::ScratchVector<uint32_t> partner(n);  // the nearest neighbour when mutual, else kNone
   uint32_t chunks = (m + kChunk - 1) / kChunk, total = 0;
   const unsigned team = std::min<unsigned>(threads, chunks);
   std::vector<Scratch> scratch(std::max(team, 1u));  // one per thread
@@ -498,8 +497,8 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
   // full tree's, made children first (each node's collapse entry needs its children's) and numbered
   // downwards from the m - 1 indices still free (m - 2 .. 0: the root last, at 0).
   if (m > 1) {
-    std::vector<Aabb> boxes(m);
-    std::vector<glm::vec3> centres(m);
+    detail::ScratchVector<Aabb> boxes(m);
+    detail::ScratchVector<glm::vec3> centres(m);
     for (uint32_t i = 0; i < m; ++i) boxes[i] = clusters.bounds(i), centres[i] = boxes[i].center();
     BuildOptions topOptions;
     topOptions.maxLeafSize = 1;
@@ -513,9 +512,9 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
     // is the union of the children's, as the full tree's other inner nodes have it: sah-binned's own
     // box of the node has the same value, but min and max of -0 and +0 depend on the order of the
     // operands, so its zeros may carry other signs (makeLargeMesh's tree changed bits that way).
-    std::vector<uint32_t> made(top.nodes.size());
-    std::vector<Aabb> madeBox(top.nodes.size());
-    std::vector<detail::CollapseInfo> madeInfo(top.nodes.size());
+    detail::ScratchVector<uint32_t> made(top.nodes.size());
+    detail::ScratchVector<Aabb> madeBox(top.nodes.size());
+    detail::ScratchVector<detail::CollapseInfo> madeInfo(top.nodes.size());
     std::vector<std::pair<uint32_t, bool>> stack{{0u, false}};  // (node, children made)
     while (!stack.empty()) {
       const auto [i, childrenMade] = stack.back();
