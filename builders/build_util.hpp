@@ -26,8 +26,8 @@ struct PrimRef {
   uint32_t id;
 };
 
-inline std::vector<PrimRef> makePrimRefs(const BuildInput& input) {
-  std::vector<PrimRef> refs(input.boxes.size());
+inline ScratchVector<PrimRef> makePrimRefs(const BuildInput& input) {
+  ScratchVector<PrimRef> refs(input.boxes.size());
   for (size_t i = 0; i < refs.size(); ++i)
     refs[i] = {input.boxes[i], input.centroids[i], uint32_t(i)};
   return refs;

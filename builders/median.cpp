@@ -33,7 +33,7 @@ struct Task {
 
 class MedianStepper {
  public:
-  MedianStepper(std::vector<PrimRef>& refs, uint32_t leafSize) : refs_(refs), leafSize_(leafSize) {}
+  MedianStepper(detail::ScratchVector<PrimRef>& refs, uint32_t leafSize) : refs_(refs), leafSize_(leafSize) {}
 
   detail::NodeStep<Task> step(const Task& task, const Aabb&) {
     detail::NodeStep<Task> step;
@@ -53,14 +53,14 @@ class MedianStepper {
   }
 
  private:
-  std::vector<PrimRef>& refs_;
+  detail::ScratchVector<PrimRef>& refs_;
   uint32_t leafSize_;
 };
 
 }  // namespace
 
 Bvh buildMedianBvh(const BuildInput& input, const BuildOptions& options) {
-  std::vector<PrimRef> refs = detail::makePrimRefs(input);
+  detail::ScratchVector<PrimRef> refs = detail::makePrimRefs(input);
   const uint32_t n = uint32_t(refs.size());
   const uint32_t leafSize = options.maxLeafSize;
   const detail::RangeBounds all = detail::rangeBounds(refs);
