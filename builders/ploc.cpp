@@ -106,7 +106,7 @@ void radixSort(detail::ScratchVector<Keyed>& keys, unsigned threads) {
 // with any box spans FLT_MAX - -FLT_MAX, which overflows to +inf on every axis, so its merged area
 // is +inf (inf * inf and inf + inf, never inf - inf or 0 * inf: no NaN) and never beats a finite
 // one. Entries between are left uninitialised: every pass writes what it reads. All arrays of one
-// Clusters live in one block (a ScratchArray: 2 MiB-aligned and advised for huge pages from 2 MiB on,
+// Clusters live in one block (a ScratchArray: whole advised huge pages from 1 MiB on, builders/scratch.hpp,
 // so that a build's fresh block does not take a page fault per 4 KiB: measured in docs/builders.md).
 struct Clusters {
   static constexpr float kHuge = std::numeric_limits<float>::max();
