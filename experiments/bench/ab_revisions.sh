@@ -12,7 +12,7 @@
 # REV = HEAD on a clean tree (A/A): that gives the placement bias of the two sides (B ran 0.5-0.7%
 # slower than A in such runs on this machine, 4 December 2026).
 #
-#   bash experiments/bench/ab_revisions.sh REV [main.cpp options: --builder B --mesh PATH|large1M --heap adaptive|warm|cold
+#   bash experiments/bench/ab_revisions.sh REV [main.cpp options: --builder B --mesh PATH|large1M --heap warm|cold|adaptive (warm by default)
 #        --rounds N --threads T --wall --bins K --ploc-radius R --ploc-top-down F --leaf-size L]
 #   AB_KEEP=/tmp/ab bash experiments/bench/ab_revisions.sh REV ...   (keeps the program for more runs)
 #

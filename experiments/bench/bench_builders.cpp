@@ -150,6 +150,11 @@ const PrimitiveSet& sphereMesh() {  // 1000 x 500 quads: 1,000,000 triangles
 
 // ---- Embree MEDIUM, raw (the tree and its callbacks: experiments/bench/embree_raw.hpp) ---------
 
+// The process's page faults since `before` (bench::minorPageFaults()) per iteration of `state`.
+double faultsPerBuild(const benchmark::State& state, long before) {
+  return double(bench::minorPageFaults() - before) / double(std::max<int64_t>(1, state.iterations()));
+}
+
 // One Embree device per thread count ("threads=N"; see the note at the top: the count is per process).
 RTCDevice embreeDevice(unsigned threads) {
   static std::map<unsigned, RTCDevice> devices;
@@ -199,7 +204,7 @@ void embreeRaw(benchmark::State& state, MeshFn mesh, unsigned threads) {
       break;
     }
   }
-  state.counters["faults"] = double(bench::minorPageFaults() - faults) / double(std::max<int64_t>(1, state.iterations()));
+  state.counters["faults"] = faultsPerBuild(state, faults);
   if (root) {  // the last build's nodes live until the RTCBVH is released
     double sah = 0.0;
     size_t nodes = 0;
@@ -230,7 +235,7 @@ void buildWith(benchmark::State& state, std::string builder, MeshFn mesh, uint32
     bvh = info.build(input, options);
     benchmark::DoNotOptimize(bvh.nodes.data());
   }
-  state.counters["faults"] = double(bench::minorPageFaults() - faults) / double(std::max<int64_t>(1, state.iterations()));
+  state.counters["faults"] = faultsPerBuild(state, faults);
   const BuildStats stats = computeStats(bvh, options.cost);
   state.counters["sah"] = stats.sahCost;
   state.counters["nodes"] = double(stats.nodes);

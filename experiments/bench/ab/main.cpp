@@ -40,8 +40,8 @@ int main(int argc, char** argv) {
   app.add_option("--ploc-radius", options.plocRadius, "BuildOptions::plocRadius");
   app.add_option("--ploc-top-down", options.plocTopDown, "BuildOptions::plocTopDown");
   app.add_flag("--wall", wall, "wall time (for several threads) instead of the thread's CPU time");
-  std::string heap = "adaptive";
-  app.add_option("--heap", heap, "heap policy: adaptive (glibc's), warm or cold (experiments/bench/heap_policy.hpp)")
+  std::string heap = "warm";  // as bench_builders: what a build frees, the next one reuses
+  app.add_option("--heap", heap, "heap policy: warm, cold or adaptive (glibc's) (experiments/bench/heap_policy.hpp)")
       ->check(CLI::IsMember({"adaptive", "warm", "cold"}));
   CLI11_PARSE(app, argc, argv);
   if (!bench::applyHeapPolicy(*bench::parseHeapPolicy(heap))) {
