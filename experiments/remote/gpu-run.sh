@@ -1,0 +1,49 @@
+#!/bin/bash
+# One prepared GPU session, in the order that matters if time runs out: (1) the EGL path on the GPU
+# (the report scene rendered shaded and as a node-visit heatmap, with GL_RENDERER in the JSON), (2)
+# builders-gpu.toml, (3) layouts-gpu.toml with 8 s of rounds per group. Each step has a time cap; a
+# sweep stopped by its cap keeps its finished runs (resume with the same command). Results go to OUTDIR
+# as a few files (PNG, JSON, one .tgz per sweep); `bvhlab report DIR` makes the HTML where you unpack.
+# Run from the repository root:
+#   bash experiments/remote/gpu-run.sh BUNDLE OUTDIR [BUILDERS_SECONDS [LAYOUTS_SECONDS]]
+# BUNDLE: a folder or .tar.xz from experiments/remote/bundle.py (or "installed": ./build/bvhlab as it is).
+# datasets/cache must hold the meshes and worlds (bash datasets/fetch.sh, or unpack a copy of it).
+set -u
+bundle=$1; out=$2; builders_s=${3:-230}; layouts_s=${4:-150}
+t0=$(date +%s); step() { echo "[gpu-run t=$(( $(date +%s) - t0 ))s] $*"; }
+mkdir -p "$out" /tmp/gpu-run
+if [ "$bundle" = installed ]; then
+  B=./build/bvhlab
+else
+  if [ -f "$bundle" ]; then mkdir -p /tmp/gpu-run/bundle && tar -C /tmp/gpu-run/bundle -xJf "$bundle" || exit 2
+                            bundle=/tmp/gpu-run/bundle; fi
+  B=$bundle/bvhlab; export LD_LIBRARY_PATH=$bundle/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+fi
+# NVIDIA's EGL through glvnd: its vendor file, and the folder of libEGL_nvidia.so.0 (a driver mounted
+# outside the loader's cache, as in containers).
+vendor=$(find /usr/local/nvidia /usr/share/glvnd /etc/glvnd -path '*egl_vendor.d*' -name '*nvidia*.json' 2>/dev/null | head -1)
+egl=$(find /usr/local/nvidia /usr/lib /usr/lib64 -name 'libEGL_nvidia.so.0' 2>/dev/null | head -1)
+[ -n "$vendor" ] && export __EGL_VENDOR_LIBRARY_FILENAMES=$vendor
+[ -n "$egl" ] && export LD_LIBRARY_PATH=${LD_LIBRARY_PATH:+$LD_LIBRARY_PATH:}$(dirname "$egl")
+step "binary $B; EGL vendor file '${vendor}', libEGL_nvidia '${egl}'"
+nvidia-smi -L 2>/dev/null; echo "host: $(nproc) cores"
+
+step "1. the EGL path: the report scene, 1280x720"
+timeout 90 "$B" render datasets/scenes/report.toml --backend egl --width 1280 --height 720 --frames 30 \
+  --warmup 5 -o "$out/report_gpu.png" --json > "$out/render_report.json"; echo "rc=$?"
+head -c 600 "$out/render_report.json"; echo
+timeout 60 "$B" render datasets/scenes/report.toml --backend egl --width 1280 --height 720 --frames 5 \
+  --view visits -o "$out/visits_gpu.png" --json > "$out/render_visits.json"; echo "rc=$?"
+
+sweep() {  # name config seconds
+  step "$1 (at most $3 s)"
+  timeout "$3" "$B" run "$2" --out "/tmp/gpu-run/$1" --no-report > "/tmp/gpu-run/$1.log" 2>&1; echo "rc=$?"
+  tail -3 "/tmp/gpu-run/$1.log"
+  mkdir -p "/tmp/gpu-run/$1" && cp "/tmp/gpu-run/$1.log" "/tmp/gpu-run/$1/run.log"
+  tar -C /tmp/gpu-run -czf "$out/$1.tgz" --exclude=images "$1"
+}
+sweep builders-gpu experiments/configs/builders-gpu.toml "$builders_s"
+sed 's/^max_seconds = [0-9]*/max_seconds = 8/' experiments/configs/layouts-gpu.toml > /tmp/gpu-run/layouts-gpu.toml
+sed -i 's|"\.\./\.\./datasets/|"'"$PWD"'/datasets/|' /tmp/gpu-run/layouts-gpu.toml
+sweep layouts-gpu /tmp/gpu-run/layouts-gpu.toml "$layouts_s"
+step "done"; ls -la "$out"
