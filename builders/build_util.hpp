@@ -1,12 +1,15 @@
 // What the top-down builders share: primitive references, range bounds, the object-median split, and
-// the driver (buildTopDown) that runs a builder's per-node step over the whole tree, on threads at the
-// top levels and for the subtrees below them, with a tree that is identical for any thread count.
+// the driver (buildTopDown) that runs a builder's per-node step over the whole tree: the top levels on one
+// thread while the subtrees below them are built on the others, a tree identical for any thread count.
 #pragma once
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdlib>
+#include <deque>
 #include <exception>
+#include <mutex>
 #include <new>
 #include <span>
 #include <thread>
@@ -115,11 +118,13 @@ struct NodeStep {
 };
 
 // Inputs below this size are built sequentially (threads cost more than they save). Above it, the
-// nodes bigger than n / kSubtreeFraction are processed level by level (each level's nodes as parallel
-// jobs), and every smaller node becomes an independent subtree job. Both thresholds depend on the
-// input size only, never on the thread count, so the tree and its node order are the same for any
-// thread count.
-constexpr uint32_t kParallelMinInput = 16384;
+// nodes bigger than n / kSubtreeFraction are made level by level on one thread, and every smaller
+// node becomes an independent subtree job, started as soon as it appears (SubtreeTeam). Both
+// thresholds depend on the input size only, never on the thread count, so the tree and its node order
+// are the same for any thread count. 4,096: with one thread start per build, two threads build
+// sah-binned trees of 5,800-6,400 triangles in 0.83x one thread's time (docs/builders.md, "One team
+// per build"); below that a start (~60 us here) is a tenth of the build.
+constexpr uint32_t kParallelMinInput = 4096;
 constexpr uint32_t kSubtreeFraction = 16;
 
 // Appends the two children of nodes[at] (an inner node from here on) and returns the first's index.
@@ -178,6 +183,141 @@ void buildSubtree(std::vector<BvhNode>& nodes, const Task& root, Stepper& steppe
   }
 }
 
+// The subtrees of a parallel build, handed out while the top levels are still being made: the main
+// thread makes the levels (in the order the one-thread build makes them), publishing each subtree as
+// it appears, and the other threads of the team build the biggest waiting one into its own array.
+// Once the levels are done, the main thread takes subtrees too; once every subtree is built, the team
+// copies them into the tree in creation order (a subtree's root replaces its placeholder, its other
+// nodes follow those of the subtrees before it: the one-thread layout), each thread a subtree at a
+// time. One start per thread per build. The first exception thrown by a stepper is rethrown by run().
+template <class Task>
+class SubtreeTeam {
+ public:
+  explicit SubtreeTeam(std::vector<BvhNode>& nodes) : nodes_(nodes) {}
+
+  // Starts `helpers` threads, calls levels(publish) on this one, then takes part in the rest.
+  template <class MakeStepper, class Levels>
+  void run(unsigned helpers, MakeStepper& makeStepper, Levels&& levels) {
+    std::vector<std::thread> team;
+    for (unsigned t = 0; t < helpers; ++t) team.emplace_back([&] { work(makeStepper); });
+    try {
+      levels([&](const Task& task) { publish(task); });
+    } catch (...) {
+      fail(std::current_exception());
+    }
+    {
+      std::lock_guard lock(mutex_);
+      closed_ = true;
+      if (built_ == entries_.size()) startCopies();  // else the last subtree's builder does it
+    }
+    wake_.notify_all();
+    work(makeStepper);
+    for (std::thread& t : team) t.join();
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  struct Entry {
+    Task task;
+    BvhNode placeholder;
+    std::vector<BvhNode> nodes;
+    bool claimed = false;
+  };
+
+  void publish(const Task& task) {
+    {
+      std::lock_guard lock(mutex_);
+      entries_.push_back({task, nodes_[task.node], {}, false});
+    }
+    wake_.notify_one();
+  }
+
+  void fail(std::exception_ptr e) {
+    std::lock_guard lock(mutex_);
+    if (!error_) error_ = e;
+    failed_ = true;
+  }
+
+  // Builds subtrees until none is waiting and the levels are done, then copies subtrees into the tree
+  // once all are built (the last builder sets out the offsets).
+  template <class MakeStepper>
+  void work(MakeStepper& makeStepper) {
+    std::unique_lock lock(mutex_);
+    for (;;) {
+      Entry* next = nullptr;
+      for (Entry& e : entries_)  // the biggest waiting subtree (few: tens)
+        if (!e.claimed && (!next || e.task.end - e.task.begin > next->task.end - next->task.begin)) next = &e;
+      if (next) {
+        next->claimed = true;
+        Task task = next->task;
+        const BvhNode placeholder = next->placeholder;
+        lock.unlock();
+        std::vector<BvhNode> local;
+        try {
+          if (!failed_) {
+            local.reserve(2 * size_t(task.end - task.begin) - 1);
+            local.push_back(placeholder);
+            task.node = 0;
+            auto stepper = makeStepper();
+            buildSubtree(local, task, stepper);
+          }
+        } catch (...) {
+          fail(std::current_exception());
+        }
+        lock.lock();
+        next->nodes = std::move(local);  // a std::deque: publishing keeps entries where they are
+        if (++built_ == entries_.size() && closed_) startCopies();
+        continue;
+      }
+      if (closed_ && built_ == entries_.size()) break;
+      wake_.wait(lock);
+    }
+    // Copies, each thread a subtree at a time.
+    while (copied_ < entries_.size()) {
+      const size_t k = copied_++;
+      lock.unlock();
+      copy(k);
+      lock.lock();
+    }
+  }
+
+  // All subtrees built: the offsets, then every thread may copy.
+  void startCopies() {
+    size_t at = nodes_.size();
+    offsets_.resize(entries_.size());
+    for (size_t k = 0; k < entries_.size(); ++k) {
+      offsets_[k] = at;
+      if (!entries_[k].nodes.empty()) at += entries_[k].nodes.size() - 1;
+    }
+    nodes_.resize(at);  // capacity reserved by buildTopDown: no reallocation
+    wake_.notify_all();
+  }
+
+  // Local index j >= 1 lands at offsets_[k] + j - 1; the local root replaces its placeholder.
+  void copy(size_t k) {
+    const std::vector<BvhNode>& local = entries_[k].nodes;
+    if (local.empty()) return;  // a stepper failed: run() rethrows
+    const uint32_t shift = uint32_t(offsets_[k]) - 1;
+    auto moved = [shift](BvhNode node) {
+      if (!node.isLeaf()) node.left += shift, node.right += shift;
+      return node;
+    };
+    nodes_[entries_[k].task.node] = moved(local[0]);
+    BvhNode* out = nodes_.data() + offsets_[k];
+    for (size_t j = 1; j < local.size(); ++j) out[j - 1] = moved(local[j]);
+  }
+
+  std::vector<BvhNode>& nodes_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<Entry> entries_;
+  std::vector<size_t> offsets_;
+  size_t built_ = 0, copied_ = 0;
+  bool closed_ = false;
+  std::exception_ptr error_;
+  std::atomic<bool> failed_{false};  // error_ is set: the rest is skipped
+};
+
 // Builds the whole tree over [root.begin, root.end) (root.begin == 0) and returns its nodes (root
 // first). `makeStepper()` makes one stepper per job.
 template <class Task, class MakeStepper>
@@ -194,62 +334,42 @@ std::vector<BvhNode> buildTopDown(const Aabb& rootBox, Task root, unsigned threa
     return nodes;
   }
 
+  // The nodes bigger than the cut, level by level (each level's in order), on this thread; every
+  // smaller node becomes a subtree, handed to `subtree` as it appears.
   const uint32_t cut = n / kSubtreeFraction;
-  std::vector<Task> level{root}, subtrees;
-  while (!level.empty()) {
-    std::vector<NodeStep<Task>> steps(level.size());
-    runJobs(level.size(), threads, [&](size_t k) {
-      auto stepper = makeStepper();
-      steps[k] = stepper.step(level[k], nodes[level[k].node].bounds);
-    });
-    std::vector<Task> next;
-    for (size_t k = 0; k < level.size(); ++k) {
-      applyStep(nodes, level[k], steps[k]);
-      if (steps[k].leaf) continue;
-      for (const Task& child : steps[k].child) (child.end - child.begin <= cut ? subtrees : next).push_back(child);
+  auto levels = [&](auto&& subtree) {
+    auto stepper = makeStepper();
+    std::vector<Task> level{root}, next;
+    while (!level.empty()) {
+      next.clear();
+      for (Task& task : level) {
+        NodeStep<Task> step = stepper.step(task, nodes[task.node].bounds);
+        applyStep(nodes, task, step);
+        if (step.leaf) continue;
+        for (const Task& child : step.child) {
+          if (child.end - child.begin <= cut)
+            subtree(child);
+          else
+            next.push_back(child);
+        }
+      }
+      level.swap(next);
     }
-    level = std::move(next);
-  }
+  };
 
   // One thread: each subtree straight into `nodes`, in creation order. That is the layout the
-  // splice below makes (a subtree's root stays at its placeholder, its other nodes follow those of
-  // the subtrees before it, in the order they were made), without the copies.
+  // team's copies make, without the copies.
   if (threads <= 1) {
+    std::vector<Task> subtrees;
+    levels([&](const Task& task) { subtrees.push_back(task); });
     for (const Task& task : subtrees) {
       auto stepper = makeStepper();
       buildSubtree(nodes, task, stepper);
     }
     return nodes;
   }
-
-  // Subtrees into their own arrays, biggest first (load balance), then spliced in creation order.
-  std::vector<std::vector<BvhNode>> local(subtrees.size());
-  std::vector<uint32_t> order(subtrees.size());
-  for (uint32_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    return subtrees[a].end - subtrees[a].begin > subtrees[b].end - subtrees[b].begin;
-  });
-  runJobs(
-      subtrees.size(), threads,
-      [&](size_t k) {
-        Task task = subtrees[k];
-        local[k].reserve(2 * size_t(task.end - task.begin) - 1);
-        local[k].push_back(nodes[task.node]);
-        task.node = 0;
-        auto stepper = makeStepper();
-        buildSubtree(local[k], task, stepper);
-      },
-      order);
-  for (size_t k = 0; k < subtrees.size(); ++k) {
-    // Local index j >= 1 lands at nodes.size() + j - 1; the local root replaces its placeholder.
-    const uint32_t shift = uint32_t(nodes.size()) - 1;
-    auto moved = [shift](BvhNode node) {
-      if (!node.isLeaf()) node.left += shift, node.right += shift;
-      return node;
-    };
-    nodes[subtrees[k].node] = moved(local[k][0]);
-    for (size_t j = 1; j < local[k].size(); ++j) nodes.push_back(moved(local[k][j]));
-  }
+  SubtreeTeam<Task> team(nodes);
+  team.run(threads - 1, makeStepper, levels);
   return nodes;
 }
 

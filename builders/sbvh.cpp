@@ -59,6 +59,11 @@ namespace bvhlab {
 
 namespace {
 
+// Inputs below this size are built on one thread. sbvh keeps its own level-parallel driver (its tasks
+// own their references, which the clipping grows), and the threshold the shared driver had when it
+// was written, so its trees and node order stay as they were (detail::kParallelMinInput is lower).
+constexpr uint32_t kParallelMinInput = 16384;
+
 // Bin count default (object and spatial bins alike), measured with leaf 4, Ct = Ci = 1, alpha 1e-5,
 // budget 2x, one thread, best of 3 builds on a shared 2-core machine (times are rough), SAH as a
 // ratio to sah-binned's (64 bins):
@@ -548,7 +553,7 @@ Bvh buildSbvh(const BuildInput& input, const BuildOptions& options) {
   std::vector<BvhNode>& nodes = bvh.nodes;
   nodes.push_back({rootBox});
   root.node = 0;
-  if (n < detail::kParallelMinInput) {
+  if (n < kParallelMinInput) {
     Subtree all;
     all.nodes = std::move(nodes);
     buildSubtree(all, std::move(root), shared);

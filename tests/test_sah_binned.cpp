@@ -208,7 +208,7 @@ TEST(SahBinned, SameTreeAsTheTextbookBuildForOtherCostModels) {
   }
 }
 
-// Large enough for the threaded driver (>= 16384 primitives) and for the two bin sets (>= 1024 per node).
+// Large enough for the threaded driver (>= detail::kParallelMinInput primitives) and for the two bin sets (>= 1024 per node).
 TEST(SahBinned, SameTreeAsTheTextbookBuildOnTheBunnyAndForAnyThreadCount) {
   PrimitiveSet bunny = testing::loadTriangles(testing::bunnyPath());
   if (bunny.size() == 0) bunny = testing::randomSoup(40000, 9);  // the data set is optional; the property is not

@@ -218,7 +218,7 @@ bool identical(const Bvh& a, const Bvh& b) {
 }
 
 TEST(Sbvh, DeterministicForAnyThreadCount) {
-  // Above the driver's parallel threshold (16384), so the top levels and subtrees run as jobs.
+  // Above sbvh's parallel threshold (16384), so the top levels and subtrees run as jobs.
   const PrimitiveSet set = testing::thinTriangles(40000, 9);
   BuildOptions options;
   options.threads = 1;
