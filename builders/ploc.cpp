@@ -563,7 +563,6 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
     topOptions.cost = options.cost;
     topOptions.threads = options.threads;
     const Bvh top = buildBvh("sah-binned", BuildInput{boxes, centres}, topOptions);
-    uint32_t nextFree = m - 1;  // one past the next index to give
     // Top's node -> the full tree's, its box and its collapse entry: kept by top index, so that making
     // a node reads its children's from here (near, in top's depth-first order) rather than from the
     // full tree, where they lie anywhere (a cache miss each: 2-3% of a bunny build with F = 4). The box
@@ -573,27 +572,74 @@ Bvh buildPloc(const BuildInput& input, const BuildOptions& options) {
     detail::ScratchVector<uint32_t> made(top.nodes.size());
     detail::ScratchVector<Aabb> madeBox(top.nodes.size());
     detail::ScratchVector<detail::CollapseInfo> madeInfo(top.nodes.size());
-    std::vector<std::pair<uint32_t, bool>> stack{{0u, false}};  // (node, children made)
-    while (!stack.empty()) {
-      const auto [i, childrenMade] = stack.back();
-      stack.pop_back();
-      const BvhNode& t = top.nodes[i];
-      if (t.isLeaf()) {
-        const uint32_t c = top.primIndices[t.first];
-        made[i] = clusters.node[c];
-        madeBox[i] = clusters.bounds(c);
-        madeInfo[i] = clusters.info[c];
-      } else if (!childrenMade) {
-        stack.push_back({i, true});
-        stack.push_back({t.right, false});
-        stack.push_back({t.left, false});
-      } else {
-        Aabb box = madeBox[t.left];
-        box.grow(madeBox[t.right]);
-        made[i] = --nextFree;
-        madeBox[i] = box;
-        madeInfo[i] = makeInner(made[i], made[t.left], made[t.right], box, madeInfo[t.left], madeInfo[t.right]);
+    // Depth-first, children made first; `next` is one past the index the next made node takes.
+    auto walk = [&](uint32_t from, uint32_t next) {
+      std::vector<std::pair<uint32_t, bool>> stack{{from, false}};  // (node, children made)
+      while (!stack.empty()) {
+        const auto [i, childrenMade] = stack.back();
+        stack.pop_back();
+        const BvhNode& t = top.nodes[i];
+        if (t.isLeaf()) {
+          const uint32_t c = top.primIndices[t.first];
+          made[i] = clusters.node[c];
+          madeBox[i] = clusters.bounds(c);
+          madeInfo[i] = clusters.info[c];
+        } else if (!childrenMade) {
+          stack.push_back({i, true});
+          stack.push_back({t.right, false});
+          stack.push_back({t.left, false});
+        } else {
+          Aabb box = madeBox[t.left];
+          box.grow(madeBox[t.right]);
+          made[i] = --next;
+          madeBox[i] = box;
+          madeInfo[i] = makeInner(made[i], made[t.left], made[t.right], box, madeInfo[t.left], madeInfo[t.right]);
+        }
       }
+    };
+    // The same walk in parts, with the same numbering: the subtrees of at most m / 16 clusters met
+    // first from the root (the parts) are walked as jobs, each starting from the index the whole walk
+    // would give it, then the nodes above them, children first. A subtree of k clusters (one per
+    // leaf: leaf size 1) makes k - 1 inner nodes. Parts depend on m only: the same tree for any
+    // thread count. (Children follow their parent in top.nodes, so one backward pass counts.)
+    detail::ScratchVector<uint32_t> clustersBelow(top.nodes.size());
+    for (size_t i = top.nodes.size(); i-- > 0;) {
+      const BvhNode& t = top.nodes[i];
+      clustersBelow[i] = t.isLeaf() ? t.count : clustersBelow[t.left] + clustersBelow[t.right];
+    }
+    const uint32_t partMax = std::max(1u, m / 16);
+    std::vector<uint32_t> parts, partNext, above;  // `above`: the other inner nodes, children first
+    {
+      uint32_t next = m - 1;
+      std::vector<std::pair<uint32_t, bool>> stack{{0u, false}};
+      while (!stack.empty()) {
+        const auto [i, childrenMade] = stack.back();
+        stack.pop_back();
+        const BvhNode& t = top.nodes[i];
+        if (t.isLeaf() || clustersBelow[i] <= partMax) {
+          parts.push_back(i), partNext.push_back(next);
+          next -= clustersBelow[i] - 1;
+        } else if (!childrenMade) {
+          stack.push_back({i, true});
+          stack.push_back({t.right, false});
+          stack.push_back({t.left, false});
+        } else {
+          made[i] = --next;
+          above.push_back(i);
+        }
+      }
+    }
+    std::vector<uint32_t> order(parts.size());
+    for (uint32_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](uint32_t a, uint32_t b) { return clustersBelow[parts[a]] > clustersBelow[parts[b]]; });
+    detail::runJobs(parts.size(), threads, [&](size_t k) { walk(parts[k], partNext[k]); }, order);
+    for (const uint32_t i : above) {
+      const BvhNode& t = top.nodes[i];
+      Aabb box = madeBox[t.left];
+      box.grow(madeBox[t.right]);
+      madeBox[i] = box;
+      madeInfo[i] = makeInner(made[i], made[t.left], made[t.right], box, madeInfo[t.left], madeInfo[t.right]);
     }
   }
 
