@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "builders/morton.hpp"
+#include "builders/morton_sort.hpp"
 #include "builders/build_util.hpp"
 #include "builders/collapse.hpp"
 
@@ -19,21 +20,6 @@ namespace bvhlab {
 namespace {
 
 using detail::Keyed;
-
-// LSD radix sort on the code, 8 bits per pass; stable, so equal codes keep their input order.
-// Passes whose digit is the same for every key are skipped.
-void radixSort(detail::ScratchVector<Keyed>& keys) {
-  detail::ScratchVector<Keyed> other(keys.size());
-  for (int shift = 0; shift < 64; shift += 8) {
-    std::array<size_t, 256> count{};
-    for (const Keyed& k : keys) ++count[(k.code >> shift) & 0xff];
-    if (count[(keys[0].code >> shift) & 0xff] == keys.size()) continue;
-    size_t sum = 0;
-    for (size_t& c : count) sum += std::exchange(c, sum);
-    for (const Keyed& k : keys) other[count[(k.code >> shift) & 0xff]++] = k;
-    keys.swap(other);
-  }
-}
 
 struct Task {
   uint32_t node, begin, end;
@@ -81,7 +67,7 @@ Bvh buildLbvh(const BuildInput& input, const BuildOptions& options) {
   const detail::MortonEncoder encoder(input, options.mortonSizeBits, options.mortonGrid);
   detail::ScratchVector<Keyed> keys(n);
   for (uint32_t i = 0; i < n; ++i) keys[i] = {encoder.code(i), i};
-  radixSort(keys);
+  detail::sortMortonKeys(keys, detail::resolveThreads(options.threads));
 
   std::vector<BvhNode> full = detail::buildTopDown(Aabb{}, Task{0, 0, n}, detail::resolveThreads(options.threads),
                                                    [&] { return MortonStepper(keys); });
