@@ -283,8 +283,11 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
           if (!(out.aoRadius > 0.0 && out.aoRadius <= 1.0)) r.fail(tv.source(), key, "must be in (0, 1]");
         } else if (tk == "embree_threads") {
           out.embreeThreads = int(r.integer(tv, key, 0, 256));
+        } else if (tk == "min_sample_ms") {
+          out.minSampleMs = r.number(tv, key);
+          if (!(out.minSampleMs >= 0.0 && out.minSampleMs <= 10000.0)) r.fail(tv.source(), key, "must be in [0, 10000] ms");
         } else {
-          r.fail(tk.source(), key, "unknown key; [trace] has count, seed, ao_radius, embree_threads");
+          r.fail(tk.source(), key, "unknown key; [trace] has count, seed, ao_radius, embree_threads, min_sample_ms");
         }
       }
     } else if (section == "axes") {

@@ -65,6 +65,10 @@ struct RunRender {
   // to one thread too (env LP_NUM_THREADS = "1"), each side runs on one core: the yardstick that holds
   // on a machine whose two virtual CPUs sometimes share a physical core (docs/layouts.md).
   int embreeThreads = 0;
+  // A timed sample of a GLSL trace lasts at least this long (`trace --min-sample-ms`): shorter
+  // dispatches (a GPU) are repeated back to back after one untimed one, and the sample is their mean.
+  // < 0: the tracer's default (10 ms on a GPU, 0 on a software renderer).
+  double minSampleMs = -1.0;
 
   nlohmann::json keyJson() const;
   // Runs with the same scene and equal groupJson() are timed together, frames interleaved.

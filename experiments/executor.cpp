@@ -64,6 +64,7 @@ std::vector<std::string> traceCommandLine(const fs::path& binary, const RunSpec&
   if (r.maxSeconds > 0.0) argv.insert(argv.end(), {"--max-seconds", number(r.maxSeconds)});
   if (r.programCopies > 1) argv.insert(argv.end(), {"--program-copies", std::to_string(r.programCopies)});
   if (r.embreeThreads > 0) argv.insert(argv.end(), {"--embree-threads", std::to_string(r.embreeThreads)});
+  if (r.minSampleMs >= 0.0) argv.insert(argv.end(), {"--min-sample-ms", number(r.minSampleMs)});
   for (const char* key : {"eye", "target", "up"})
     if (scene.value.contains(key)) argv.insert(argv.end(), {std::string("--") + key, vec3Flag(scene.value[key])});
   if (scene.value.contains("fov")) argv.insert(argv.end(), {"--fov", number(scene.value["fov"].get<double>())});

@@ -83,6 +83,7 @@ json RunRender::groupJson() const {
   g["trace_seed"] = traceSeed;
   g["ao_radius"] = aoRadius;
   g["embree_threads"] = embreeThreads;
+  g["min_sample_ms"] = minSampleMs;
   return g;
 }
 
@@ -112,6 +113,7 @@ json RunSpec::keyJson() const {
     key["trace"] = {{"count", render.traceCount}, {"seed", render.traceSeed}, {"ao_radius", render.aoRadius}};
     // Only when set: the keys of configs without it stay as they were.
     if (render.embreeThreads != 0) key["trace"]["embree_threads"] = render.embreeThreads;
+    if (render.minSampleMs >= 0.0) key["trace"]["min_sample_ms"] = render.minSampleMs;
   }
   return key;
 }
@@ -161,6 +163,7 @@ RunSpec RunSpec::fromJson(const json& j) {
   s.render.traceSeed = r.value("trace_seed", s.render.traceSeed);
   s.render.aoRadius = r.value("ao_radius", s.render.aoRadius);
   s.render.embreeThreads = r.value("embree_threads", s.render.embreeThreads);
+  s.render.minSampleMs = r.value("min_sample_ms", s.render.minSampleMs);
   s.render.cameraPath = r.value("camera_path", "");
   s.render.cameraPathHash = r.value("camera_path_hash", "");
   s.render.cameraPathFile = r.value("camera_path_file", "");

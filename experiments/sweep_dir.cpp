@@ -155,7 +155,7 @@ const std::vector<std::string>& resultColumns() {
       "image", "visits_image",
       // trace runs (rays axis): the batch, Embree on the same rays, agreement
       "rays", "mrays_per_s", "embree_ms", "embree_mrays_per_s", "ratio_to_embree", "ratio_ci_low", "ratio_ci_high",
-      "embree_threads", "hit_mismatches", "hit_ties",
+      "embree_threads", "hit_mismatches", "hit_ties", "dispatches_per_sample",
       // provenance
       "gl_renderer", "config_name", "config_hash", "git_commit", "hostname", "cpu", "cores", "started_at",
       "wall_s", "error"};

@@ -31,8 +31,11 @@ class GlRayTracer {
   GlRayTracer& operator=(const GlRayTracer&) = delete;
 
   void setRays(const std::vector<BatchRay>& rays);
-  // One dispatch over every ray, waited for (glFinish); returns wall-clock ms.
-  double trace();
+  // One dispatch over every ray, waited for (glFinish); returns wall-clock ms. With dispatches > 1
+  // (a GPU, where one dispatch is shorter than its clock's ramp-up and glFinish's round trip): one
+  // untimed dispatch waited for, then `dispatches` back to back (a barrier between, so they do not
+  // overlap) waited for once; returns the wall-clock ms per dispatch.
+  double trace(int dispatches = 1);
   // The last trace()'s answers (prim = original triangle id).
   std::vector<BatchHit> results() const;
   // Traces once more with the counters compiled in: per ray (node visits, triangle tests, stack
@@ -40,6 +43,7 @@ class GlRayTracer {
   std::vector<glm::uvec4> traceCounted(std::vector<BatchHit>* hits = nullptr);
 
  private:
+  void issue(unsigned program);
   double dispatch(unsigned program);
   RayTracerOptions options_;
   unsigned timed_ = 0, counted_ = 0;

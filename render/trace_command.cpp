@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <random>
 #include <vector>
@@ -43,10 +45,28 @@ void addTraceOptions(CLI::App& app, TraceCommand& c, RenderCliText& text) {
                  "trace with this many separately compiled copies of the kernel's program, each once per round; "
                  "from 6 the ratio to Embree's interval spans them")
       ->check(CLI::Range(1, 64));
+  app.add_option("--min-sample-ms", c.minSampleMs,
+                 "a timed sample lasts at least this long: shorter dispatches (a GPU) are repeated back to back after an "
+                 "untimed one and averaged (-1 = 10 ms on a GPU, 0 on a software renderer)")
+      ->check(CLI::Range(-1.0, 10000.0));
   app.add_option("--eye", text.eye, "camera position x,y,z");
   app.add_option("--target", text.target, "camera target x,y,z");
   app.add_option("--up", text.up, "camera up x,y,z");
   app.add_option("--fov", rc.fov, "vertical field of view in degrees");
+}
+
+double resolveMinSampleMs(double requested, const std::string& renderer) {
+  if (requested >= 0.0) return requested;
+  return isSoftwareRenderer(renderer) ? 0.0 : kAutoMinSampleMs;
+}
+
+int dispatchesPerSample(double minSampleMs, double shortestMs) {
+  // A non-finite or non-positive time (a timer that did not move) asks for the most: a sample then
+  // still has a length to measure. NaN fails every comparison below, so it never picks a branch.
+  if (!(minSampleMs > 0.0)) return 1;
+  if (shortestMs >= minSampleMs) return 1;
+  if (!(shortestMs > 0.0)) return 1000;
+  return int(std::min(1000.0, std::ceil(minSampleMs / shortestMs)));
 }
 
 TraceCommand parseTraceArgs(const std::vector<std::string>& args) {
@@ -77,15 +97,22 @@ int runTrace(const TraceCommand& c) {
     copies.push_back(std::make_unique<GlRayTracer>(s.prepared->packed, s.tracer));
     copies.back()->setRays(y.rays().rays);
   }
-  for (int i = 0; i < rc.warmup; ++i) {
-    for (auto& copy : copies) copy->trace();
-    y.trace();
+  // The warm-up's shortest dispatch sets how many make a timed sample (--min-sample-ms); with a sample
+  // length asked for, one more untimed pass after the warm-up (the first pass may hold a JIT compile).
+  const double minSampleMs = resolveMinSampleMs(c.minSampleMs, ctx->renderer());
+  double shortest = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < rc.warmup + (minSampleMs > 0.0 ? 1 : 0); ++i) {
+    for (auto& copy : copies) shortest = std::min(shortest, copy->trace());
+    if (i < rc.warmup) y.trace();
   }
+  const int dispatches = dispatchesPerSample(minSampleMs, shortest);
   // Rounds: one trace of each copy and of Embree, in an order drawn per round (fixed seed), so drift
   // hits them alike and round i's times pair up.
   TraceRounds r;
   r.warmup = rc.warmup;
   r.targetCiPct = c.targetCiPct;
+  r.minSampleMs = minSampleMs;
+  r.dispatches = dispatches;
   if (copies.size() > 1) r.copyMs.resize(copies.size());
   std::mt19937_64 order(0x7261795f74726163ull);
   const int maxFrames = std::max(rc.frames, c.maxFrames);
@@ -114,7 +141,7 @@ int runTrace(const TraceCommand& c) {
       if (slot == copies.size()) {
         r.embreeMs.push_back(y.trace());
       } else {
-        round.push_back(copies[slot]->trace());
+        round.push_back(copies[slot]->trace(dispatches));
         if (copies.size() > 1) r.copyMs[slot].push_back(round.back());
       }
     }

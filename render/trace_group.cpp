@@ -198,10 +198,20 @@ json traceGroup(const json& spec, const GroupSettings& g) {
             << elapsed() << ")\n";
 
   // ---- warm-up, then rounds in a shuffled order until every interval is narrow enough --------------
-  auto traceCopy = [](Run& r, size_t copy, bool timed) {
+  // One sample length for the group (its runs come from one config): dispatches per timed sample
+  // from the warm-up's shortest dispatch of any run, so paired rounds time alike-made samples.
+  double minSampleMs = 0.0;
+  for (auto& r : runs)
+    if (r->alive()) minSampleMs = std::max(minSampleMs, resolveMinSampleMs(r->cmd.minSampleMs, renderer));
+  double shortest = std::numeric_limits<double>::infinity();
+  int dispatches = 1;
+  auto traceCopy = [&](Run& r, size_t copy, bool timed) {
     try {
-      const double ms = r.copies[copy]->trace();
-      if (timed) r.copyMs[copy].push_back(ms);
+      const double ms = r.copies[copy]->trace(timed ? dispatches : 1);
+      if (timed)
+        r.copyMs[copy].push_back(ms);
+      else
+        shortest = std::min(shortest, ms);
     } catch (const std::exception& ex) {
       r.error = std::string("trace failed: ") + ex.what();
       r.copies.clear();
@@ -210,11 +220,15 @@ json traceGroup(const json& spec, const GroupSettings& g) {
   int warmup = 0;
   for (auto& r : runs)
     if (r->alive()) warmup = std::max(warmup, r->cmd.render.warmup);
-  for (int w = 0; w < warmup; ++w) {
+  // With a sample length, one more pass after the warm-up times the dispatches (the first pass may
+  // hold a JIT compile).
+  for (int w = 0; w < warmup + (minSampleMs > 0.0 ? 1 : 0); ++w) {
     for (auto& r : runs)
       for (size_t k = 0; r->alive() && k < r->copies.size(); ++k) traceCopy(*r, k, false);
-    for (Yardstick& y : yardsticks) y.tracer->trace();
+    if (w < warmup)
+      for (Yardstick& y : yardsticks) y.tracer->trace();
   }
+  dispatches = dispatchesPerSample(minSampleMs, shortest);
   std::vector<Slot> order;
   for (size_t i = 0; i < runs.size(); ++i)
     for (size_t k = 0; k < runs[i]->copies.size(); ++k) order.push_back(Slot{i, k, false});
@@ -259,7 +273,8 @@ json traceGroup(const json& spec, const GroupSettings& g) {
 
   // ---- counts, answers, JSON ----------------------------------------------------------------------------
   json out = {{"session", g.session}, {"rounds", rounds}, {"stop", stop}, {"renderer", renderer},
-              {"gpu", !isSoftwareRenderer(renderer)}, {"command", "trace"}, {"yardsticks", yardsticks.size()}};
+              {"gpu", !isSoftwareRenderer(renderer)}, {"command", "trace"}, {"yardsticks", yardsticks.size()},
+              {"dispatches_per_sample", dispatches}, {"min_sample_ms", minSampleMs}};
   json results = json::object();
   const Run* control = nullptr;
   for (auto& r : runs) {
@@ -279,6 +294,8 @@ json traceGroup(const json& spec, const GroupSettings& g) {
       tr.stop = stop;
       tr.targetCiPct = g.minFrames == g.maxFrames ? 0.0 : g.targetPct;
       tr.warmup = warmup;
+      tr.minSampleMs = minSampleMs;
+      tr.dispatches = dispatches;
       uint64_t overflows = 0;
       json j = traceResult(r->cmd, *r->setup, *yardsticks[r->yardstick].tracer, *r->copies.front(), tr, renderer, overflows);
       // With copies, findings take a comparison's interval across them (per copy the paired ratio of

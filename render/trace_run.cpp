@@ -186,6 +186,8 @@ nlohmann::json traceResult(const TraceCommand& c, const TraceSetup& s, const Tra
   j["measure_stop"] = r.stop;
   j["ci_target_pct"] = r.targetCiPct > 0.0 ? nlohmann::json(r.targetCiPct) : nlohmann::json();
   j["warmup"] = r.warmup;
+  j["min_sample_ms"] = r.minSampleMs;
+  j["dispatches_per_sample"] = r.dispatches;
   j["ms"] = ms;
   j["ms_ci_low"] = orNull(ci, false);
   j["ms_ci_high"] = orNull(ci, true);

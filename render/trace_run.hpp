@@ -77,6 +77,8 @@ struct TraceRounds {
   std::string stop = "fixed";               // fixed | target | max_frames | max_seconds
   double targetCiPct = 0.0;                 // 0: none
   int warmup = 0;
+  double minSampleMs = 0.0;  // the sample length used (resolved: no -1 here)
+  int dispatches = 1;        // dispatches per timed sample; glMs are per dispatch
 };
 
 // The object `trace --json` prints. Traces once more with the counters (`gl` must be copy 0, whose

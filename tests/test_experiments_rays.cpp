@@ -63,6 +63,7 @@ TEST(ExperimentRays, ValidationNamesTheKey) {
       {"[trace]\nao_radius = 2.0\n[axes]\nscenes = 'm.off'\n", {"cfg.toml:2", "trace.ao_radius", "(0, 1]"}},
       {"[trace]\ncolor = 1\n[axes]\nscenes = 'm.off'\n", {"cfg.toml:2", "trace.color", "unknown key"}},
       {"[trace]\nembree_threads = -1\n[axes]\nscenes = 'm.off'\n", {"cfg.toml:2", "trace.embree_threads"}},
+      {"[trace]\nmin_sample_ms = -1\n[axes]\nscenes = 'm.off'\n", {"cfg.toml:2", "trace.min_sample_ms", "[0, 10000]"}},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.text);
@@ -125,6 +126,18 @@ TEST(ExperimentRays, EmbreeThreadsReachTheTraceCommandAndOnlyTraceKeys) {
   EXPECT_EQ(oneCore.runs[0].render.env.at("LP_NUM_THREADS"), "1");
   // The setting survives the plan file (runs are read back from plan.json on resume).
   EXPECT_EQ(RunSpec::fromJson(oneThread.runs[0].toJson()).render.embreeThreads, 1);
+
+  // [trace] min_sample_ms likewise: on the trace command line, in trace keys only, through plan.json;
+  // absent, no flag (the tracer's default for its renderer).
+  const ExperimentConfig sampled = parse(std::string("[trace]\nmin_sample_ms = 12.5\n") + base);
+  ASSERT_EQ(sampled.runs.size(), 2u);
+  EXPECT_NE(plain.runs[0].key, sampled.runs[0].key);
+  EXPECT_EQ(plain.runs[1].key, sampled.runs[1].key);
+  const std::string sampledLine =
+      shellQuote(renderCommandLine("/bin/bvhlab", RunRequest{sampled.runs[0], testDir() / "i.png", "", "", ""}));
+  EXPECT_NE(sampledLine.find("--min-sample-ms 12.5"), std::string::npos) << sampledLine;
+  EXPECT_EQ(line.find("--min-sample-ms"), std::string::npos) << line;
+  EXPECT_EQ(RunSpec::fromJson(sampled.runs[0].toJson()).render.minSampleMs, 12.5);
 }
 
 // A real sweep: a generated mesh, two builders, two workloads, through `bvhlab run`.
@@ -305,6 +318,22 @@ TEST(ExperimentRays, TraceGroupFileErrors) {
   for (const json& ms : copies["frame_ms_copies"]) EXPECT_EQ(ms.size(), 3u);
   EXPECT_EQ(copies["frame_ms_all"].size(), 3u);
   EXPECT_EQ(copies["program_copies"], 2);
+  // One sample length for the whole group (the largest of its runs' --min-sample-ms): dispatches per
+  // sample from the warm-up's shortest dispatch, in the group's JSON and in every run's.
+  json sampled = {{"session", "s"}, {"min_frames", 3}, {"max_frames", 3}, {"aa_control", false}, {"command", "trace"},
+                  {"runs", {{{"key", "a"}, {"args", {mesh, "--json", "--count", "64", "--min-sample-ms", "30"}}},
+                            {{"key", "b"}, {"args", {mesh, "--json", "--count", "64", "--builder", "median"}}}}}};
+  r = run("measure " + writeTemp("rays-group-file/sampled.json", sampled.dump()).string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json many = json::parse(r.out);
+  EXPECT_EQ(many["min_sample_ms"], 30.0);
+  EXPECT_GT(many["dispatches_per_sample"].get<int>(), 1) << r.out;  // 64 rays: far under 30 ms
+  for (const char* key : {"a", "b"}) {
+    EXPECT_EQ(many["runs"][key]["dispatches_per_sample"], many["dispatches_per_sample"]) << key;
+    EXPECT_EQ(many["runs"][key]["frame_ms_all"].size(), 3u) << key;
+    EXPECT_EQ(many["runs"][key]["hit_mismatches"], 0) << key;
+  }
+  EXPECT_EQ(out["dispatches_per_sample"], 1);  // the first group: llvmpipe's default, one a sample
   r = run("measure " + group(R"({"command": "draw"})").string());
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.err.find("command: \"draw\" (render | trace)"), std::string::npos) << r.err;

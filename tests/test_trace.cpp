@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -20,6 +21,7 @@
 #include "render/gl_context.hpp"
 #include "render/prepared_scene.hpp"
 #include "render/ray_tracer_gl.hpp"
+#include "render/trace_command.hpp"
 #include "render/workloads.hpp"
 #include "traversal/embree_tracer.hpp"
 #include "traversal/kernels.hpp"
@@ -241,7 +243,7 @@ TEST(TraceGlsl, EqualsTheMirrorPerRay) {
         gl.setRays(rays.rays);
         std::vector<BatchHit> hits;
         const std::vector<glm::uvec4> counts = gl.traceCounted(&hits);
-        gl.trace();
+        gl.trace(3);  // a sample of three dispatches back to back (--min-sample-ms): the same answers
         const std::vector<BatchHit> timed = gl.results();
         const glsl::Storage storage(p->packed, stackSizeFor(p->packed.depth));
         int failures = 0;
@@ -392,6 +394,54 @@ TEST(TraceCli, JsonHasTheIssueKeys) {
   r = clitest::run("trace " + input + " --rays sideways");
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.err.find("primary, shadow, specular, diffuse, ao"), std::string::npos) << r.err;
+}
+
+// How many dispatches make a timed sample: enough for --min-sample-ms after the warm-up's shortest;
+// one when none is asked for or a dispatch is long enough; bounded; a NaN or zero time never picks
+// the count by accident. The default length is the renderer's: none on llvmpipe, 10 ms on a GPU.
+TEST(TraceTiming, DispatchesPerSampleCoverTheSampleLength) {
+  EXPECT_EQ(dispatchesPerSample(0.0, 0.4), 1);
+  EXPECT_EQ(dispatchesPerSample(10.0, 0.4), 25);
+  EXPECT_EQ(dispatchesPerSample(10.0, 0.3), 34);  // ceil: a sample at least 10 ms long
+  EXPECT_EQ(dispatchesPerSample(10.0, 10.0), 1);
+  EXPECT_EQ(dispatchesPerSample(10.0, 250.0), 1);
+  EXPECT_EQ(dispatchesPerSample(10.0, 1e-6), 1000);
+  EXPECT_EQ(dispatchesPerSample(10.0, 0.0), 1000);
+  EXPECT_EQ(dispatchesPerSample(10.0, std::nan("")), 1000);
+  EXPECT_EQ(dispatchesPerSample(std::nan(""), 0.4), 1);
+  EXPECT_EQ(dispatchesPerSample(10.0, std::numeric_limits<double>::infinity()), 1);
+  EXPECT_EQ(resolveMinSampleMs(-1.0, "llvmpipe (LLVM 15.0.6, 256 bits)"), 0.0);
+  EXPECT_EQ(resolveMinSampleMs(-1.0, "NVIDIA H200/PCIe/SSE2"), kAutoMinSampleMs);
+  EXPECT_EQ(resolveMinSampleMs(3.0, "llvmpipe (LLVM 15.0.6, 256 bits)"), 3.0);
+  EXPECT_EQ(resolveMinSampleMs(0.0, "NVIDIA H200/PCIe/SSE2"), 0.0);
+}
+
+// --min-sample-ms: on llvmpipe the default is one dispatch a sample; asked for a sample much longer
+// than a dispatch of 2,000 rays, each timed round repeats the dispatch and reports its mean, with the
+// same answers (no mismatch against Embree) and the same counts.
+TEST(TraceCli, MinSampleMsRepeatsShortDispatches) {
+  const std::string input = clitest::scene("mesh.toml").string();
+  if (!fs::exists(input)) GTEST_SKIP() << "no mesh input";
+  const std::string base = "trace " + input + " --rays primary --json --count 2000 --frames 6 --warmup 1";
+  clitest::Result r = clitest::run(base);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json one = nlohmann::json::parse(r.out);
+  EXPECT_EQ(one["min_sample_ms"], 0.0);
+  EXPECT_EQ(one["dispatches_per_sample"], 1);
+  r = clitest::run(base + " --min-sample-ms 40");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json many = nlohmann::json::parse(r.out);
+  EXPECT_EQ(many["min_sample_ms"], 40.0);
+  EXPECT_GT(many["dispatches_per_sample"].get<int>(), 1);  // 2,000 rays: well under 40 ms on llvmpipe
+  EXPECT_LE(many["dispatches_per_sample"].get<int>(), 1000);
+  EXPECT_EQ(many["ms_all"].size(), 6u);
+  EXPECT_GT(many["ms"].get<double>(), 0.0);
+  EXPECT_EQ(many["hit_mismatches"], 0);
+  EXPECT_EQ(many["node_visits_per_ray"], one["node_visits_per_ray"]);
+  EXPECT_EQ(many["triangle_tests_per_ray"], one["triangle_tests_per_ray"]);
+  r = clitest::run(base + " --min-sample-ms -5");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("min-sample-ms"), std::string::npos) << r.err;
 }
 
 // --program-copies 6: six compiled copies of the kernel traced every round; the round's GLSL time is
