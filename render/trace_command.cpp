@@ -152,6 +152,8 @@ int runTrace(const TraceCommand& c) {
   if (rc.json) {
     std::cout << j.dump() << std::endl;
   } else {
+    if (dispatches > 1)  // the time below is a mean per dispatch
+      std::printf("(%d dispatches a timed sample, >= %.3g ms)\n", dispatches, minSampleMs);
     std::printf("%s: %zu %s rays, %s on %s over %s (leaf %u): %.2f ms (%.1f Mrays/s), Embree %.2f ms (%.1f Mrays/s, %u threads): "
                 "%.2fx Embree's time; %.1f node visits + %.1f triangle tests per ray; %llu hit mismatches, %llu ties\n",
                 rc.input.c_str(), y.rays().rays.size(), workloadName(s.workload), s.tracer.kernel.c_str(),

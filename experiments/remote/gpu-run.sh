@@ -1,15 +1,15 @@
 #!/bin/bash
 # One prepared GPU session, in the order that matters if time runs out: (1) the EGL path on the GPU
 # (the report scene rendered shaded and as a node-visit heatmap, with GL_RENDERER in the JSON), (2)
-# builders-gpu.toml, (3) layouts-gpu.toml with 8 s of rounds per group. Each step has a time cap; a
+# builders-gpu.toml, (3) layouts-gpu.toml with 8 s of rounds per group, (4) kernels-gpu.toml. Each step has a time cap; a
 # sweep stopped by its cap keeps its finished runs (resume with the same command). Results go to OUTDIR
 # as a few files (PNG, JSON, one .tgz per sweep); `bvhlab report DIR` makes the HTML where you unpack.
 # Run from the repository root:
-#   bash experiments/remote/gpu-run.sh BUNDLE OUTDIR [BUILDERS_SECONDS [LAYOUTS_SECONDS]]
+#   bash experiments/remote/gpu-run.sh BUNDLE OUTDIR [BUILDERS_SECONDS [LAYOUTS_SECONDS [KERNELS_SECONDS]]]
 # BUNDLE: a folder or .tar.xz from experiments/remote/bundle.py (or "installed": ./build/bvhlab as it is).
 # datasets/cache must hold the meshes and worlds (bash datasets/fetch.sh, or unpack a copy of it).
 set -u
-bundle=$1; out=$2; builders_s=${3:-230}; layouts_s=${4:-150}
+bundle=$1; out=$2; builders_s=${3:-230}; layouts_s=${4:-150}; kernels_s=${5:-110}
 t0=$(date +%s); step() { echo "[gpu-run t=$(( $(date +%s) - t0 ))s] $*"; }
 mkdir -p "$out" /tmp/gpu-run
 if [ "$bundle" = installed ]; then
@@ -46,4 +46,5 @@ sweep builders-gpu experiments/configs/builders-gpu.toml "$builders_s"
 sed 's/^max_seconds = [0-9]*/max_seconds = 8/' experiments/configs/layouts-gpu.toml > /tmp/gpu-run/layouts-gpu.toml
 sed -i 's|"\.\./\.\./datasets/|"'"$PWD"'/datasets/|' /tmp/gpu-run/layouts-gpu.toml
 sweep layouts-gpu /tmp/gpu-run/layouts-gpu.toml "$layouts_s"
+sweep kernels-gpu experiments/configs/kernels-gpu.toml "$kernels_s"
 step "done"; ls -la "$out"
