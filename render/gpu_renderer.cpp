@@ -214,19 +214,21 @@ void GpuRenderer::upload() {
 
 // Uniforms live in the program: a program shared through a ProgramCache gets this renderer's values
 // again before each of its frames (drawFrame), so renderers never see each other's settings.
-void GpuRenderer::setUniforms() {
+void GpuRenderer::setUniforms(bool samplers) {
   const SceneData& d = scene_.data;
   const PackedBvh& p = scene_.packed;
   glUseProgram(program_);
   auto seti = [&](const char* n, int v) { glUniform1i(glGetUniformLocation(program_, n), v); };
   auto setf = [&](const char* n, float v) { glUniform1f(glGetUniformLocation(program_, n), v); };
   auto set3 = [&](const char* n, glm::vec3 v) { glUniform3f(glGetUniformLocation(program_, n), v.x, v.y, v.z); };
-  seti("u_nodes", kUnitNodes);
-  seti("u_triangles", kUnitTriangles);
-  seti("u_attributes", kUnitAttributes);
-  seti("u_vertices", kUnitVertices);
-  seti("u_textures", kUnitTextures);
-  seti("u_worldMap", kUnitWorld);
+  if (samplers) {
+    seti("u_nodes", kUnitNodes);
+    seti("u_triangles", kUnitTriangles);
+    seti("u_attributes", kUnitAttributes);
+    seti("u_vertices", kUnitVertices);
+    seti("u_textures", kUnitTextures);
+    seti("u_worldMap", kUnitWorld);
+  }
   seti("u_meshPresent", p.triangles.empty() ? 0 : 1);
   const World& w = scene_.scene.world;
   seti("u_worldKind", static_cast<int>(w.kind));
@@ -275,7 +277,10 @@ void GpuRenderer::createFramebuffer() {
 }
 
 double GpuRenderer::drawFrame() {
-  if (programs_) setUniforms();  // a shared program holds the last renderer's uniforms (not timed)
+  // A shared program holds the last renderer's uniforms: this one's again (not timed). Its samplers'
+  // units are the same constants for every renderer, set once at construction: re-setting them each
+  // frame is state a driver may revalidate at the draw, inside the timed span (docs/gpu.md, section 6).
+  if (programs_) setUniforms(false);
   auto start = std::chrono::steady_clock::now();
   glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
   glViewport(0, 0, frame_.width, frame_.height);

@@ -65,7 +65,7 @@ class GpuRenderer {
  private:
   void compile();
   void upload();
-  void setUniforms();
+  void setUniforms(bool samplers = true);  // false: all but the sampler units
   void createFramebuffer();
 
   const PreparedScene& scene_;

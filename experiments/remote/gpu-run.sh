@@ -1,15 +1,17 @@
 #!/bin/bash
 # One prepared GPU session, in the order that matters if time runs out: (1) the EGL path on the GPU
 # (the report scene rendered shaded and as a node-visit heatmap, with GL_RENDERER in the JSON), (2)
-# builders-gpu.toml, (3) layouts-gpu.toml with 8 s of rounds per group, (4) kernels-gpu.toml. Each step has a time cap; a
+# builders-gpu.toml, (3) layouts-gpu.toml with 8 s of rounds per group, (4) kernels-gpu.toml, (5) the report
+# scene's 1080p frames over the 9 builders with and without shared programs (docs/gpu.md, section 6:
+# a 9-run frame group read 1.7x a 3-run one). Each step has a time cap; a
 # sweep stopped by its cap keeps its finished runs (resume with the same command). Results go to OUTDIR
 # as a few files (PNG, JSON, one .tgz per sweep); `bvhlab report DIR` makes the HTML where you unpack.
 # Run from the repository root:
-#   bash experiments/remote/gpu-run.sh BUNDLE OUTDIR [BUILDERS_SECONDS [LAYOUTS_SECONDS [KERNELS_SECONDS]]]
+#   bash experiments/remote/gpu-run.sh BUNDLE OUTDIR [BUILDERS_S [LAYOUTS_S [KERNELS_S [SHARING_S]]]]
 # BUNDLE: a folder or .tar.xz from experiments/remote/bundle.py (or "installed": ./build/bvhlab as it is).
 # datasets/cache must hold the meshes and worlds (bash datasets/fetch.sh, or unpack a copy of it).
 set -u
-bundle=$1; out=$2; builders_s=${3:-230}; layouts_s=${4:-150}; kernels_s=${5:-110}
+bundle=$1; out=$2; builders_s=${3:-230}; layouts_s=${4:-150}; kernels_s=${5:-110}; sharing_s=${6:-60}
 t0=$(date +%s); step() { echo "[gpu-run t=$(( $(date +%s) - t0 ))s] $*"; }
 mkdir -p "$out" /tmp/gpu-run
 if [ "$bundle" = installed ]; then
@@ -47,4 +49,15 @@ sed 's/^max_seconds = [0-9]*/max_seconds = 8/' experiments/configs/layouts-gpu.t
 sed -i 's|"\.\./\.\./datasets/|"'"$PWD"'/datasets/|' /tmp/gpu-run/layouts-gpu.toml
 sweep layouts-gpu /tmp/gpu-run/layouts-gpu.toml "$layouts_s"
 sweep kernels-gpu experiments/configs/kernels-gpu.toml "$kernels_s"
+# 5: builders-gpu.toml's settings, only the report scene's frames, programs shared (the default) and not.
+awk '/^\[\[sweep\]\]/{n++} n<1' experiments/configs/builders-gpu.toml > /tmp/gpu-run/shared.toml
+printf '[[sweep]]\nname = "frames"\nscenes = { file = "%s/datasets/scenes/report.toml", name = "report" }\n' "$PWD" >> /tmp/gpu-run/shared.toml
+sed 's/^\[measure\]/[measure]\nshare_programs = false/' /tmp/gpu-run/shared.toml > /tmp/gpu-run/unshared.toml
+step "sharing (at most $sharing_s s each)"
+mkdir -p /tmp/gpu-run/sharing
+for s in shared unshared; do
+  timeout "$sharing_s" "$B" run /tmp/gpu-run/$s.toml --out /tmp/gpu-run/sharing/$s --no-report > /tmp/gpu-run/sharing/$s.log 2>&1
+  echo "$s rc=$?"; grep 'sah-binned' /tmp/gpu-run/sharing/$s.log | tail -1
+done
+tar -C /tmp/gpu-run -czf "$out/sharing-gpu.tgz" --exclude=images sharing
 step "done"; ls -la "$out"
