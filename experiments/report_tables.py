@@ -187,6 +187,18 @@ def section_provenance(page, data):
         met = sum(1 for r in data.sweep if r.get("ci_target_met") is True)
         items.insert(3, ("frames", "measurement stopped: %s; %d of %d runs met the interval target" % (
             ", ".join("%s %d" % (k, v) for k, v in sorted(stops.items())), met, len(data.sweep))))
+    # Trace runs on a GPU time each sample as several dispatches back to back ([trace] min_sample_ms):
+    # said here, since every GLSL time above is then a mean per dispatch.
+    samples = {}
+    for r in data.traced:
+        k = r.get("dispatches_per_sample")
+        if isinstance(k, (int, float)) and k > 1:
+            key = (int(k), r.get("min_sample_ms"))
+            samples[key] = samples.get(key, 0) + 1
+    if samples:
+        items.insert(3, ("trace samples", "; ".join(
+            "%d dispatches a timed sample (at least %s ms): %d runs" % (k, fmt(ms), n)
+            for (k, ms), n in sorted(samples.items())) + "; each GLSL time is the mean per dispatch"))
     page.table("provenance-data", ["", ""], [["<b>%s</b>" % k, v] for k, v in items])
     plan = os.path.join(data.root, "plan.json")
     if os.path.isfile(plan):
