@@ -43,7 +43,8 @@ class GlRayTracer {
   std::vector<glm::uvec4> traceCounted(std::vector<BatchHit>* hits = nullptr);
 
  private:
-  void issue(unsigned program);
+  void issue(unsigned program);  // binds the program and buffers, dispatches (not waited for)
+  unsigned groups() const;       // work groups of one dispatch
   double dispatch(unsigned program);
   RayTracerOptions options_;
   unsigned timed_ = 0, counted_ = 0;

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <limits>
@@ -53,20 +52,6 @@ void addTraceOptions(CLI::App& app, TraceCommand& c, RenderCliText& text) {
   app.add_option("--target", text.target, "camera target x,y,z");
   app.add_option("--up", text.up, "camera up x,y,z");
   app.add_option("--fov", rc.fov, "vertical field of view in degrees");
-}
-
-double resolveMinSampleMs(double requested, const std::string& renderer) {
-  if (requested >= 0.0) return requested;
-  return isSoftwareRenderer(renderer) ? 0.0 : kAutoMinSampleMs;
-}
-
-int dispatchesPerSample(double minSampleMs, double shortestMs) {
-  // A non-finite or non-positive time (a timer that did not move) asks for the most: a sample then
-  // still has a length to measure. NaN fails every comparison below, so it never picks a branch.
-  if (!(minSampleMs > 0.0)) return 1;
-  if (shortestMs >= minSampleMs) return 1;
-  if (!(shortestMs > 0.0)) return 1000;
-  return int(std::min(1000.0, std::ceil(minSampleMs / shortestMs)));
 }
 
 TraceCommand parseTraceArgs(const std::vector<std::string>& args) {

@@ -30,18 +30,9 @@ struct TraceCommand {
   // A timed sample lasts at least this long: a dispatch shorter than that (a GPU, where one is shorter
   // than the clocks' ramp-up and glFinish's round trip) is repeated back to back after one untimed
   // one, as many times as the warm-up's shortest time says, and the sample is their mean.
-  // < 0: kAutoMinSampleMs on a GPU, 0 (one dispatch a sample) on a software renderer.
+  // < 0: kAutoMinSampleMs (render/trace_run.hpp) on a GPU, 0 (one dispatch a sample) on a software renderer.
   double minSampleMs = -1.0;
 };
-
-// The default sample length on a GPU: 10 ms is 20 dispatches of the bunny's 1M primary rays on an
-// H200 (0.4-0.5 ms each), so the untimed leading dispatch and the one glFinish are small beside it.
-constexpr double kAutoMinSampleMs = 10.0;
-// The sample length a run uses: `requested` when >= 0, else the default for the renderer.
-double resolveMinSampleMs(double requested, const std::string& renderer);
-// Dispatches per timed sample for a sample of at least `minSampleMs` when one takes `shortestMs`
-// (the warm-up's shortest); 1 when minSampleMs is 0 or a dispatch is already that long; at most 1000.
-int dispatchesPerSample(double minSampleMs, double shortestMs);
 
 void addTraceOptions(CLI::App& app, TraceCommand& cmd, RenderCliText& text);
 // Prints one line (or the JSON object with --json). Returns the process exit code.

@@ -122,6 +122,21 @@ bool TraceYardstick::sameAs(const TraceYardstick& o) const {
   return rays_.rays.empty() || std::memcmp(rays_.rays.data(), o.rays_.rays.data(), rays_.rays.size() * sizeof(BatchRay)) == 0;
 }
 
+double resolveMinSampleMs(double requested, const std::string& renderer) {
+  if (requested >= 0.0) return requested;
+  return isSoftwareRenderer(renderer) ? 0.0 : kAutoMinSampleMs;
+}
+
+int dispatchesPerSample(double minSampleMs, double shortestMs) {
+  // A zero, negative or NaN time (a timer that did not move) asks for the most, so a sample still
+  // has a length to measure; an infinite one (nothing timed) for one. NaN fails every comparison
+  // below, so it never picks a branch by accident.
+  if (!(minSampleMs > 0.0)) return 1;
+  if (shortestMs >= minSampleMs) return 1;
+  if (!(shortestMs > 0.0)) return 1000;
+  return int(std::min(1000.0, std::ceil(minSampleMs / shortestMs)));
+}
+
 nlohmann::json traceResult(const TraceCommand& c, const TraceSetup& s, const TraceYardstick& y, GlRayTracer& gl,
                            const TraceRounds& r, const std::string& renderer, uint64_t& overflows) {
   const std::vector<BatchHit> glHits = gl.results();

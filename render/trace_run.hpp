@@ -69,6 +69,15 @@ class TraceYardstick {
   std::vector<BatchHit> hits_;
 };
 
+// The default sample length on a GPU: 10 ms is 20 dispatches of the bunny's 1M primary rays on an
+// H200 (0.4-0.5 ms each), so the untimed leading dispatch and the one glFinish are small beside it.
+constexpr double kAutoMinSampleMs = 10.0;
+// The sample length a run uses: `requested` when >= 0, else the default for the renderer.
+double resolveMinSampleMs(double requested, const std::string& renderer);
+// Dispatches per timed sample for a sample of at least `minSampleMs` when one takes `shortestMs`
+// (the warm-up's shortest); 1 when minSampleMs is 0 or a dispatch is already that long; at most 1000.
+int dispatchesPerSample(double minSampleMs, double shortestMs);
+
 // What a run measured: round i gave glMs[i] (with program copies, the median over them; each copy's
 // own in copyMs) and, for its yardstick, embreeMs[i].
 struct TraceRounds {

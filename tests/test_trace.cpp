@@ -21,7 +21,7 @@
 #include "render/gl_context.hpp"
 #include "render/prepared_scene.hpp"
 #include "render/ray_tracer_gl.hpp"
-#include "render/trace_command.hpp"
+#include "render/trace_run.hpp"
 #include "render/workloads.hpp"
 #include "traversal/embree_tracer.hpp"
 #include "traversal/kernels.hpp"
