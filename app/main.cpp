@@ -36,7 +36,7 @@ struct BuildCommand {
   std::string mesh, builder = "sah-binned", optimize, layout = kDefaultLayout, triangles = kDefaultTriangleFormat;
   int leafSize = 4, bins = 0, plocRadius = 16, plocTopDown = 0, mortonSizeBits = 0;
   std::string mortonGrid = "cube";
-  float sbvhAlpha = 1e-5f;
+  float sbvhAlpha = 1e-5f, sbvhBudget = 2.0f;
   bool json = false;
 };
 
@@ -48,6 +48,7 @@ int buildCommand(const BuildCommand& c) {
   asRender.bins = c.bins;
   asRender.optimize = c.optimize;
   asRender.sbvhAlpha = c.sbvhAlpha;
+  asRender.sbvhBudget = c.sbvhBudget;
   asRender.plocRadius = c.plocRadius;
   asRender.plocTopDown = c.plocTopDown;
   asRender.mortonSizeBits = c.mortonSizeBits;
@@ -74,6 +75,8 @@ int buildCommand(const BuildCommand& c) {
                         {"optimize", c.optimize.empty() ? nlohmann::json() : nlohmann::json(c.optimize)},
                         {"leaf_size", stats.leafSize},  // what the leaves were limited to
                         {"leaf_size_requested", c.leafSize},
+                        {"sbvh_alpha", options.sbvhAlpha},
+                        {"sbvh_budget", options.sbvhReferenceBudget},
                         {"ploc_radius", options.plocRadius},
                         {"ploc_top_down", options.plocTopDown},
                         {"morton_size_bits", options.mortonSizeBits},
@@ -143,6 +146,7 @@ int main(int argc, char** argv) {
   build->add_option("--bins", bc.bins, "bins for sah-binned and sbvh (0 = default)");
   build->add_option("--optimize", bc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
   build->add_option("--sbvh-alpha", bc.sbvhAlpha, "sbvh: overlap threshold for spatial splits");
+  build->add_option("--sbvh-budget", bc.sbvhBudget, "sbvh: at most this many leaf references per primitive, >= 1 (1: no spatial splits)");
   build->add_option("--ploc-radius", bc.plocRadius, "ploc: nearest-neighbour search radius");
   build->add_option("--ploc-top-down", bc.plocTopDown,
                     "ploc: split the last n/F clusters top-down by binned SAH, 0..1024 (0 = cluster to the end)");

@@ -95,6 +95,40 @@ struct Step {
   Task child[2];
 };
 
+// The slabs of one axis of a spatial-split search: planes[0..bins] (non-decreasing floats, the outer
+// ones the node's faces) and a first guess of the slab holding a coordinate, from the planes' uniform
+// spacing. Lookups walk from the guess to the answer, comparing with the planes themselves, so they
+// return exactly what a binary search over the planes returns (the guess only decides where the walk
+// starts: the planes are clamped and rounded, so it can be off by one); a guess is nearly always
+// right, where a binary search over 32 planes costs five hard-to-predict branches, and a node's
+// references take up to eight lookups per axis.
+struct Slabs {
+  const float* planes;
+  uint32_t bins;
+  double lo, scale;  // scale = bins / (hi - lo), finite: hi > lo are floats, their difference is >= 2^-149
+
+  // floor((x - lo) * scale) clamped to [from, to]. x, lo and scale are finite, so g is never NaN.
+  uint32_t guess(float x, uint32_t from, uint32_t to) const {
+    const double g = (double(x) - lo) * scale;
+    return g <= double(from) ? from : g >= double(to) ? to : uint32_t(g);
+  }
+  // The largest j in [from, to] with planes[j] <= x, given planes[from] <= x: upper_bound over
+  // planes[from..to] minus one.
+  uint32_t lastAtMost(float x, uint32_t from, uint32_t to) const {
+    uint32_t j = guess(x, from, to);
+    while (j > from && planes[j] > x) --j;
+    while (j < to && planes[j + 1] <= x) ++j;
+    return j;
+  }
+  // The number of planes among planes[1..bins-1] below x: lower_bound over them.
+  uint32_t countBelow(float x) const {
+    uint32_t k = guess(x, 0, bins - 1);
+    while (k > 0 && !(planes[k] < x)) --k;
+    while (k + 1 < bins && planes[k + 1] < x) ++k;
+    return k;
+  }
+};
+
 // a's area with b added, without building the union box twice in the callers.
 inline float unionArea(const Aabb& a, const Aabb& b) {
   Aabb u = a;
@@ -288,7 +322,8 @@ class Stepper {
   // estimate the SAH of the candidate planes, so the crossings are computed plainly (rounded to
   // nearest): the split itself clips with clip.hpp's conservative bounds. Each plane's crossings are
   // computed once and grow both slabs they bound.
-  void binStraddler(const Ref& r, int axis, const float* planes, uint32_t first, uint32_t last) {
+  void binStraddler(const Ref& r, int axis, const Slabs& slabs, uint32_t first, uint32_t last) {
+    const float* planes = slabs.planes;
     if (!s_.triangles) {
       for (uint32_t b = first; b <= last; ++b) {
         const Aabb part = clip::clipBox(r.box, axis, planes[b], planes[b + 1]);
@@ -302,7 +337,7 @@ class Stepper {
     for (const glm::vec3& p : v) {
       // The slabs holding the vertex (two when it lies on a plane), within [first, last].
       if (p[axis] < planes[first] || p[axis] > planes[last + 1]) continue;
-      const uint32_t b0 = uint32_t(std::upper_bound(planes + first, planes + last + 1, p[axis]) - planes) - 1;
+      const uint32_t b0 = slabs.lastAtMost(p[axis], first, last);
       piece[b0].grow(p);
       if (b0 > first && planes[b0] == p[axis]) piece[b0 - 1].grow(p);
     }
@@ -312,7 +347,7 @@ class Stepper {
       const float lo = std::min(p[axis], q[axis]), hi = std::max(p[axis], q[axis]);
       // Planes strictly between the edge's ends, among the planes first .. last + 1 of the slabs
       // the reference spans.
-      uint32_t j = uint32_t(std::upper_bound(planes + first, planes + last + 2, lo) - planes);
+      uint32_t j = planes[first] > lo ? first : slabs.lastAtMost(lo, first, last + 1) + 1;
       const glm::dvec3 dp(p), slope = (glm::dvec3(q) - dp) / (double(q[axis]) - double(p[axis]));
       for (; j <= last + 1 && planes[j] < hi; ++j) {
         glm::vec3 x(dp + (double(planes[j]) - dp[axis]) * slope);
@@ -349,20 +384,21 @@ class Stepper {
       for (uint32_t b = 1; b < bins; ++b)
         planes[b] = std::clamp(float(lo + (hi - lo) * double(b) / double(bins)), planes[b - 1], box.max[a]);
       for (uint32_t b = 0; b < bins; ++b) boxes_[b] = Aabb{}, enter_[b] = 0, exit_[b] = 0;
+      const Slabs slabs{planes, bins, lo, double(bins) / (hi - lo)};
 
       for (const Ref& r : refs) {
         // last: the first slab whose upper plane reaches the reference's max; first: the last slab
         // up to `last` whose lower plane is at or below its min. (A reference flat on a plane
         // belongs to the slab below it, as the partition's "max <= plane goes left" rule says.)
-        const uint32_t last = uint32_t(std::lower_bound(planes + 1, planes + bins, r.box.max[a]) - (planes + 1));
-        const uint32_t first = uint32_t(std::upper_bound(planes, planes + last + 1, r.box.min[a]) - planes) - 1;
+        const uint32_t last = slabs.countBelow(r.box.max[a]);
+        const uint32_t first = slabs.lastAtMost(r.box.min[a], 0, last);
         ++enter_[first];
         ++exit_[last];
         if (first == last) {
           boxes_[first].grow(r.box);
           continue;
         }
-        binStraddler(r, a, planes, first, last);
+        binStraddler(r, a, slabs, first, last);
       }
 
       Aabb right;

@@ -239,12 +239,16 @@ class ConfigReader {
         const double a = number(v, sub);
         if (!(a >= 0.0 && a <= 1.0)) fail(v.source(), sub, "must be in 0..1 (a fraction of the root's area)");
         value["sbvh_alpha"] = a;
+      } else if (k == "sbvh_budget") {
+        const double b = number(v, sub);
+        if (!(b >= 1.0 && std::isfinite(b))) fail(v.source(), sub, "must be a finite number >= 1 (leaf references per primitive)");
+        value["sbvh_budget"] = b;
       } else if (k == "ploc_radius") value["ploc_radius"] = integer(v, sub, 1, 1024);
       else if (k == "ploc_top_down") value["ploc_top_down"] = integer(v, sub, 0, kMaxPlocTopDown);
       else if (k == "morton_size_bits") value["morton_size_bits"] = integer(v, sub, 0, kMaxMortonSizeBits);
       else if (k == "morton_grid") value["morton_grid"] = oneOf(v, sub, mortonGridNames(), "Morton grid");
       else fail(k.source(), sub,
-                "unknown key; a builder table has name, bins, optimize, sbvh_alpha, ploc_radius, ploc_top_down, morton_size_bits, "
+                "unknown key; a builder table has name, bins, optimize, sbvh_alpha, sbvh_budget, ploc_radius, ploc_top_down, morton_size_bits, "
                 "morton_grid, label");
     }
     if (!nameNode) fail(node.source(), key, "a builder table needs `name`");
@@ -253,6 +257,7 @@ class ConfigReader {
       label = name;
       if (value.contains("bins")) label += "[bins=" + std::to_string(value["bins"].get<int64_t>()) + "]";
       if (value.contains("sbvh_alpha")) label += "[alpha=" + value["sbvh_alpha"].dump() + "]";
+      if (value.contains("sbvh_budget")) label += "[budget=" + value["sbvh_budget"].dump() + "]";
       if (value.contains("ploc_radius")) label += "[radius=" + std::to_string(value["ploc_radius"].get<int64_t>()) + "]";
       if (value.contains("ploc_top_down"))
         label += "[top-down=" + std::to_string(value["ploc_top_down"].get<int64_t>()) + "]";

@@ -104,6 +104,8 @@ std::vector<std::string> renderCommandLine(const fs::path& binary, const RunRequ
       if (value.value.contains("optimize")) argv.insert(argv.end(), {"--optimize", scalarFlag(value.value["optimize"])});
       if (value.value.contains("sbvh_alpha"))
         argv.insert(argv.end(), {"--sbvh-alpha", number(value.value["sbvh_alpha"].get<double>())});
+      if (value.value.contains("sbvh_budget"))
+        argv.insert(argv.end(), {"--sbvh-budget", number(value.value["sbvh_budget"].get<double>())});
       if (value.value.contains("ploc_radius"))
         argv.insert(argv.end(), {"--ploc-radius", scalarFlag(value.value["ploc_radius"])});
       if (value.value.contains("ploc_top_down"))

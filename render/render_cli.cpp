@@ -38,6 +38,7 @@ void addTreeOptions(CLI::App& app, RenderCommand& rc) {
   app.add_option("--bins", rc.bins, "bins for sah-binned and sbvh (0 = default)");
   app.add_option("--optimize", rc.optimize, "post-pass after the builder: reinsert (Bittner et al. 2013)");
   app.add_option("--sbvh-alpha", rc.sbvhAlpha, "sbvh: overlap threshold for spatial splits (fraction of the root area)");
+  app.add_option("--sbvh-budget", rc.sbvhBudget, "sbvh: at most this many leaf references per primitive, >= 1 (1: no spatial splits)");
   app.add_option("--ploc-radius", rc.plocRadius, "ploc: nearest-neighbour search radius");
   app.add_option("--ploc-top-down", rc.plocTopDown,
                  "ploc: split the last n/F clusters top-down by binned SAH, 0..1024 (0 = cluster to the end)");

@@ -25,6 +25,7 @@ struct RenderCommand {
   int bins = 0;
   std::string optimize;    // post-pass after the builder: "" | "reinsert"
   float sbvhAlpha = 1e-5f; // sbvh: spatial splits only where object-split children overlap more than this
+  float sbvhBudget = 2.0f; // sbvh: at most this many leaf references per primitive (BuildOptions::sbvhReferenceBudget)
   int plocRadius = 16;     // ploc: nearest-neighbour search radius
   int plocTopDown = 0;     // ploc: the last n / F clusters split top-down by binned SAH (0 = cluster to the end)
   int mortonSizeBits = 0;  // ploc, lbvh: primitive-size bits in the Morton codes (builders/morton.hpp)

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include <glad/gl.h>
 
@@ -36,6 +37,8 @@ BuildOptions renderBuildOptions(const RenderCommand& cmd, OptionReview* review) 
   if (cmd.bins < 0) throw std::invalid_argument("--bins must be >= 0 (0 = the builder's default)");
   if (!(cmd.sbvhAlpha >= 0.0f && cmd.sbvhAlpha <= 1.0f))
     throw std::invalid_argument("--sbvh-alpha must be in 0..1 (a fraction of the root's area)");
+  if (!(cmd.sbvhBudget >= 1.0f && std::isfinite(cmd.sbvhBudget)))
+    throw std::invalid_argument("--sbvh-budget must be a finite number >= 1 (leaf references per primitive)");
   if (cmd.plocRadius < 1 || cmd.plocRadius > int(kMaxPlocRadius))
     throw std::invalid_argument("--ploc-radius must be in 1.." + std::to_string(kMaxPlocRadius));
   if (cmd.plocTopDown < 0 || cmd.plocTopDown > int(kMaxPlocTopDown))
@@ -49,6 +52,7 @@ BuildOptions renderBuildOptions(const RenderCommand& cmd, OptionReview* review) 
   b.bins = uint32_t(cmd.bins);
   b.optimize = cmd.optimize;
   b.sbvhAlpha = cmd.sbvhAlpha;
+  b.sbvhReferenceBudget = cmd.sbvhBudget;
   b.plocRadius = uint32_t(cmd.plocRadius);
   b.plocTopDown = uint32_t(cmd.plocTopDown);
   b.mortonSizeBits = uint32_t(cmd.mortonSizeBits);
@@ -128,7 +132,7 @@ std::string treeKey(const RenderCommand& c) {
     key += text;
   };
   for (const std::string& f : {c.input, c.layout, c.triangles, c.builder, std::to_string(c.leafSize), std::to_string(c.bins), c.optimize,
-                               std::to_string(c.sbvhAlpha), std::to_string(c.plocRadius), std::to_string(c.plocTopDown), std::to_string(c.mortonSizeBits), c.mortonGrid, c.cameraPath})
+                               std::to_string(c.sbvhAlpha), std::to_string(c.sbvhBudget), std::to_string(c.plocRadius), std::to_string(c.plocTopDown), std::to_string(c.mortonSizeBits), c.mortonGrid, c.cameraPath})
     field(f);
   for (const auto& v : {c.width, c.height, c.depth}) field(v ? std::to_string(*v) : "-");
   for (const auto& v : {c.eye, c.target}) field(v ? vecText(*v) : "-");

@@ -1,6 +1,7 @@
 // What the command line says about the options a user gives: a directory as input, --bins and
 // --leaf-size against what the builder does with them, the path `render` wrote, --help's defaults,
 // and whether a render ran on a GPU (EGL falls back to Mesa's software renderer without one).
+#include <cmath>
 #include <sstream>
 #include <string>
 
@@ -120,6 +121,51 @@ TEST(CliOptions, PlocTopDownIsCheckedReportedAndWarnedAbout) {
   EXPECT_NE(r.err.find("warning: lbvh ignores --ploc-top-down"), std::string::npos) << r.err;
 }
 
+TEST(CliOptions, SbvhBudgetIsCheckedReportedAndWarnedAbout) {
+  // Below 1 or not a finite number: refused before the mesh is read, naming the flag.
+  for (const std::string command : {"build --mesh", "render", "trace"}) {
+    for (const char* budget : {"0.5", "0", "-2", "nan", "inf"}) {
+      Result r = run(command + " no_such_mesh.off --builder sbvh --sbvh-budget " + budget);
+      EXPECT_NE(r.code, 0) << command << " " << budget;
+      EXPECT_NE(r.err.find("--sbvh-budget"), std::string::npos) << command << " " << budget << ": " << r.err;
+      EXPECT_EQ(r.err.find("no_such_mesh"), std::string::npos) << command << " " << budget << ": " << r.err;
+    }
+  }
+  Result r = run("build --mesh no_such_mesh.off --builder sbvh --sbvh-budget 0.5");
+  EXPECT_NE(r.err.find("--sbvh-budget must be a finite number >= 1"), std::string::npos) << r.err;
+  // Reaches the builder: 64 long needles crossing at one point, where spatial splits pay, get extra
+  // references within the default budget (2x) and none with a budget of 1; the JSON says what was used.
+  std::ostringstream off;
+  off << "OFF\n192 64 0\n";
+  for (int k = 0; k < 64; ++k) {
+    const double a = 3.14159265358979 * k / 64, c = std::cos(a), s = std::sin(a);
+    off << -10 * c << " " << -10 * s << " 0\n" << 10 * c << " " << 10 * s << " 0\n"
+        << 10 * c - 0.1 * s << " " << 10 * s + 0.1 * c << " 0.2\n";
+  }
+  for (int k = 0; k < 64; ++k) off << "3 " << 3 * k << " " << 3 * k + 1 << " " << 3 * k + 2 << "\n";
+  const fs::path needles = writeTemp("needles.off", off.str());
+  r = run("build --mesh " + needles.string() + " --builder sbvh --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  json j = json::parse(r.out);
+  EXPECT_EQ(j["sbvh_budget"], 2.0);
+  EXPECT_FLOAT_EQ(j["sbvh_alpha"].get<float>(), 1e-5f);
+  EXPECT_EQ(j["primitives"], 64);
+  EXPECT_GT(j["references"].get<int>(), 64);
+  EXPECT_LE(j["references"].get<int>(), 128);
+  const double sahWithSplits = j["sah_cost"];
+  r = run("build --mesh " + needles.string() + " --builder sbvh --sbvh-budget 1 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+  j = json::parse(r.out);
+  EXPECT_EQ(j["sbvh_budget"], 1.0);
+  EXPECT_EQ(j["references"], 64);
+  EXPECT_GT(j["sah_cost"].get<double>(), sahWithSplits);
+  const fs::path mesh = gridMesh();
+  r = run("build --mesh " + mesh.string() + " --builder median --sbvh-budget 3 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: median ignores --sbvh-budget"), std::string::npos) << r.err;
+}
+
 TEST(CliOptions, IgnoredBinsAndCappedLeavesWarnAndTheJsonSaysWhatWasUsed) {
   const fs::path mesh = gridMesh();
   Result r = run("build --mesh " + mesh.string() + " --builder median --bins 16 --json");
@@ -174,6 +220,10 @@ TEST(CliOptions, ReviewNamesTheOptionsEachBuilderIgnores) {
   EXPECT_EQ(bvhlab::reviewBuildOptions("lbvh", o).leafSize, 200u);
   o.bins = 1;
   EXPECT_THROW(bvhlab::reviewBuildOptions("lbvh", o), std::invalid_argument);
+  o = {};
+  o.sbvhReferenceBudget = 3.0f;  // read by sbvh only
+  EXPECT_TRUE(bvhlab::reviewBuildOptions("sbvh", o).warnings.empty());
+  EXPECT_EQ(bvhlab::reviewBuildOptions("sah-binned", o).warnings.size(), 1u);
 }
 
 TEST(CliOptions, RenderSaysWhatItWrote) {

@@ -324,6 +324,34 @@ builders = [{ name = "ploc", ploc_top_down = 4 }, "ploc"]
   }
 }
 
+// A builder table's sbvh_budget reaches the command line and the label; below 1 is refused with the
+// file, line and key.
+TEST_F(Experiments, BuilderTableCarriesSbvhBudget) {
+  writeText(root / "m.off", "OFF\n0 0 0\n");
+  const ExperimentConfig cfg = parse(R"(
+[axes]
+scenes = "m.off"
+builders = [{ name = "sbvh", sbvh_budget = 1.5 }, { name = "sbvh", sbvh_alpha = 0.001, sbvh_budget = 4 }, "sbvh"]
+)");
+  ASSERT_EQ(cfg.runs.size(), 3u);
+  const std::string line = shellQuote(renderCommandLine("/bin/bvhlab", RunRequest{cfg.runs[0], root / "i.png", root / "v.png", "", ""}));
+  EXPECT_NE(line.find("--builder sbvh --sbvh-budget 1.5"), std::string::npos) << line;
+  EXPECT_EQ(cfg.runs[0].axis("builder")->label, "sbvh[budget=1.5]");
+  EXPECT_EQ(cfg.runs[1].axis("builder")->label, "sbvh[alpha=0.001][budget=4.0]");
+  EXPECT_EQ(cfg.runs[2].axis("builder")->label, "sbvh");
+  const std::string plain = shellQuote(renderCommandLine("/bin/bvhlab", RunRequest{cfg.runs[2], root / "i.png", root / "v.png", "", ""}));
+  EXPECT_EQ(plain.find("--sbvh-budget"), std::string::npos) << plain;
+  for (const char* bad : {"0.5", "nan", "inf"}) {
+    try {
+      parse(std::string("[axes]\nscenes = 'm.off'\nbuilders = { name = 'sbvh', sbvh_budget = ") + bad + " }\n");
+      ADD_FAILURE() << bad << ": expected an InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("cfg.toml:3"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("sbvh_budget"), std::string::npos) << e.what();
+    }
+  }
+}
+
 // [render] camera_path: resolved against the config's folder, validated at load, part of the key,
 // passed to the renderer as --camera-path.
 TEST_F(Experiments, CameraPathIsResolvedKeyedAndPassedToTheRenderer) {

@@ -30,7 +30,7 @@ using nlohmann::json;
 namespace bvhlab::experiments_test {
 
 inline const fs::path kFixtures = fs::path(BVHLAB_SOURCE_DIR) / "tests" / "fixtures" / "experiments";
-inline const KnownNames kNames{{"median", "sah-binned", "sah-sweep", "embree", "ploc"}, {"stack-ordered", "stackless"}};
+inline const KnownNames kNames{{"median", "sah-binned", "sah-sweep", "sbvh", "embree", "ploc"}, {"stack-ordered", "stackless"}};
 
 inline void writeText(const fs::path& p, const std::string& text) {
   fs::create_directories(p.parent_path());

@@ -34,6 +34,12 @@
 // timing: SAH, EPO (builders/epo.hpp) and the ray cost (node visits + triangle tests per ray, Ct =
 // Ci = 1) of closest-hit rays traversed front to back on the CPU here, against the registered
 // `embree` builder's tree (MEDIUM, the same build embree-raw times).
+// --curve=sbvh runs sbvh's accuracy knobs instead (experiments/bench/builders_report.hpp kSbvhCurve):
+// the overlap threshold alpha from 1 (no spatial split can pass it: the control) to 0 (every node
+// tries spatial splits) at the default budget, and the reference budget 1.1..4 at the default alpha,
+// on the bunny, the armadillo, the ship and the interior, one thread, beside sah-binned: time paired
+// against sah-binned's and against sbvh's defaults, and per tree its leaf references, SAH, EPO and
+// ray cost (experiments/bench/ray_cost.hpp) against sah-binned's tree.
 //
 // --processes=K (K >= 2) runs the same benchmarks in K processes one after another (each with its own
 // interleaving) and prints every paired ratio combined across them: the median of the processes'
@@ -47,7 +53,7 @@
 // block fresh, faulted in per build (a one-off build in a new process); adaptive: glibc's default,
 // whose choice between the two depends on the process's history (this program's default before
 // 4 December 2026). Printed in the output's first line; each table gives the page faults per build.
-//   bench_builders [--reps=N] [--curve] [--ploc-top-down=F] [--ploc-radius=R] [--processes=K]
+//   bench_builders [--reps=N] [--curve[=bins|sbvh]] [--ploc-top-down=F] [--ploc-radius=R] [--processes=K]
 //                  [--heap=P] [--paired-out=FILE] [--benchmark_filter=...]   (meshes: `bash datasets/fetch.sh`)
 #include <algorithm>
 #include <cmath>
@@ -79,12 +85,14 @@
 #include "experiments/bench/builders_report.hpp"
 #include "experiments/bench/embree_raw.hpp"
 #include "experiments/bench/heap_policy.hpp"
+#include "experiments/bench/ray_cost.hpp"
 #include "experiments/process.hpp"
 
 namespace {
 
 using namespace bvhlab;
 using bvhlab::testing::PrimitiveSet;
+using bench::Ray, bench::curveRays, bench::rayCost;
 using bench::RawNode, bench::rawCreateNode, bench::rawSetChildren, bench::rawSetBounds, bench::rawCreateLeaf, bench::rawStats;
 
 constexpr uint32_t kLeafSize = 4;
@@ -241,136 +249,59 @@ void buildWith(benchmark::State& state, std::string builder, MeshFn mesh, uint32
   state.counters["nodes"] = double(stats.nodes);
 }
 
-// ---- the bins curve (--curve): tree quality beside the time --------------------------------------
-
-// Closest-hit rays traversed front to back over the Bvh itself: a node counts as visited when it is
-// entered (its box was hit closer than the closest hit so far when it is popped); every triangle of
-// a visited leaf counts as tested. Rays: from random points on the sphere around the scene (radius
-// its diagonal) to random points in its box, so most rays hit. The same rays for every tree.
-struct Ray {
-  glm::vec3 origin, dir, invDir;
-};
-
-std::vector<Ray> curveRays(const PrimitiveSet& set, size_t count) {
-  Aabb bounds;
-  for (const Aabb& b : set.boxes) bounds.grow(b);
-  const glm::vec3 centre = 0.5f * (bounds.min + bounds.max), extent = bounds.max - bounds.min;
-  const float radius = glm::length(extent);
-  std::mt19937 rng(15);
-  std::uniform_real_distribution<float> u(0.0f, 1.0f), n(-1.0f, 1.0f);
-  std::vector<Ray> rays;
-  while (rays.size() < count) {
-    const glm::vec3 p(n(rng), n(rng), n(rng));
-    if (!(glm::dot(p, p) > 1e-6f && glm::dot(p, p) <= 1.0f)) continue;  // uniform direction by rejection
-    const glm::vec3 origin = centre + radius * glm::normalize(p);
-    const glm::vec3 target = bounds.min + glm::vec3(u(rng), u(rng), u(rng)) * extent;
-    glm::vec3 dir = glm::normalize(target - origin);
-    // No zero components: 1 / 0 and then 0 * inf would make the slab test NaN for origins on a slab.
-    // 1e-20 is far below any direction component that changes a float slab distance in these scenes.
-    for (int k = 0; k < 3; ++k)
-      if (std::fabs(dir[k]) < 1e-20f) dir[k] = 1e-20f;
-    rays.push_back({origin, dir, 1.0f / dir});
-  }
-  return rays;
-}
-
-// Entry distance of the ray into the box, or +inf when it misses it or enters it beyond tMax.
-float entry(const Ray& r, const Aabb& b, float tMax) {
-  const glm::vec3 t0 = (b.min - r.origin) * r.invDir, t1 = (b.max - r.origin) * r.invDir;
-  const glm::vec3 lo = glm::min(t0, t1), hi = glm::max(t0, t1);
-  const float tNear = std::max({lo.x, lo.y, lo.z, 0.0f}), tFar = std::min({hi.x, hi.y, hi.z, tMax});
-  return tNear <= tFar ? tNear : INFINITY;
-}
-
-// Möller & Trumbore (1997): the hit distance, or tMax when there is none closer.
-float hitTriangle(const Ray& r, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, float tMax) {
-  const glm::vec3 e1 = b - a, e2 = c - a, p = glm::cross(r.dir, e2);
-  const float det = glm::dot(e1, p);
-  if (!(std::fabs(det) > 0.0f)) return tMax;  // parallel or degenerate
-  const float inv = 1.0f / det;
-  const glm::vec3 s = r.origin - a;
-  const float u = glm::dot(s, p) * inv;
-  if (!(u >= 0.0f && u <= 1.0f)) return tMax;
-  const glm::vec3 q = glm::cross(s, e1);
-  const float v = glm::dot(r.dir, q) * inv;
-  if (!(v >= 0.0f && u + v <= 1.0f)) return tMax;
-  const float t = glm::dot(e2, q) * inv;
-  return t > 0.0f && t < tMax ? t : tMax;
-}
-
-double rayCost(const Bvh& bvh, const PrimitiveSet& set, const std::vector<Ray>& rays) {
-  double cost = 0.0;
-  std::vector<std::pair<uint32_t, float>> stack;
-  for (const Ray& ray : rays) {
-    float tBest = INFINITY;
-    stack.clear();
-    if (const float t = entry(ray, bvh.nodes[0].bounds, tBest); t < INFINITY) stack.push_back({0u, t});
-    while (!stack.empty()) {
-      const auto [index, t] = stack.back();
-      stack.pop_back();
-      if (!(t < tBest)) continue;
-      cost += 1.0;  // a node visit
-      const BvhNode& node = bvh.nodes[index];
-      if (node.isLeaf()) {
-        cost += node.count;  // triangle tests
-        for (uint32_t k = node.first; k < node.first + node.count; ++k) {
-          const uint32_t id = bvh.primIndices[k];
-          tBest = hitTriangle(ray, set.v0[id], set.v1[id], set.v2[id], tBest);
-        }
-        continue;
-      }
-      const float tl = entry(ray, bvh.nodes[node.left].bounds, tBest), tr = entry(ray, bvh.nodes[node.right].bounds, tBest);
-      const bool leftFirst = tl <= tr;  // both finite or +inf: never NaN
-      const std::pair<uint32_t, float> near{leftFirst ? node.left : node.right, leftFirst ? tl : tr};
-      const std::pair<uint32_t, float> far{leftFirst ? node.right : node.left, leftFirst ? tr : tl};
-      if (far.second < INFINITY) stack.push_back(far);
-      if (near.second < INFINITY) stack.push_back(near);
-    }
-  }
-  return cost / double(rays.size());
-}
+// ---- the accuracy curves (--curve, --curve=sbvh): tree quality beside the time --------------------
 
 struct Quality {
-  double sah = 0, epo = 0, rayCost = 0;
+  double sah = 0, epo = 0, rayCost = 0, references = 0;
 };
 
-// Once per (mesh, builder, bins): repetitions reuse it.
-const Quality& treeQuality(const PrimitiveSet& set, const std::string& builder, uint32_t bins) {
-  static std::map<std::tuple<std::string, std::string, uint32_t>, Quality> cache;
-  static std::map<std::string, std::vector<Ray>> rays;
-  const auto key = std::make_tuple(set.name, builder, bins);
-  if (const auto it = cache.find(key); it != cache.end()) return it->second;
+BuildOptions curveOptions(uint32_t bins) {
   BuildOptions options;
   options.maxLeafSize = kLeafSize;
   options.bins = bins;
-  const Bvh bvh = buildBvh(builder, set.input(), options);
+  return options;
+}
+
+// Once per (mesh, label): repetitions reuse it. `options` are those of the timed builds (threads do
+// not change a tree); builders that clip (sbvh) get the triangles, as in the timed builds.
+const Quality& treeQuality(const PrimitiveSet& set, const std::string& builder, const BuildOptions& options,
+                           const std::string& label) {
+  static std::map<std::pair<std::string, std::string>, Quality> cache;
+  static std::map<std::string, std::vector<Ray>> rays;
+  const auto key = std::make_pair(set.name, label);
+  if (const auto it = cache.find(key); it != cache.end()) return it->second;
+  const Bvh bvh = buildBvh(builder, set.inputWithTriangles(), options);
   std::vector<Ray>& r = rays[set.name];
   if (r.empty()) r = curveRays(set, 20000);
   Quality q;
   q.sah = sahCost(bvh, options.cost);
   q.epo = endPointOverlap(bvh, set.v0, set.v1, set.v2, options.cost);
   q.rayCost = rayCost(bvh, set, r);
+  q.references = double(bvh.primIndices.size());
   return cache[key] = q;
 }
 
-void curveBinned(benchmark::State& state, MeshFn mesh, uint32_t bins, uint32_t threads) {
+void reportQuality(benchmark::State& state, const Quality& q) {
+  state.counters["sah"] = q.sah;
+  state.counters["epo"] = q.epo;
+  state.counters["ray_cost"] = q.rayCost;
+  state.counters["references"] = q.references;
+}
+
+// Times `builder` with `options` on `threads` threads; the tree's quality once, beside it.
+void curveBuild(benchmark::State& state, MeshFn mesh, std::string builder, BuildOptions options, uint32_t threads,
+                std::string label) {
   const PrimitiveSet* set = &mesh();
   if (set->size() == 0) return state.SkipWithError("mesh missing: run `bash datasets/fetch.sh`");
-  BuildOptions options;
-  options.maxLeafSize = kLeafSize;
   options.threads = threads;
-  options.bins = bins;
-  const BuildInput input = set->input();
+  const BuildInput input = set->inputWithTriangles();
   validateBuildInput(input, options);
-  const BuilderInfo& info = findBuilder("sah-binned");
+  const BuilderInfo& info = findBuilder(builder);
   for (auto _ : state) {
     Bvh bvh = info.build(input, options);
     benchmark::DoNotOptimize(bvh.nodes.data());
   }
-  const Quality& q = treeQuality(*set, "sah-binned", bins);
-  state.counters["sah"] = q.sah;
-  state.counters["epo"] = q.epo;
-  state.counters["ray_cost"] = q.rayCost;
+  reportQuality(state, treeQuality(*set, builder, options, label));
 }
 
 // embree-raw for the time, and the registered `embree` builder's tree for the quality measures.
@@ -378,12 +309,8 @@ void curveEmbree(benchmark::State& state, MeshFn mesh) {
   embreeRaw(state, mesh, 2);
   const PrimitiveSet& set = mesh();
   if (set.size() == 0) return;
-  const Quality& q = treeQuality(set, "embree", 0);
-  state.counters["sah"] = q.sah;
-  state.counters["epo"] = q.epo;
-  state.counters["ray_cost"] = q.rayCost;
+  reportQuality(state, treeQuality(set, "embree", curveOptions(0), "embree"));
 }
-
 
 // --processes=K: this program again, K times, with `args` (our flags less --processes) and a
 // --paired-out file each; then the paired ratios across the processes. Returns the exit code.
@@ -446,7 +373,8 @@ int main(int argc, char** argv) {
   // Our own flag, and random interleaving by default (a shared machine drifts; interleaved
   // repetitions see the same drift).
   int reps = 7;  // 6 or more for a 95% interval of a median (paired ratios)
-  bool interleaving = false, curve = false;
+  bool interleaving = false;
+  bench::Curve curve = bench::Curve::None;
   uint32_t plocTopDown = 4;  // the extra ploc row: `--ploc-top-down 4` (0: no such row)
   uint32_t plocRadius = BuildOptions{}.plocRadius;  // and its search radius
   int processes = 1;
@@ -495,9 +423,17 @@ int main(int argc, char** argv) {
       heap = *policy;
       continue;
     }
-    if (std::strcmp(argv[i], "--curve") == 0) {
-      curve = true;
+    if (std::strcmp(argv[i], "--curve") == 0 || std::strcmp(argv[i], "--curve=bins") == 0) {
+      curve = bench::Curve::Bins;
       continue;
+    }
+    if (std::strcmp(argv[i], "--curve=sbvh") == 0) {
+      curve = bench::Curve::Sbvh;
+      continue;
+    }
+    if (std::strncmp(argv[i], "--curve", 7) == 0) {
+      std::fprintf(stderr, "bench_builders: %s: expected --curve, --curve=bins or --curve=sbvh\n", argv[i]);
+      return 2;
     }
     if (std::strncmp(argv[i], "--benchmark_enable_random_interleaving", 38) == 0) interleaving = true;
     args.push_back(argv[i]);
@@ -515,19 +451,36 @@ int main(int argc, char** argv) {
   };
   const std::vector<std::pair<std::string, MeshFn>> curveMeshes = {
       {"bunny", bunny}, {"elephant", elephantMesh}, {"armadillo", armadilloMesh}, {"large1M", largeMesh}};
-  for (const auto& [meshName, set] : curve ? curveMeshes : decltype(curveMeshes){}) {
+  for (const auto& [meshName, set] : curve == bench::Curve::Bins ? curveMeshes : decltype(curveMeshes){}) {
     auto timeCpuToo = [&](benchmark::internal::Benchmark* b) { configure(b), b->MeasureProcessCPUTime(); };
     timeCpuToo(benchmark::RegisterBenchmark(("embree-raw/" + meshName + "/threads:2").c_str(), curveEmbree, set));
     for (uint32_t bins : bench::kCurveBins)
-      for (uint32_t threads : {1u, 2u})
-        timeCpuToo(benchmark::RegisterBenchmark(
-            ("sah-binned:" + std::to_string(bins) + "/" + meshName + "/threads:" + std::to_string(threads)).c_str(),
-            curveBinned, set, bins, threads));
+      for (uint32_t threads : {1u, 2u}) {
+        const std::string label = "sah-binned:" + std::to_string(bins);
+        timeCpuToo(benchmark::RegisterBenchmark((label + "/" + meshName + "/threads:" + std::to_string(threads)).c_str(),
+                                                curveBuild, set, "sah-binned", curveOptions(bins), threads, label));
+      }
+  }
+  // The sbvh curve: scans (bunny, armadillo) and scenes of long thin triangles (ship, interior), one
+  // thread, sah-binned's tree and time as the reference.
+  const std::vector<std::pair<std::string, MeshFn>> sbvhMeshes = {
+      {"bunny", bunny}, {"armadillo", armadilloMesh}, {"ship", shipMesh}, {"interior", interiorMesh}};
+  for (const auto& [meshName, set] : curve == bench::Curve::Sbvh ? sbvhMeshes : decltype(sbvhMeshes){}) {
+    const std::string suffix = "/" + meshName + "/threads:1";
+    configure(benchmark::RegisterBenchmark(("sah-binned" + suffix).c_str(), curveBuild, set, "sah-binned",
+                                           curveOptions(0), 1u, "sah-binned"));
+    for (const bench::SbvhPoint& p : bench::kSbvhCurve) {
+      BuildOptions options = curveOptions(0);
+      options.sbvhAlpha = p.alpha;
+      options.sbvhReferenceBudget = p.budget;
+      const std::string label = bench::sbvhCurveRow(p);
+      configure(benchmark::RegisterBenchmark((label + suffix).c_str(), curveBuild, set, "sbvh", options, 1u, label));
+    }
   }
   const std::vector<std::pair<std::string, MeshFn>> meshes = {
       {"bunny", bunny}, {"elephant", elephantMesh}, {"armadillo", armadilloMesh}, {"ship", shipMesh},
       {"interior", interiorMesh}, {"large1M", largeMesh}, {"sphere1M", sphereMesh}};
-  for (const auto& [meshName, set] : curve ? decltype(meshes){} : meshes) {
+  for (const auto& [meshName, set] : curve != bench::Curve::None ? decltype(meshes){} : meshes) {
     for (unsigned threads : {1u, 2u}) {
       const std::string suffix = "/" + meshName + "/threads:" + std::to_string(threads);
       if (threads == 2) configure(benchmark::RegisterBenchmark(("embree-raw" + suffix).c_str(), embreeRaw, set, threads));

@@ -36,10 +36,28 @@ inline std::string plocTopDownRow(uint32_t fraction, uint32_t radius) {
 // sah-binned's bin counts on the bins curve (--curve).
 constexpr uint32_t kCurveBins[] = {8, 12, 16, 24, 32, 48, 64, 128};
 
+// Which accuracy curve bench_builders runs instead of its builder tables.
+enum class Curve { None, Bins, Sbvh };
+
+// The sbvh curve (--curve=sbvh): the overlap threshold alpha at the default reference budget, then
+// the budget at the default alpha. alpha = 1 never allows a spatial split (an overlap is at most the
+// node's area, at most the root's): sbvh's object splits alone, the control.
+struct SbvhPoint {
+  float alpha, budget;
+};
+constexpr SbvhPoint kSbvhCurve[] = {{1.0f, 2.0f},  {1e-2f, 2.0f},  {1e-3f, 2.0f}, {1e-4f, 2.0f}, {1e-5f, 2.0f},
+                                    {1e-6f, 2.0f}, {0.0f, 2.0f},   {1e-5f, 1.1f}, {1e-5f, 1.25f}, {1e-5f, 1.5f},
+                                    {1e-5f, 4.0f}};
+inline std::string sbvhCurveRow(SbvhPoint p) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "sbvh[alpha=%g,budget=%g]", double(p.alpha), double(p.budget));
+  return buf;
+}
+
 // Console output as usual (aggregates only), plus a table per mesh at the end, from the medians.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
-  RatioReporter(bool curve, uint32_t plocTopDown, uint32_t plocRadius, std::string pairedOut = "")
+  RatioReporter(Curve curve, uint32_t plocTopDown, uint32_t plocRadius, std::string pairedOut = "")
       : curve_(curve), plocTopDownRow_(plocTopDownRow(plocTopDown, plocRadius)), pairedOut_(std::move(pairedOut)) {}
   // False when the paired-out file could not be written (after Finalize).
   bool pairedOutWritten() const { return pairedOutOk_; }
@@ -71,6 +89,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
       if (run.aggregate_name == "median") {
         r.time[threads] = t, r.cpu[threads] = cpu;
         r.sah = counter("sah"), r.epo = counter("epo"), r.rayCost = counter("ray_cost");
+        r.references = counter("references");
         r.faults[threads] = counter("faults");
       } else if (run.aggregate_name == "min") {
         r.low[threads] = t, r.cpuLow[threads] = cpu;
@@ -81,8 +100,9 @@ class RatioReporter : public benchmark::ConsoleReporter {
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
-    if (curve_) return printCurve();
     writePairedOut();
+    if (curve_ == Curve::Bins) return printCurve();
+    if (curve_ == Curve::Sbvh) return printSbvhCurve();
     std::string mesh;
     for (const auto& [key, r] : results_) {
       if (key.first != mesh) {
@@ -146,7 +166,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
   struct Result {
     double time[2] = {0, 0}, low[2] = {0, 0}, high[2] = {0, 0};  // [1 thread, 2 threads], wall ms
     double cpu[2] = {0, 0}, cpuLow[2] = {0, 0}, cpuHigh[2] = {0, 0};  // process CPU ms (--curve)
-    double sah = 0, epo = 0, rayCost = 0;
+    double sah = 0, epo = 0, rayCost = 0, references = 0;
     double faults[2] = {NAN, NAN};  // minor page faults per build, median over the repetitions
     std::vector<double> rounds[2];  // wall ms of each repetition, by round (NaN: none that round)
   };
@@ -223,7 +243,40 @@ class RatioReporter : public benchmark::ConsoleReporter {
     out.close();
     pairedOutOk_ = bool(out);
   }
-  bool curve_ = false;
+  // The sbvh curve: per mesh, each point's one-thread time against sah-binned's and against sbvh's
+  // defaults (alpha 1e-5, budget 2), paired over the rounds, beside its tree: leaf references per
+  // primitive, SAH, EPO and ray cost against sah-binned's tree.
+  void printSbvhCurve() const {
+    std::printf("\nsbvh curve (leaf 4, Ct = Ci = 1, 32 bins, 1 thread): alpha (spatial splits where the object split's "
+                "children overlap more than alpha x the root's area) and the reference budget (leaf references <= "
+                "budget x primitives); times are medians [min, max] and paired ratios [95%%] over the rounds; "
+                "references, SAH, EPO and ray cost against sah-binned's tree\n");
+    std::set<std::string> meshes;
+    for (const auto& [key, r] : results_) meshes.insert(key.first);
+    const std::string defaults = sbvhCurveRow({BuildOptions{}.sbvhAlpha, BuildOptions{}.sbvhReferenceBudget});
+    for (const std::string& mesh : meshes) {
+      const Result* binned = find(mesh, "sah-binned");
+      const Result* standard = find(mesh, defaults);
+      if (!binned || binned->references <= 0) continue;
+      std::printf("\n%s: sah-binned %.2f [%.2f, %.2f] ms, SAH %.3f, EPO %.3f, ray cost %.2f, %.0f primitives\n", mesh.c_str(),
+                  binned->time[0], binned->low[0], binned->high[0], binned->sah, binned->epo, binned->rayCost,
+                  binned->references);
+      std::printf("%8s %6s %26s %24s %24s %8s %8s %8s %8s\n", "alpha", "budget", "1 thread ms", "x sah-binned t(1) [95%]",
+                  "x sbvh default [95%]", "refs/n", "x SAH", "x EPO", "x rays");
+      for (const SbvhPoint& p : kSbvhCurve) {
+        const Result* r = find(mesh, sbvhCurveRow(p));
+        if (!r || r->time[0] <= 0) continue;
+        char cell[64];
+        std::snprintf(cell, sizeof cell, "%8.2f [%7.2f,%7.2f]", r->time[0], r->low[0], r->high[0]);
+        std::printf("%8g %6g %26s %24s %24s %8.4f %8.4f %8.4f %8.4f\n", double(p.alpha), double(p.budget), cell,
+                    paired(r->rounds[0], binned->rounds[0]).c_str(),
+                    standard && r != standard ? paired(r->rounds[0], standard->rounds[0]).c_str() : "-",
+                    r->references / binned->references, r->sah / binned->sah, r->epo / binned->epo,
+                    r->rayCost / binned->rayCost);
+      }
+    }
+  }
+  Curve curve_ = Curve::None;
   std::string plocTopDownRow_;
   std::string pairedOut_;
   bool pairedOutOk_ = true;
