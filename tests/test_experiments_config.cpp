@@ -188,6 +188,7 @@ TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
       {"quick.toml", 56},      {"seed-figures.toml", 18}, {"builders.toml", 1990}, {"accuracy-vs-time.toml", 30},
       {"antialiasing.toml", 16}, {"flythrough.toml", 15}, {"large.toml", 2}, {"bench.toml", 400},
       {"morton-grid.toml", 20}, {"ploc-top-down.toml", 12}, {"storage.toml", 15},
+      {"sbvh-knobs.toml", 15},  // 3 scenes x (sah-binned + 4 sbvh settings)
       {"builders-gpu.toml", 72},   // 3 scenes x 2 workloads x 9 builders + 2 rendered scenes x 9
       {"kernels-gpu.toml", 21}};   // 3 scenes x 2 workloads x 3 kernels + the report scene x 3
   // layouts.toml sweeps `layouts = "all"`: (3 scenes x 2 workloads + the report scene + the bunny's diffuse

@@ -140,8 +140,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
                   ref->sah > 0 ? r.sah / ref->sah : NAN);
     }
     std::printf("\nTargets (issue 15): sbvh SAH <= 0.92x sah-binned's; ploc SAH <= 1.05x sah-binned's and time <= sah-binned's\n");
-    std::set<std::string> meshes;
-    for (const auto& [key, r] : results_) meshes.insert(key.first);
+    const std::set<std::string> meshes = meshNames();
     for (const std::string& m : meshes) {
       const Result* binned = find(m, "sah-binned");
       if (!binned || binned->sah <= 0) continue;
@@ -198,8 +197,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
                 "[min-max range over the repetitions]; wall = real time; CPU = process CPU time, against Embree's "
                 "halved (its 2-thread wall time is at least that); SAH, EPO and ray cost against the registered "
                 "embree builder's tree\n");
-    std::set<std::string> meshes;
-    for (const auto& [key, r] : results_) meshes.insert(key.first);
+    const std::set<std::string> meshes = meshNames();
     for (const std::string& mesh : meshes) {
       const Result* ref = find(mesh, "embree-raw");
       if (!ref) continue;
@@ -251,8 +249,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
                 "children overlap more than alpha x the root's area) and the reference budget (leaf references <= "
                 "budget x primitives); times are medians [min, max] and paired ratios [95%%] over the rounds; "
                 "references, SAH, EPO and ray cost against sah-binned's tree\n");
-    std::set<std::string> meshes;
-    for (const auto& [key, r] : results_) meshes.insert(key.first);
+    const std::set<std::string> meshes = meshNames();
     const std::string defaults = sbvhCurveRow({BuildOptions{}.sbvhAlpha, BuildOptions{}.sbvhReferenceBudget});
     for (const std::string& mesh : meshes) {
       const Result* binned = find(mesh, "sah-binned");
@@ -280,6 +277,11 @@ class RatioReporter : public benchmark::ConsoleReporter {
   std::string plocTopDownRow_;
   std::string pairedOut_;
   bool pairedOutOk_ = true;
+  std::set<std::string> meshNames() const {
+    std::set<std::string> names;
+    for (const auto& [key, r] : results_) names.insert(key.first);
+    return names;
+  }
   const Result* find(const std::string& mesh, const std::string& builder) const {
     const auto it = results_.find({mesh, builder});
     return it == results_.end() ? nullptr : &it->second;
