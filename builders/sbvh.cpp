@@ -42,6 +42,9 @@
 // part of each of its references. Costs are doubles of finite areas and counts: no NaN can reach a
 // comparison (inputs are validated finite; a zero-area root disables spatial splits, whose overlap
 // test would divide by it).
+//
+// Files: builders/sbvh_slabs.hpp (the reference, the slabs of one axis of a spatial-split search and
+// the part of a straddling reference in each), here the node step and the driver.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -54,6 +57,7 @@
 #include "builders/build_util.hpp"
 #include "builders/builder.hpp"
 #include "builders/clip.hpp"
+#include "builders/sbvh_slabs.hpp"
 
 namespace bvhlab {
 
@@ -77,11 +81,7 @@ constexpr uint32_t kDefaultBins = 32;
 constexpr uint32_t kMaxBins = 256;
 static_assert(kMaxBins == kMaxBuildBins, "reviewBuildOptions (builders/registry.cpp) validates --bins against kMaxBuildBins");
 
-struct Ref {
-  Aabb box;
-  glm::vec3 centroid;  // the input centroid while whole; the box centre once clipped
-  uint32_t id;
-};
+using sbvh::Ref, sbvh::Slabs;  // builders/sbvh_slabs.hpp
 
 struct Task {
   uint32_t node = 0;
@@ -93,40 +93,6 @@ struct Step {
   bool leaf = true;
   Aabb childBox[2];
   Task child[2];
-};
-
-// The slabs of one axis of a spatial-split search: planes[0..bins] (non-decreasing floats, the outer
-// ones the node's faces) and a first guess of the slab holding a coordinate, from the planes' uniform
-// spacing. Lookups walk from the guess to the answer, comparing with the planes themselves, so they
-// return exactly what a binary search over the planes returns (the guess only decides where the walk
-// starts: the planes are clamped and rounded, so it can be off by one); a guess is nearly always
-// right, where a binary search over 32 planes costs five hard-to-predict branches, and a node's
-// references take up to eight lookups per axis.
-struct Slabs {
-  const float* planes;
-  uint32_t bins;
-  double lo, scale;  // scale = bins / (hi - lo), finite: hi > lo are floats, their difference is >= 2^-149
-
-  // floor((x - lo) * scale) clamped to [from, to]. x, lo and scale are finite, so g is never NaN.
-  uint32_t guess(float x, uint32_t from, uint32_t to) const {
-    const double g = (double(x) - lo) * scale;
-    return g <= double(from) ? from : g >= double(to) ? to : uint32_t(g);
-  }
-  // The largest j in [from, to] with planes[j] <= x, given planes[from] <= x: upper_bound over
-  // planes[from..to] minus one.
-  uint32_t lastAtMost(float x, uint32_t from, uint32_t to) const {
-    uint32_t j = guess(x, from, to);
-    while (j > from && planes[j] > x) --j;
-    while (j < to && planes[j + 1] <= x) ++j;
-    return j;
-  }
-  // The number of planes among planes[1..bins-1] below x: lower_bound over them.
-  uint32_t countBelow(float x) const {
-    uint32_t k = guess(x, 0, bins - 1);
-    while (k > 0 && !(planes[k] < x)) --k;
-    while (k + 1 < bins && planes[k + 1] < x) ++k;
-    return k;
-  }
 };
 
 // a's area with b added, without building the union box twice in the callers.
@@ -316,55 +282,6 @@ class Stepper {
     return clip::clipReference(s_.input.v0[t], s_.input.v1[t], s_.input.v2[t], r.box, axis, lo, hi);
   }
 
-  // Grows the bins [first, last] that a reference spans on `axis` by its part in each: the box's
-  // slab for a box-only primitive; for a triangle, the box of its vertices in the slab and of its
-  // edges' crossings with the slab's planes, intersected with the reference's box. These boxes only
-  // estimate the SAH of the candidate planes, so the crossings are computed plainly (rounded to
-  // nearest): the split itself clips with clip.hpp's conservative bounds. Each plane's crossings are
-  // computed once and grow both slabs they bound.
-  void binStraddler(const Ref& r, int axis, const Slabs& slabs, uint32_t first, uint32_t last) {
-    const float* planes = slabs.planes;
-    if (!s_.triangles) {
-      for (uint32_t b = first; b <= last; ++b) {
-        const Aabb part = clip::clipBox(r.box, axis, planes[b], planes[b + 1]);
-        if (!part.empty()) boxes_[b].grow(part);
-      }
-      return;
-    }
-    Aabb* piece = pieces_.data() - first;  // piece[b] for b in [first, last]
-    for (uint32_t b = first; b <= last; ++b) piece[b] = Aabb{};
-    const glm::vec3 v[3] = {s_.input.v0[r.id], s_.input.v1[r.id], s_.input.v2[r.id]};
-    for (const glm::vec3& p : v) {
-      // The slabs holding the vertex (two when it lies on a plane), within [first, last].
-      if (p[axis] < planes[first] || p[axis] > planes[last + 1]) continue;
-      const uint32_t b0 = slabs.lastAtMost(p[axis], first, last);
-      piece[b0].grow(p);
-      if (b0 > first && planes[b0] == p[axis]) piece[b0 - 1].grow(p);
-    }
-    for (int e = 0; e < 3; ++e) {
-      const glm::vec3 &p = v[e], &q = v[(e + 1) % 3];
-      if (p[axis] == q[axis]) continue;
-      const float lo = std::min(p[axis], q[axis]), hi = std::max(p[axis], q[axis]);
-      // Planes strictly between the edge's ends, among the planes first .. last + 1 of the slabs
-      // the reference spans.
-      uint32_t j = planes[first] > lo ? first : slabs.lastAtMost(lo, first, last + 1) + 1;
-      const glm::dvec3 dp(p), slope = (glm::dvec3(q) - dp) / (double(q[axis]) - double(p[axis]));
-      for (; j <= last + 1 && planes[j] < hi; ++j) {
-        glm::vec3 x(dp + (double(planes[j]) - dp[axis]) * slope);
-        x[axis] = planes[j];
-        if (j > first) piece[j - 1].grow(x);
-        if (j <= last) piece[j].grow(x);
-      }
-    }
-    for (uint32_t b = first; b <= last; ++b) {
-      Aabb slab = r.box;
-      slab.min[axis] = std::max(slab.min[axis], planes[b]);
-      slab.max[axis] = std::min(slab.max[axis], planes[b + 1]);
-      const Aabb part = clip::intersect(piece[b], slab);
-      if (!part.empty()) boxes_[b].grow(part);
-    }
-  }
-
   SpatialSplit findSpatialSplit(const std::vector<Ref>& refs, const Aabb& box, int64_t budget) {
     SpatialSplit best;
     // At most max(4, n) slabs for n references: near the leaves, where references span most of a
@@ -398,7 +315,7 @@ class Stepper {
           boxes_[first].grow(r.box);
           continue;
         }
-        binStraddler(r, a, slabs, first, last);
+        sbvh::binStraddler(r, a, slabs, first, last, s_.input, s_.triangles, boxes_.data(), pieces_.data());
       }
 
       Aabb right;
