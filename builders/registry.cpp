@@ -136,7 +136,7 @@ OptionReview reviewBuildOptions(const std::string& builder, const BuildOptions& 
     review.warnings.push_back(info.name + " ignores --bins (only sah-binned and sbvh bin)");
   if (options.sbvhAlpha != defaults.sbvhAlpha && !info.usesSbvhAlpha)
     review.warnings.push_back(info.name + " ignores --sbvh-alpha (only sbvh makes spatial splits)");
-  if (options.sbvhReferenceBudget != defaults.sbvhReferenceBudget && !info.usesSbvhAlpha)
+  if (options.sbvhReferenceBudget != defaults.sbvhReferenceBudget && !info.usesSbvhAlpha)  // usesSbvhAlpha: makes spatial splits
     review.warnings.push_back(info.name + " ignores --sbvh-budget (only sbvh makes spatial splits)");
   if (options.plocRadius != defaults.plocRadius && !info.usesPlocRadius)
     review.warnings.push_back(info.name + " ignores --ploc-radius (only ploc clusters)");

@@ -54,13 +54,12 @@ struct Slabs {
   }
 };
 
-// Grows boxes[first..last], the bins a reference spans on `axis`, by its part in each (pieces: scratch
-// for as many boxes): the box's
-// slab for a box-only primitive; for a triangle, the box of its vertices in the slab and of its
-// edges' crossings with the slab's planes, intersected with the reference's box. These boxes only
-// estimate the SAH of the candidate planes, so the crossings are computed plainly (rounded to
-// nearest): the split itself clips with clip.hpp's conservative bounds. Each plane's crossings are
-// computed once and grow both slabs they bound.
+// Grows boxes[first..last], the bins a reference spans on `axis`, by its part in each (`pieces`:
+// scratch for as many boxes): the box's slab for a box-only primitive; for a triangle, the box of its
+// vertices in the slab and of its edges' crossings with the slab's planes, intersected with the
+// reference's box. These boxes only estimate the SAH of the candidate planes, so the crossings are
+// computed plainly (rounded to nearest): the split itself clips with clip.hpp's conservative bounds.
+// Each plane's crossings are computed once and grow both slabs they bound.
 inline void binStraddler(const Ref& r, int axis, const Slabs& slabs, uint32_t first, uint32_t last, const BuildInput& input,
                          bool triangles, Aabb* boxes, Aabb* pieces) {
   const float* planes = slabs.planes;

@@ -57,7 +57,6 @@
 //                  [--heap=P] [--paired-out=FILE] [--benchmark_filter=...]   (meshes: `bash datasets/fetch.sh`)
 #include <algorithm>
 #include <cmath>
-#include <random>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -68,7 +67,6 @@
 #include <optional>
 #include <span>
 #include <string>
-#include <tuple>
 #include <vector>
 
 #include <benchmark/benchmark.h>
