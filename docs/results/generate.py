@@ -153,7 +153,7 @@ def provenance(paths_rows, src, command_of):
     machines = machines or {src.get("machine", "not recorded")}
     renderers = renderers or {src.get("gl_renderer", "not recorded")}
     files = ", ".join(f"`{rel(p)}`" for p, _ in paths_rows)
-    cmds = "; ".join(f"`{command_of(p)}`" for p, _ in paths_rows)
+    cmds = "; ".join(f"`{c}`" for c in dict.fromkeys(command_of(p) for p, _ in paths_rows))
     lines = ["", f"Data: {files}. Command: {cmds}. Commit: {', '.join(sorted(commits))}. "
                  f"Machine: {'; '.join(sorted(machines))}. GL renderer: {'; '.join(sorted(renderers))}."]
     if src.get("note"):
@@ -368,6 +368,84 @@ def cpu_build_quality():
     return lines + provenance([(path, rows)], src, commands(BQ, src))
 
 
+def cpu_layout_bytes():
+    path, rows = read_json_lines(BQ, "layout-bytes.jsonl")
+    src = source(BQ)
+    formats = ["raw", "precomputed", "indexed"]
+    out = []
+    for lay in ["v1", "bvh2-cb", "bvh4", "bvh8", "cwbvh"]:
+        row = [f"`{lay}`"]
+        for tri in formats:
+            r = [x for x in rows if x.get("layout") == lay and x.get("triangle_format") == tri]
+            if len(r) != 1:
+                raise DataError(f"{rel(path)}: {len(r)} rows for layout {lay} / {tri}, expected 1")
+            row.append(f"{num(r[0], 'bytes_per_triangle', path):.2f}")
+        out.append(row)
+    meshes = sorted({os.path.basename(str(r.get("input"))) for r in rows})
+    builders = sorted({str(r.get("builder")) for r in rows})
+    leaves = sorted({str(r.get("leaf_size")) for r in rows})
+    header = ["layout"] + [f"`{t}`, bytes per triangle" for t in formats]
+    lines = table(header, out)
+    lines += ["", f"All streams (nodes, triangles, attributes, vertices) over the input triangles; "
+                  f"{', '.join(meshes)}, {', '.join(builders)} tree, leaf size {', '.join(leaves)}."]
+    return lines + provenance([(path, rows)], src, commands(BQ, src))
+
+
+BT = "build-time"
+
+
+def cpu_build_time():
+    bpath, bench = read_json(BT, "bench.json")
+    tpath = result_path(BT, "paired.tsv")
+    src = source(BT)
+    try:
+        with open(tpath) as f:
+            paired = [line.rstrip("\n").split("\t") for line in f if line.strip()]
+    except OSError as e:
+        raise DataError(f"{rel(tpath)}: {e.strerror}") from None
+    ratios = {}
+    for n, p in enumerate(paired, 1):
+        if len(p) != 6:
+            raise DataError(f"{rel(tpath)}: line {n}: expected 6 tab-separated fields, got {len(p)}")
+        try:
+            ratios[(p[0], p[1].split(" ")[0])] = tuple(float(x) for x in p[3:6])
+        except ValueError:
+            raise DataError(f"{rel(tpath)}: line {n}: the ratio and its interval are not numbers") from None
+    reps = {}
+    for b in bench.get("benchmarks", []):
+        if b.get("run_type") != "iteration":
+            continue
+        builder, mesh = b["name"].split("/")[:2]
+        reps.setdefault((mesh, builder), []).append(b)
+    if not reps:
+        raise DataError(f"{rel(bpath)}: no benchmark repetitions")
+    out = []
+    for (mesh, builder), rs in sorted(reps.items(), key=lambda kv: (kv[0][0], kv[0][1] != "sah-binned", kv[0][1])):
+        times = sorted(num(r, "real_time", bpath) for r in rs)
+        med = times[len(times) // 2]
+        unit = rs[0].get("time_unit", "?")
+        if builder == "sah-binned":
+            cell = "1 (reference)"
+        elif (mesh, builder) in ratios:
+            cell = with_ci(*ratios[(mesh, builder)], fmt=lambda x: sig(x, 3))
+        else:
+            cell = "-"
+        out.append([mesh, f"`{builder}`", f"{sig(med)} {unit} [{sig(times[0])}, {sig(times[-1])}]", cell,
+                    f"{num(rs[0], 'sah', bpath):.2f}"])
+    load = bench.get("context", {}).get("load_avg")
+    ctx = bench.get("context", {})
+    header = ["mesh", "builder", f"build time, median [min, max] of {len(times)} repetitions", "x sah-binned, paired [95%]",
+              "SAH cost"]
+    lines = table(header, out)
+    lines += ["", f"One build thread (`embree` and `embree-low` use Embree's own thread pool whatever the setting). "
+                  f"Repetition r of every builder runs in round r of a random interleaving; the paired ratio is the "
+                  f"median of the per-round ratios with its order-statistic interval. Load average when it started: "
+                  f"{', '.join(f'{x:.1f}' for x in load or [])} on {ctx.get('num_cpus', '?')} CPUs."]
+    rows = [{"hostname": ctx.get("host_name", "?"), "cpu": f"{ctx.get('mhz_per_cpu', '?')} MHz",
+             "cores": ctx.get("num_cpus", "?")}]
+    return lines + provenance([(bpath, rows), (tpath, [])], src, commands(BT, src))
+
+
 KNOBS = "sbvh-knobs"
 
 
@@ -380,26 +458,30 @@ def cpu_sbvh_knobs():
         raise DataError(f"{rel(fpath)}: key 'comparisons' is not a list")
     out = []
     for c in comps:
-        if c.get("axis") != "builder" or c.get("b_label") != "sah-binned":
+        if c.get("kind") != "axis" or c.get("axis") != "builder":
             continue
         a = pick(rows, cpath, key=c.get("a"))
         b = pick(rows, cpath, key=c.get("b"))
         lo, hi = c.get("ci_low"), c.get("ci_high")
         ratio = num(c, "ratio", fpath)
-        cell = with_ci(ratio, float(lo), float(hi), f3) if lo is not None and hi is not None else f3(ratio)
-        out.append([c.get("scene", "?"), f"`{c.get('a_label')}`", cell, c.get("verdict", "?"),
-                    f"±{100 * float(c.get('band') or 0):.1f}%",
+        cell = with_ci(ratio, num(c, "ci_low", fpath), num(c, "ci_high", fpath), f3) \
+            if lo is not None and hi is not None else f3(ratio)
+        band = float(c.get("band") or 0)
+        out.append([str(c.get("scene", "?")), f"`{c.get('a_label')}`", f"`{c.get('b_label')}`", cell,
+                    str(c.get("verdict", "?")), f"±{100 * (math.exp(band) - 1):.1f}%",
                     f3(num(a, "sah_cost", cpath) / num(b, "sah_cost", cpath)),
                     f3(num(a, "ray_cost", cpath) / num(b, "ray_cost", cpath))])
     if not out:
-        raise DataError(f"{rel(fpath)}: no builder comparison against sah-binned")
+        raise DataError(f"{rel(fpath)}: no comparison along the builder axis")
     r0 = rows[0]
-    header = ["scene", "builder", "frame time x sah-binned [95%]", "verdict", "A/A band", "SAH x", "ray cost x"]
+    header = ["scene", "a", "b (reference)", "frame time a/b [95%]", "verdict", "noise band", "SAH a/b",
+              "ray cost a/b"]
     lines = table(header, out)
-    lines += ["", f"{r0.get('width')}x{r0.get('height')} frames, depth {r0.get('depth')}, stack-ordered kernel, "
-                  f"leaf 4; frames of one scene interleaved in one process. The ratio and verdict are findings.json's "
-                  f"(docs/measurement.md explains both)."]
-    return lines + provenance([(cpath, rows)], src, commands(KNOBS, src))
+    lines += ["", f"{r0.get('width')}x{r0.get('height')} frames, depth {r0.get('depth')}, {r0.get('kernel')} "
+                  f"kernel, leaf {r0.get('leaf_size')}; frames of one scene interleaved in one process. Every "
+                  f"ratio, interval, band and reference is findings.json's (docs/measurement.md explains them); "
+                  f"SAH and ray cost are exact counts from results.csv."]
+    return lines + provenance([(cpath, rows), (fpath, [])], src, commands(KNOBS, src))
 
 
 TABLES = {
@@ -410,6 +492,8 @@ TABLES = {
     "gpu-kernels": gpu_kernels,
     "gpu-layouts": gpu_layouts,
     "cpu-build-quality": cpu_build_quality,
+    "cpu-layout-bytes": cpu_layout_bytes,
+    "cpu-build-time": cpu_build_time,
     "cpu-sbvh-knobs": cpu_sbvh_knobs,
 }
 
