@@ -446,6 +446,67 @@ def cpu_build_time():
     return lines + provenance([(bpath, rows), (tpath, [])], src, commands(BT, src))
 
 
+RB = "robustness"
+
+
+def cpu_hard_cases():
+    path, d = read_json(RB, "hard-cases.json")
+    src = source(RB)
+    suite = d.get("suite") or {}
+    out = []
+    for v in d.get("variants") or []:
+        t = v.get("total") or {}
+        g = v.get("gpu") or {}
+        out.append([f"`{v.get('robust')}`", f"{v.get('triangle_test')} / {v.get('box_test')} / {v.get('origin_offset')}",
+                    f"{int(num(t, 'leaks', path)):,}", f"{int(num(g, 'leaks', path)):,}" if g else "-",
+                    f"{int(num(t, 'oracle_hit_disagree', path)):,}", f"{int(num(t, 'oracle_first_disagree', path)):,}",
+                    f"{int(num(t, 'oracle_first_clear_disagree', path)):,}",
+                    f"{int(num(t, 'nan_box_entries', path)) + int(num(t, 'nonfinite_hits', path)):,}",
+                    f"{int(num(t, 'secondary_self_hits', path)):,}", f"{int(num(t, 'secondary_lost', path)):,}"])
+    if not out:
+        raise DataError(f"{rel(path)}: key 'variants' is empty")
+    ms, gr = int(num(suite, "must_hit", path)), d.get("gpu_rays")
+    header = ["variant", "triangle / box / offset", f"leaks (of {ms:,} must-hit rays)",
+              f"GLSL leaks (of {gr:,} pixels)" if gr else "GLSL leaks",
+              f"hit/miss != oracle (of {int(num(suite, 'oracle_decisive', path)):,})",
+              f"first hit != oracle (of {int(num(suite, 'oracle_first_decisive', path)):,})",
+              f"of those clear of edges (of {int(num(suite, 'oracle_first_clear', path)):,})",
+              "NaN entries + non-finite hits", "secondary self-hits", "secondary rays lost inside closed meshes"]
+    lines = table(header, out)
+    lines += ["", f"{int(num(suite, 'cases', path))} cases, {int(num(suite, 'rays', path)):,} rays traced by the C++ "
+                  f"mirror through a {d.get('builder')} tree in the {d.get('layout')} layout ({d.get('kernel')}); the "
+                  f"exact oracle decides {int(num(suite, 'oracle_rays', path)):,} unit-scale rays, of which "
+                  f"{int(num(suite, 'oracle_ties', path)):,} are exact ties and not scored. These are counts; they do not "
+                  f"depend on the machine's load."]
+    return lines + provenance([(path, [d])], src, commands(RB, src))
+
+
+def cpu_robust_cost():
+    fpath, findings = read_json(RB, "findings.json")
+    cpath, rows = read_csv(RB, "results.csv")
+    src = source(RB)
+    out = []
+    for c in findings.get("comparisons") or []:
+        if c.get("kind") != "axis" or c.get("axis") != "robust":
+            continue
+        lo, hi = c.get("ci_low"), c.get("ci_high")
+        ratio = num(c, "ratio", fpath)
+        cell = with_ci(ratio, num(c, "ci_low", fpath), num(c, "ci_high", fpath), f3) \
+            if lo is not None and hi is not None else f3(ratio)
+        band = float(c.get("band") or 0)
+        out.append([str(c.get("scene")), f"`{c.get('a_label')}`", f"`{c.get('b_label')}`", cell,
+                    str(c.get("verdict")), f"±{100 * (math.exp(band) - 1):.1f}%"])
+    if not out:
+        raise DataError(f"{rel(fpath)}: no comparison along the robust axis")
+    r0 = rows[0]
+    header = ["scene", "a", "b (reference)", "frame time a/b [95%]", "verdict", "noise band"]
+    lines = table(header, out)
+    lines += ["", f"{r0.get('width')}x{r0.get('height')} frames, {r0.get('builder')}, {r0.get('kernel')}, leaf "
+                  f"{r0.get('leaf_size')}; every variant of a scene interleaved in one process. Every ratio, interval, "
+                  f"band and verdict is findings.json's (docs/measurement.md)."]
+    return lines + provenance([(cpath, rows), (fpath, [])], src, commands(RB, src))
+
+
 KNOBS = "sbvh-knobs"
 
 
@@ -494,6 +555,8 @@ TABLES = {
     "cpu-build-quality": cpu_build_quality,
     "cpu-layout-bytes": cpu_layout_bytes,
     "cpu-build-time": cpu_build_time,
+    "cpu-hard-cases": cpu_hard_cases,
+    "cpu-robust-cost": cpu_robust_cost,
     "cpu-sbvh-knobs": cpu_sbvh_knobs,
 }
 
