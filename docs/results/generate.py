@@ -26,6 +26,7 @@ import math
 import os
 import re
 import sys
+import textwrap
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -563,6 +564,17 @@ TABLES = {
 
 # ---- the Markdown files ------------------------------------------------------------------------
 
+def wrap(lines):
+    """Prose lines wrapped at 110 characters; table rows kept whole."""
+    out = []
+    for line in lines:
+        if line.startswith("|") or len(line) <= 110:
+            out.append(line)
+        else:
+            out += textwrap.wrap(line, 110, break_long_words=False, break_on_hyphens=False)
+    return out
+
+
 def markdown_files():
     files = [os.path.join(ROOT, "README.md")]
     for dirpath, _, names in os.walk(os.path.join(ROOT, "docs")):
@@ -593,7 +605,7 @@ def render_file(path, cache):
         if j == len(lines):
             raise DataError(f"{rel(path)}:{start}: table '{name}' has no '{END}'")
         if name not in cache:
-            cache[name] = TABLES[name]()
+            cache[name] = wrap(TABLES[name]())
         out += cache[name]
         out.append(END)
         names.append((name, lines[i + 1:j] != cache[name]))
