@@ -5,7 +5,7 @@ import math
 import os
 
 from tables_io import (DataError, num, pick, read_csv, read_json, read_json_lines, result_path, rel, source,
-                       commands, provenance, table, sig, f3, with_ci)
+                       commands, provenance, table, sig, f3, with_ci, check_paired)
 
 # ---- CPU runs on the development machine -------------------------------------------------------
 
@@ -165,10 +165,13 @@ def cpu_robust_cost():
     fpath, findings = read_json(RB, "findings.json")
     cpath, rows = read_csv(RB, "results.csv")
     src = source(RB)
+    rpath, results = read_json(RB, "results.json")
+    by_key = {r.get("key"): r for r in results.get("rows") or []}
     out = []
     for c in findings.get("comparisons") or []:
         if c.get("kind") != "axis" or c.get("axis") != "robust":
             continue
+        check_paired(c, by_key, fpath, rpath)
         lo, hi = c.get("ci_low"), c.get("ci_high")
         ratio = num(c, "ratio", fpath)
         cell = with_ci(ratio, num(c, "ci_low", fpath), num(c, "ci_high", fpath), f3) \
@@ -183,8 +186,9 @@ def cpu_robust_cost():
     lines = table(header, out)
     lines += ["", f"{r0.get('width')}x{r0.get('height')} frames, {r0.get('builder')}, {r0.get('kernel')}, leaf "
                   f"{r0.get('leaf_size')}; every variant of a scene interleaved in one process. Every ratio, interval, "
-                  f"band and verdict is findings.json's (docs/measurement.md)."]
-    return lines + provenance([(cpath, rows), (fpath, [])], src, commands(RB, src))
+                  f"band and verdict is findings.json's (docs/measurement.md); generate.py re-derives each ratio "
+                  f"and interval from the per-round times in results.json."]
+    return lines + provenance([(cpath, rows), (fpath, []), (rpath, [])], src, commands(RB, src))
 
 
 KNOBS = "sbvh-knobs"
@@ -197,10 +201,13 @@ def cpu_sbvh_knobs():
     comps = findings.get("comparisons")
     if not isinstance(comps, list):
         raise DataError(f"{rel(fpath)}: key 'comparisons' is not a list")
+    rpath, results = read_json(KNOBS, "results.json")
+    by_key = {r.get("key"): r for r in results.get("rows") or []}
     out = []
     for c in comps:
         if c.get("kind") != "axis" or c.get("axis") != "builder":
             continue
+        check_paired(c, by_key, fpath, rpath)
         a = pick(rows, cpath, key=c.get("a"))
         b = pick(rows, cpath, key=c.get("b"))
         lo, hi = c.get("ci_low"), c.get("ci_high")
@@ -221,5 +228,6 @@ def cpu_sbvh_knobs():
     lines += ["", f"{r0.get('width')}x{r0.get('height')} frames, depth {r0.get('depth')}, {r0.get('kernel')} "
                   f"kernel, leaf {r0.get('leaf_size')}; frames of one scene interleaved in one process. Every "
                   f"ratio, interval, band and reference is findings.json's (docs/measurement.md explains them); "
+                  f"generate.py re-derives each ratio and interval from the per-round times in results.json. "
                   f"SAH and ray cost are exact counts from results.csv."]
-    return lines + provenance([(cpath, rows), (fpath, [])], src, commands(KNOBS, src))
+    return lines + provenance([(cpath, rows), (fpath, []), (rpath, [])], src, commands(KNOBS, src))
