@@ -28,7 +28,7 @@ import textwrap
 sys.dont_write_bytecode = True  # the table modules beside this script: leave no __pycache__ in the checkout
 import tables_cpu  # noqa: E402
 import tables_gpu  # noqa: E402
-from tables_io import ROOT, DataError, rel  # noqa: E402
+from tables_io import ROOT, DataError  # noqa: E402
 
 BEGIN = re.compile(r"^<!-- generated:([a-z0-9-]+) -->$")
 END = "<!-- end generated -->"
@@ -62,16 +62,17 @@ def wrap(lines):
     return out
 
 
-def markdown_files():
-    files = [os.path.join(ROOT, "README.md")]
-    for dirpath, _, names in os.walk(os.path.join(ROOT, "docs")):
+def markdown_files(root):
+    files = [os.path.join(root, "README.md")]
+    for dirpath, _, names in os.walk(os.path.join(root, "docs")):
         files += [os.path.join(dirpath, n) for n in sorted(names) if n.endswith(".md")]
     return [f for f in files if os.path.isfile(f)]
 
 
-def render_file(path, cache):
+def render_file(path, cache, root=ROOT):
     """The file's text with every generated block rewritten, and the names of its blocks.
     Raises DataError naming the file and line on an unknown name or an unclosed block."""
+    shown = os.path.relpath(path, root)  # the file as the reader names it
     with open(path) as f:
         lines = f.read().split("\n")
     out, names, i = [], [], 0
@@ -83,14 +84,14 @@ def render_file(path, cache):
             continue
         name, start = m.group(1), i + 1
         if name not in TABLES:
-            raise DataError(f"{rel(path)}:{start}: unknown table '{name}' (known: {', '.join(TABLES)})")
+            raise DataError(f"{shown}:{start}: unknown table '{name}' (known: {', '.join(TABLES)})")
         j = i + 1
         while j < len(lines) and lines[j].strip() != END:
             if BEGIN.match(lines[j].strip()):
-                raise DataError(f"{rel(path)}:{j + 1}: table '{name}' opened on line {start} is not closed")
+                raise DataError(f"{shown}:{j + 1}: table '{name}' opened on line {start} is not closed")
             j += 1
         if j == len(lines):
-            raise DataError(f"{rel(path)}:{start}: table '{name}' has no '{END}'")
+            raise DataError(f"{shown}:{start}: table '{name}' has no '{END}'")
         if name not in cache:
             cache[name] = wrap(TABLES[name]())
         out += cache[name]
@@ -100,18 +101,21 @@ def render_file(path, cache):
     return "\n".join(out), names
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--check", action="store_true", help="exit 1 if any table differs from its data")
-    args = ap.parse_args()
+    ap.add_argument("--root", default=ROOT,
+                    help="the tree whose README.md and docs/**/*.md hold the tables (default: this checkout); "
+                         "the data always comes from the result directories beside this script")
+    args = ap.parse_args(argv)
     cache, stale, count = {}, [], 0
     try:
-        for path in markdown_files():
-            text, names = render_file(path, cache)
+        for path in markdown_files(args.root):
+            text, names = render_file(path, cache, args.root)
             count += len(names)
             for name, differs in names:
                 if differs:
-                    stale.append(f"{rel(path)}: table '{name}'")
+                    stale.append(f"{os.path.relpath(path, args.root)}: table '{name}'")
             if names and not args.check:
                 with open(path) as f:
                     old = f.read()
