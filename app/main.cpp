@@ -1,5 +1,5 @@
 // bvhlab — command line. Each subcommand is a thin shell over a library call; every error ends in
-// one line on stderr and a non-zero exit code.
+// "bvhlab: error: ..." on stderr and exit status 2 (usage) or 1 (runtime failure): render/exit_status.hpp.
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
@@ -18,6 +18,7 @@
 #include "layout/layouts.hpp"
 #include "layout/triangle_formats.hpp"
 #include "layout/tree_hash.hpp"
+#include "render/exit_status.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/hard_cases_command.hpp"
 #include "render/measure_command.hpp"
@@ -109,6 +110,36 @@ int buildCommand(const BuildCommand& c) {
                 stats.buildMs, stats.bytes, layout.name.c_str(), triangleFormat.c_str());
   }
   return 0;
+}
+
+// A CLI11 parse failure (everything but --help and --version) as a usage error: one line naming the
+// command, what CLI11 refused (it names the flag or argument) and where help is; exit status 2.
+int reportParseError(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
+  std::vector<std::string> names;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) names.push_back(sub->get_name());
+  const bool known = argc > 1 && std::find(names.begin(), names.end(), argv[1]) != names.end();
+  if (argc < 2 || (!known && argv[1][0] != '-')) {
+    // A mistyped or missing command: name it and list the real ones (CLI11 would only say that an
+    // argument was not expected).
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    if (argc < 2)
+      std::fprintf(stderr, "bvhlab: error: no command given; commands: %s (bvhlab COMMAND --help)\n", list.c_str());
+    else
+      std::fprintf(stderr, "bvhlab: error: unknown command '%s'; commands: %s (bvhlab COMMAND --help)\n", argv[1],
+                   list.c_str());
+    return kExitUsage;
+  }
+  if (!known) {  // an option before any command (CLI11 would only ask for a command)
+    std::fprintf(stderr, "bvhlab: error: unknown option '%s' (options follow the command: bvhlab COMMAND --help)\n",
+                 argv[1]);
+    return kExitUsage;
+  }
+  const std::vector<CLI::App*> selected = app.get_subcommands();
+  const std::string command = selected.empty() ? std::string() : selected.front()->get_name();
+  std::fprintf(stderr, "bvhlab: error: %s%s (bvhlab %s--help)\n", command.empty() ? "" : (command + ": ").c_str(),
+               e.what(), command.empty() ? "" : (command + " ").c_str());
+  return kExitUsage;
 }
 
 }  // namespace
@@ -241,27 +272,13 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", [] {
     return std::string("bvhlab ") + BVHLAB_VERSION + " (commit " + gitCommit(findSourceDir()) + ")";
   });
+  app.footer(kExitStatusHelp);  // after the subcommands: they would copy it
   try {
     app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);  // --help, --help-all, --version: printed on stdout, exit status 0
   } catch (const CLI::ParseError& e) {
-    // A mistyped or missing subcommand: name it and list the real ones (CLI11 would only say that
-    // an argument was not expected).
-    std::vector<std::string> names;
-    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) names.push_back(sub->get_name());
-    const bool help = dynamic_cast<const CLI::CallForHelp*>(&e) || dynamic_cast<const CLI::CallForAllHelp*>(&e) ||
-                      dynamic_cast<const CLI::CallForVersion*>(&e);
-    const bool known = argc > 1 && std::find(names.begin(), names.end(), argv[1]) != names.end();
-    if (!help && (argc < 2 || (!known && argv[1][0] != '-'))) {
-      std::string list;
-      for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-      if (argc < 2)
-        std::fprintf(stderr, "bvhlab: error: no command given; commands: %s (bvhlab COMMAND --help)\n", list.c_str());
-      else
-        std::fprintf(stderr, "bvhlab: error: unknown command '%s'; commands: %s (bvhlab COMMAND --help)\n", argv[1],
-                     list.c_str());
-      return 2;
-    }
-    return app.exit(e);
+    return reportParseError(app, e, argc, argv);
   }
   try {
     if (render->parsed()) {
@@ -316,12 +333,8 @@ int main(int argc, char** argv) {
                     f.name == kDefaultTriangleFormat ? " (default)" : "");
       return 0;
     }
-  } catch (const ShaderError& e) {
-    std::fprintf(stderr, "bvhlab: shader error: %s\n", e.what());
-    return 4;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "bvhlab: error: %s\n", e.what());
-    return 1;
+    return reportError(e);  // a ShaderError is a runtime failure like any other GL failure
   }
   return 0;
 }

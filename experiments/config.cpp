@@ -565,7 +565,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
 
 ExperimentConfig loadExperimentConfig(const fs::path& file, const KnownNames& names) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string() + ": cannot open the experiment config");
+  if (!in) throw FileError(file.string() + ": cannot open the experiment config");
   std::ostringstream text;
   text << in.rdbuf();
   return parseExperimentConfig(text.str(), file, names);

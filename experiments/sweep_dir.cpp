@@ -73,7 +73,7 @@ namespace {
 
 json readJson(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string() + ": cannot open");
+  if (!in) throw FileError(file.string() + ": cannot open");
   try {
     return json::parse(in);
   } catch (const json::parse_error& e) {
@@ -85,7 +85,7 @@ json readJson(const fs::path& file) {
 
 json readPlan(const SweepDir& dir) {
   if (!fs::exists(dir.plan()))
-    throw InputError(dir.plan().string() + ": missing (is " + dir.root.string() + " the output of `bvhlab run`?)");
+    throw FileError(dir.plan().string() + ": missing (is " + dir.root.string() + " the output of `bvhlab run`?)");
   json plan = readJson(dir.plan());
   if (!plan.is_object() || plan.value("format", 0) != 1 || !plan.contains("runs"))
     throw InputError(dir.plan().string() + ": not a bvhlab sweep plan (format 1)");

@@ -363,7 +363,7 @@ json measureGroup(const json& spec) {
 
 int runMeasure(const MeasureCommand& cmd) {
   std::ifstream in(cmd.spec);
-  if (!in) throw std::invalid_argument(cmd.spec + ": cannot open the group file");
+  if (!in) throw FileError(cmd.spec + ": cannot open the group file");
   json spec;
   try {
     spec = json::parse(in);

@@ -449,13 +449,13 @@ TEST(TriangleFormatCli, ListsRefusesAndReports) {
   ASSERT_EQ(r.code, 0) << r.err;
   for (const TriangleFormatInfo& f : triangleFormats()) EXPECT_NE(r.out.find(f.name), std::string::npos) << r.out;
   r = run("render /no/such/mesh.off --triangles precomputed");
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);  // a usage error
   EXPECT_NE(r.err.find("--robust fast, box, ulp or box+ulp"), std::string::npos) << r.err;
   r = run("trace /no/such/mesh.off --triangles strips");
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("valid formats: raw precomputed indexed"), std::string::npos) << r.err;
   r = run("build --mesh /no/such/mesh.off --triangles strips");
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("valid formats"), std::string::npos) << r.err;
 
   // A tetrahedron: 4 triangles, 4 welded vertices (flat corners: the OFF has no normals).
