@@ -1,0 +1,41 @@
+// Reading results.json rows for the findings (experiments/findings.hpp): axis labels, frame lists,
+// program copies, A/A controls and replicates, each read defensively (a missing or malformed field
+// reads as absent, never as a number).
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "render/frame_stats.hpp"
+
+namespace bvhlab::findings_detail {
+
+// The axes findings compare along: every experiment axis but the scene, in experimentAxes() order.
+const std::vector<std::string>& comparedAxes();
+// A row's value on `axis` as a label ("" when absent): the string a config names it by.
+std::string label(const nlohmann::json& row, const std::string& axis);
+// {axis: label} for every compared axis the row has a value for.
+nlohmann::json axisValues(const nlohmann::json& row);
+std::optional<double> number(const nlohmann::json& row, const std::string& key);
+std::vector<double> numbers(const nlohmann::json& row, const std::string& key);  // numeric entries of a list
+std::vector<double> frames(const nlohmann::json& row);                            // frame_ms_all
+// A traced run's rounds as multiples of Embree's time in the same round; empty without such pairs.
+std::vector<double> embreeNormalised(const nlohmann::json& row);
+std::string session(const nlohmann::json& row);
+// "stack-ordered leaf_size=4": the values of `axes`, for people.
+std::string describe(const nlohmann::json& row, const std::vector<std::string>& axes);
+// A run's frames per program copy (copy 0 first); empty without copies or when malformed.
+std::vector<std::vector<double>> programCopies(const nlohmann::json& row);
+// A run's measurements: each replicate's row (`replicate_rows`), or the row itself.
+std::vector<const nlohmann::json*> replicatesOf(const nlohmann::json& row);
+// FNV-1a 64 of a string: the seed of a comparison's bootstrap (the same on every standard library).
+uint64_t seedOf(const std::string& text);
+// A run's A/A control (`prefix` "aa_control" or "aa_shared_control"): the paired block-bootstrap ratio
+// of the run's frames (copy 0's with program copies) and the control's, else the ratio `measure` stored
+// (its i.i.d. interval; logSe 0). nullopt without one.
+std::optional<Interval> controlRatio(const nlohmann::json& row, const std::string& prefix);
+
+}  // namespace bvhlab::findings_detail
