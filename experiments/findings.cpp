@@ -50,47 +50,6 @@ bool contains(const std::vector<std::string>& list, const std::string& x) {
   return std::find(list.begin(), list.end(), x) != list.end();
 }
 
-std::optional<double> correlationOf(const std::vector<const json*>& rows, const char* metric) {
-  std::vector<double> x, y;
-  for (const json* r : rows) {
-    const auto m = number(*r, metric);
-    const auto t = number(*r, "frame_ms");
-    if (!m || !t) return std::nullopt;  // a run without the measure: no honest correlation
-    x.push_back(*m);
-    y.push_back(*t);
-  }
-  return spearman(x, y);
-}
-
-// The band of an A/A interval: how far it reaches from 1, on the log scale.
-double extentOf(const Interval& aa) { return std::max(std::abs(std::log(aa.low)), std::abs(std::log(aa.high))); }
-
-// a/b across program copies: per copy, the paired ratio of the two runs' frames drawn with that copy;
-// the median of those ratios with its order-statistic interval over the copies, and their logs (for
-// the sign test, the interval's dual). nullopt unless both runs have the same number of copies, at
-// least kMinValuesForInterval, with paired frames each.
-struct AcrossCopies {
-  Interval ratio;
-  std::vector<double> logRatios;
-};
-std::optional<AcrossCopies> ratioAcrossCopies(const json& a, const json& b) {
-  const auto ca = programCopies(a), cb = programCopies(b);
-  if (ca.size() < kMinValuesForInterval || ca.size() != cb.size()) return std::nullopt;
-  AcrossCopies out;
-  std::vector<double> perCopy;
-  for (size_t j = 0; j < ca.size(); ++j) {
-    if (ca[j].size() != cb[j].size()) return std::nullopt;
-    const auto r = pairedRatio(ca[j], cb[j]);
-    if (!r) return std::nullopt;
-    perCopy.push_back(r->estimate);
-    out.logRatios.push_back(std::log(r->estimate));
-  }
-  const auto m = medianInterval(perCopy);
-  if (!m) return std::nullopt;
-  out.ratio = *m;
-  return out;
-}
-
 // A comparison waiting for its verdict: the verdicts of tested comparisons are set once every test of
 // the family is known (the adjustment needs them all).
 struct Pending {
@@ -151,7 +110,11 @@ class Finder {
     // The family: every comparison that has an interval and a band (same-tree pairs are never
     // directional and are checked on their own, below).
     std::vector<Pending*> family, sameTree;
-    for (Pending& p : pending_) (p.c["verdict"] == "same tree" ? sameTree : family).push_back(&p);
+    std::set<std::string> samePairs;  // a pair met along an axis and again as builder-best counts once
+    for (Pending& p : pending_) {
+      if (p.c["verdict"] != "same tree") family.push_back(&p);
+      else if (samePairs.insert(p.c["a"].dump() + "/" + p.c["b"].dump()).second) sameTree.push_back(&p);
+    }
     const size_t directional = decide(family, true);
     const size_t tests = size_t(std::count_if(family.begin(), family.end(), [](Pending* p) { return p->tested; }));
     out_["adjustment"] = {{"method", kAdjustmentMethod},
@@ -167,10 +130,14 @@ class Finder {
     for (Pending* p : sameTree) p->c["verdict"] = "pending";
     const size_t wouldCall = decide(sameTree, false);
     size_t sameTested = 0;
+    std::map<std::string, json> sameAdjusted;
     for (Pending* p : sameTree) {
       sameTested += p->tested;
       p->c["verdict"] = "same tree";
+      sameAdjusted[p->c["a"].dump() + "/" + p->c["b"].dump()] = p->c["p_adjusted"];
     }
+    for (Pending& p : pending_)  // the second listing of a pair: the first's adjusted p
+      if (p.c["verdict"] == "same tree") p.c["p_adjusted"] = sameAdjusted[p.c["a"].dump() + "/" + p.c["b"].dump()];
     out_["same_tree_check"] = {{"pairs", sameTree.size()},
                                {"tested", sameTested},
                                {"directional", wouldCall},

@@ -1,5 +1,6 @@
 #include "experiments/findings_rows.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "experiments/config.hpp"
@@ -126,6 +127,43 @@ std::optional<Interval> controlRatio(const json& row, const std::string& prefix)
              hi = number(row, prefix + "_ci_high");
   if (!ratio || !lo || !hi) return std::nullopt;
   return Interval{*ratio, *lo, *hi, kConfidence, original.size()};
+}
+
+std::optional<double> correlationOf(const std::vector<const json*>& rows, const char* metric) {
+  std::vector<double> x, y;
+  for (const json* r : rows) {
+    const auto m = number(*r, metric);
+    const auto t = number(*r, "frame_ms");
+    if (!m || !t) return std::nullopt;  // a run without the measure: no honest correlation
+    x.push_back(*m);
+    y.push_back(*t);
+  }
+  return spearman(x, y);
+}
+
+// The band of an A/A interval: how far it reaches from 1, on the log scale.
+double extentOf(const Interval& aa) { return std::max(std::abs(std::log(aa.low)), std::abs(std::log(aa.high))); }
+
+// a/b across program copies: per copy, the paired ratio of the two runs' frames drawn with that copy;
+// the median of those ratios with its order-statistic interval over the copies, and their logs (for
+// the sign test, the interval's dual). nullopt unless both runs have the same number of copies, at
+// least kMinValuesForInterval, with paired frames each.
+std::optional<AcrossCopies> ratioAcrossCopies(const json& a, const json& b) {
+  const auto ca = programCopies(a), cb = programCopies(b);
+  if (ca.size() < kMinValuesForInterval || ca.size() != cb.size()) return std::nullopt;
+  AcrossCopies out;
+  std::vector<double> perCopy;
+  for (size_t j = 0; j < ca.size(); ++j) {
+    if (ca[j].size() != cb[j].size()) return std::nullopt;
+    const auto r = pairedRatio(ca[j], cb[j]);
+    if (!r) return std::nullopt;
+    perCopy.push_back(r->estimate);
+    out.logRatios.push_back(std::log(r->estimate));
+  }
+  const auto m = medianInterval(perCopy);
+  if (!m) return std::nullopt;
+  out.ratio = *m;
+  return out;
 }
 
 }  // namespace bvhlab::findings_detail

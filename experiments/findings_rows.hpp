@@ -38,4 +38,18 @@ uint64_t seedOf(const std::string& text);
 // (its i.i.d. interval; logSe 0). nullopt without one.
 std::optional<Interval> controlRatio(const nlohmann::json& row, const std::string& prefix);
 
+// Spearman's rank correlation of a measure with frame_ms over the rows; nullopt when a row lacks either.
+std::optional<double> correlationOf(const std::vector<const nlohmann::json*>& rows, const char* metric);
+// The band of an A/A interval: how far it reaches from 1, on the log scale.
+double extentOf(const Interval& aa);
+// a/b across program copies: per copy, the paired ratio of the two runs' frames drawn with that copy;
+// the median of those ratios with its order-statistic interval over the copies, and their logs (for
+// the sign test, the interval's dual). nullopt unless both runs have the same number of copies, at
+// least kMinValuesForInterval, with paired frames each.
+struct AcrossCopies {
+  Interval ratio;
+  std::vector<double> logRatios;
+};
+std::optional<AcrossCopies> ratioAcrossCopies(const nlohmann::json& a, const nlohmann::json& b);
+
 }  // namespace bvhlab::findings_detail

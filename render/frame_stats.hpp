@@ -85,7 +85,7 @@ std::optional<Interval> unpairedRatio(std::span<const double> a, std::span<const
 // & White 2009) for the moving-block bootstrap with an AR(1) model fitted to the series:
 // b = (6 rho^2 n)^(1/3) / (1 - rho^2)^(2/3), rho = the lag-1 autocorrelation clipped to [0, 0.95]
 // (negative dependence needs no blocks; above 0.95 the formula runs away), rounded up, at least 1 and
-// at most n / 3 (three blocks or more, so a resample is more than a shifted copy).
+// at most n / 3 (three blocks or more, so a resample is more than a shifted copy); variance bias-corrected (.cpp).
 
 // Sample lag-1 autocorrelation of a series; nullopt for fewer than 3 finite values or a constant one.
 std::optional<double> lag1Autocorrelation(std::span<const double> series);
