@@ -155,7 +155,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   const toml::node *framesNode = nullptr, *measureMinNode = nullptr, *maxFramesNode = nullptr,
                    *programCopiesNode = nullptr;
   std::optional<int> measureMin;
-  std::vector<std::tuple<std::string, std::string, const toml::node*, std::string>> baselineNodes;  // axis, label, node, key
+  std::vector<std::tuple<std::string, std::string, const toml::node*, std::string>> baselineNodes;  // axis label node key
 
   auto readAxes = [&](const toml::table& t, const std::string& section, Sweep& into,
                       const std::set<std::string>& skip) {
@@ -578,9 +578,8 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   for (const auto& [axis, label, node, key] : baselineNodes) {
     const auto it = cfg.axisLabels.find(axis);
     if (it == cfg.axisLabels.end() || std::find(it->second.begin(), it->second.end(), label) == it->second.end())
-      r.fail(node->source(), key,
-             "'" + label + "' is not a value of the " + axis + " axis in this config" +
-                 (it == cfg.axisLabels.end() ? std::string(" (no sweep sets it)") : " (values: " + joined(it->second) + ")"));
+      r.fail(node->source(), key, "'" + label + "' is not a value of the " + axis + " axis in this config" +
+             (it == cfg.axisLabels.end() ? std::string(" (no sweep sets it)") : " (values: " + joined(it->second) + ")"));
     cfg.findingsBaseline[axis] = label;
   }
   return cfg;

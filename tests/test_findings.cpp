@@ -273,6 +273,7 @@ TEST_F(Experiments, FindingsBaselineIsValidatedWithFileLineAndKey) {
             "sah-binned");
   const std::pair<std::string, std::string> bad[] = {
       {"[findings]\nbaseline = { builder = \"sbvh\" }\n", "cfg.toml:6: findings.baseline.builder: 'sbvh' is not a value"},
+      {"[findings]\nbaseline = { leaf_size = 8 }\n", "cfg.toml:6: findings.baseline.leaf_size: '8' is not a value of the leaf_size axis"},
       {"[findings]\nbaseline = { colour = \"red\" }\n", "cfg.toml:6: findings.baseline.colour: not an axis"},
       {"[findings]\nbaseline = { scene = \"m\" }\n", "cfg.toml:6: findings.baseline.scene: not an axis"},
       {"[findings]\nbaselines = { builder = \"median\" }\n", "cfg.toml:6: findings.baselines: unknown key"},
