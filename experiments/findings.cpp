@@ -216,10 +216,11 @@ class Finder {
     m.viaEmbree = !na.empty() && !nb.empty();
     const uint64_t seed = seedOf(label(a, "key") + "/" + label(b, "key") + "/" + label(a, "replicate"));
     const std::optional<AcrossCopies> copies = m.paired ? ratioAcrossCopies(a, b) : std::nullopt;
+    const std::optional<PairedMeasure> rounds = m.paired && !copies ? pairedMeasure(fa, fb, seed) : std::nullopt;
     if (copies)
       m.ratio = copies->ratio;
     else if (m.paired)
-      m.ratio = pairedRatioBlock(fa, fb, seed);
+      m.ratio = rounds ? std::optional<Interval>(rounds->ratio) : std::nullopt;
     else
       m.ratio = unpairedRatioBlock(m.viaEmbree ? na : fa, m.viaEmbree ? nb : fb, seed);
     if (m.paired) {
@@ -229,7 +230,8 @@ class Finder {
     }
     if (m.ratio && m.hasBand)
       m.test = copies ? signBandTest(copies->logRatios, m.band)
-                      : normalBandTest(std::log(m.ratio->estimate), m.ratio->logSe, m.band);
+               : rounds ? pairedBandTest(*rounds, m.band)
+                        : normalBandTest(std::log(m.ratio->estimate), m.ratio->logSe, m.band);
     m.over = copies ? "program copies" : m.paired ? "rounds" : "bootstrap";
     m.sharedProgram = sharedProgram(a, b);
     m.n = std::min(fa.size(), fb.size());

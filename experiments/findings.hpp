@@ -4,8 +4,9 @@
 //
 // Every comparison is a ratio of two runs' frame times, a/b, with its 95% interval and a p-value:
 //   - both runs in one session with paired rounds: the median of the per-round log ratios, its
-//     interval from a moving-block bootstrap over the rounds (render/frame_stats.hpp; it holds when
-//     consecutive rounds are correlated); from 6 program copies, across the copies instead;
+//     interval the hull of a moving-block bootstrap's over the rounds (render/frame_stats.hpp; it holds
+//     when consecutive rounds are correlated) and the order-statistic one; from 6 program copies,
+//     across the copies instead;
 //   - runs in different sessions (interleave = false, another group or shard): a block bootstrap of
 //     the ratio of the two medians;
 //   - runs measured in replicates: pooled over them (experiments/replicates.hpp).

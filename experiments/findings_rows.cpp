@@ -115,14 +115,36 @@ uint64_t seedOf(const std::string& text) {
   return h;
 }
 
+std::optional<PairedMeasure> pairedMeasure(std::span<const double> a, std::span<const double> b, uint64_t seed) {
+  const auto block = pairedRatioBlock(a, b, seed);
+  const auto iid = pairedRatio(a, b);
+  if (!block || !iid) return std::nullopt;
+  PairedMeasure out;
+  out.ratio = *block;
+  out.ratio.low = std::min(block->low, iid->low);
+  out.ratio.high = std::max(block->high, iid->high);
+  const size_t n = std::min(a.size(), b.size());
+  for (size_t i = 0; i < n; ++i)  // the pairs pairedRatio keeps
+    if (a[i] > 0.0 && b[i] > 0.0 && std::isfinite(a[i]) && std::isfinite(b[i]))
+      out.logRatios.push_back(std::log(a[i]) - std::log(b[i]));
+  return out;
+}
+
+BandTest pairedBandTest(const PairedMeasure& m, double band) {
+  const BandTest normal = normalBandTest(std::log(m.ratio.estimate), m.ratio.logSe, band);
+  const BandTest sign = signBandTest(m.logRatios, band);
+  return {std::max(normal.pSlower, sign.pSlower), std::max(normal.pFaster, sign.pFaster)};
+}
+
 std::optional<Interval> controlRatio(const json& row, const std::string& prefix) {
   const std::vector<double> control = numbers(row, prefix + "_frame_ms_all");
   // The control repeats the run's own program copy: with program copies, copy 0's frames.
   const std::vector<std::vector<double>> copies = programCopies(row);
   const std::vector<double> original = copies.empty() ? frames(row) : copies.front();
-  if (!control.empty() && control.size() == original.size())
-    return pairedRatioBlock(original, control,
-                            seedOf(label(row, "key") + "/" + prefix + "/" + label(row, "replicate")));
+  if (!control.empty() && control.size() == original.size()) {
+    const auto m = pairedMeasure(original, control, seedOf(label(row, "key") + "/" + prefix + "/" + label(row, "replicate")));
+    return m ? std::optional<Interval>(m->ratio) : std::nullopt;
+  }
   const auto ratio = number(row, prefix + "_ratio"), lo = number(row, prefix + "_ci_low"),
              hi = number(row, prefix + "_ci_high");
   if (!ratio || !lo || !hi) return std::nullopt;

@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -33,9 +34,21 @@ std::vector<std::vector<double>> programCopies(const nlohmann::json& row);
 std::vector<const nlohmann::json*> replicatesOf(const nlohmann::json& row);
 // FNV-1a 64 of a string: the seed of a comparison's bootstrap (the same on every standard library).
 uint64_t seedOf(const std::string& text);
-// A run's A/A control (`prefix` "aa_control" or "aa_shared_control"): the paired block-bootstrap ratio
-// of the run's frames (copy 0's with program copies) and the control's, else the ratio `measure` stored
-// (its i.i.d. interval; logSe 0). nullopt without one.
+// Paired rounds a/b: the median of the per-round log ratios with the hull of two 95% intervals, the
+// moving-block bootstrap's (holds under autocorrelated rounds) and the order-statistic one (exact
+// under independent rounds; with few rounds the bootstrap's normal interval can be the narrower):
+// whichever is more cautious. The interval keeps the bootstrap's logSe, block and lag1.
+struct PairedMeasure {
+  Interval ratio;
+  std::vector<double> logRatios;
+};
+std::optional<PairedMeasure> pairedMeasure(std::span<const double> a, std::span<const double> b, uint64_t seed);
+// The test that matches that hull: per side the larger p of the normal (bootstrap) and the sign test,
+// so p < 0.05 exactly when both intervals, hence the hull, lie outside the band.
+BandTest pairedBandTest(const PairedMeasure& m, double band);
+// A run's A/A control (`prefix` "aa_control" or "aa_shared_control"): pairedMeasure of the run's frames
+// (copy 0's with program copies) and the control's, else the ratio `measure` stored (its i.i.d.
+// interval; logSe 0, block 0). nullopt without one.
 std::optional<Interval> controlRatio(const nlohmann::json& row, const std::string& prefix);
 
 // Spearman's rank correlation of a measure with frame_ms over the rows; nullopt when a row lacks either.
