@@ -7,6 +7,7 @@
 
 #include "experiments/findings.hpp"
 #include "experiments/findings_adjust.hpp"
+#include "experiments/findings_command.hpp"
 #include "test_experiments_fixture.hpp"
 
 using namespace bvhlab::experiments_test;
@@ -345,3 +346,55 @@ TEST(FindingsIntervals, BandTestsAgreeWithTheirIntervals) {
 }
 
 }  // namespace
+
+// `bvhlab findings DIR --check`: the committed result directories under docs/results/ quote ratios,
+// intervals and verdicts from their findings.json; each must follow from the per-round times in its
+// results.json with the current rules, and a changed round must be caught.
+TEST(FindingsCommand, CommittedFindingsFollowFromTheirRoundsAndAChangedRoundIsCaught) {
+  const fs::path docs = fs::path(BVHLAB_SOURCE_DIR) / "docs" / "results";
+  int checked = 0;
+  for (const auto& entry : fs::directory_iterator(docs)) {
+    if (!fs::exists(entry.path() / "results.json") || !fs::exists(entry.path() / "findings.json")) continue;
+    EXPECT_EQ(findingsCommand(entry.path(), true), 0) << entry.path();
+    ++checked;
+  }
+  EXPECT_GE(checked, 2) << "docs/results/ has fewer result directories with findings than the docs quote";
+
+  const fs::path dir = fs::temp_directory_path() / ("bvhlab_findings_cmd_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  for (const char* f : {"results.json", "findings.json"}) fs::copy_file(docs / "sbvh-knobs" / f, dir / f);
+  EXPECT_EQ(findingsCommand(dir, true), 0);
+  nlohmann::json results = nlohmann::json::parse(std::ifstream(dir / "results.json"));
+  bool changed = false;
+  for (auto& row : results["rows"])
+    if (row.contains("frame_ms_all") && row["frame_ms_all"].size() >= 6 && !changed) {
+      for (auto& v : row["frame_ms_all"]) v = v.get<double>() * 1.01;
+      changed = true;
+    }
+  ASSERT_TRUE(changed);
+  std::ofstream(dir / "results.json") << results.dump(1);
+  EXPECT_EQ(findingsCommand(dir, true), 1) << "a run 1% slower in every round left findings.json unchanged";
+  EXPECT_EQ(findingsCommand(dir, false), 0);  // rewritten from the rows: now it follows
+  EXPECT_EQ(findingsCommand(dir, true), 0);
+  fs::remove_all(dir);
+}
+
+TEST(FindingsCommand, FirstJsonDifferenceNamesThePathAndToleratesOnlyLastBits) {
+  using nlohmann::json;
+  const json a = {{"comparisons", {{{"ratio", 1.0}, {"verdict", "faster"}}}}};
+  EXPECT_FALSE(firstJsonDifference(a, a, 1e-9));
+  json b = a;
+  b["comparisons"][0]["ratio"] = 1.0 + 1e-12;
+  EXPECT_FALSE(firstJsonDifference(a, b, 1e-9));
+  b["comparisons"][0]["ratio"] = 1.001;
+  const auto d = firstJsonDifference(a, b, 1e-9);
+  ASSERT_TRUE(d);
+  EXPECT_NE(d->find("comparisons[0].ratio"), std::string::npos) << *d;
+  b = a;
+  b["comparisons"][0]["verdict"] = "slower";
+  EXPECT_TRUE(firstJsonDifference(a, b, 1e-9));
+  b = a;
+  b["comparisons"][0]["ratio"] = std::nan("");
+  EXPECT_TRUE(firstJsonDifference(b, b, 1e-9)) << "a NaN never agrees";
+}
