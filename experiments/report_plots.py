@@ -74,91 +74,6 @@ def nudge(xs, i, n, logx):
     return [x + 0.35 * f * (min(steps) if steps else 1.0) for x in xs]
 
 
-def yerr(rows, ys):
-    """Error bars (below, above) from the rows' intervals; 0 where a row has none."""
-    lo, hi = [], []
-    for r, y in zip(rows, ys):
-        ci = frame_ci(r)
-        lo.append(max(0.0, y - ci[0]) if ci else 0.0)
-        hi.append(max(0.0, ci[1] - y) if ci else 0.0)
-    return [lo, hi] if any(lo) or any(hi) else None
-
-
-def line_plot(data, styles, rows, x, y, ylabel, title, logx=False):
-    """y vs x, one panel per scene, one line per combination of the other varying axes."""
-    rows = [r for r in rows if num(r.get(x)) is not None and num(r.get(y)) is not None]
-    if len(data.values(rows, x)) < 2:
-        return None, "fewer than two values of %s" % x
-    series_axes = data.varying(rows, exclude=(x, "scene"))
-    panels = []
-    for scene in data.values(rows, "scene"):
-        srows = [r for r in rows if label(r, "scene") == scene]
-        lines = group(srows, lambda r: tuple(label(r, a) for a in series_axes))
-        lines = {k: v for k, v in lines.items() if len({label(r, x) for r in v}) >= 2}
-        if lines:
-            panels.append((scene, lines))
-    if not panels:
-        return None, "no series with two or more values of %s" % x
-    # Axes that still vary among the drawn series (runs off the line, e.g. a depth sweep at one leaf size, are gone).
-    drawn = [r for _, lines in panels for members in lines.values() for r in members]
-    series_axes = data.varying(drawn, exclude=(x, "scene"))
-    extra_axes = [a for a in series_axes if a not in ("builder", "kernel")]
-    fig, axs = facet_axes(len(panels))
-    for ax, (scene, lines) in zip(axs, panels):
-        keys = sorted(lines, key=lambda k: [str(v) for v in k])
-        extras = sorted({tuple(label(lines[k][0], a) for a in extra_axes) for k in keys}, key=str)
-        handles = []
-        for i, k in enumerate(keys):
-            members = lines[k]
-            by_x = group(members, lambda r: num(r.get(x)))
-            xs = sorted(by_x)
-            # one run per x (several only when rows repeat a configuration: the median one)
-            picked = [sorted(by_x[v], key=lambda r: num(r[y]))[len(by_x[v]) // 2] for v in xs]
-            ys = [num(r[y]) for r in picked]
-            st = styles.of(members[0])
-            if extra_axes:  # the marker tells the other axes apart; colour and line stay builder / kernel
-                st["marker"] = MARKERS[extras.index(tuple(label(members[0], a) for a in extra_axes)) % len(MARKERS)]
-            err = yerr(picked, ys) if y == "frame_ms" else None
-            ax.errorbar(nudge(xs, i, len(keys), logx), ys, yerr=err, color=st["color"], marker=st["marker"],
-                        linestyle=st["linestyle"], markersize=4, linewidth=1.2, elinewidth=0.9, capsize=2,
-                        markerfacecolor="white" if st["linestyle"] != "-" else st["color"])
-            if extra_axes:
-                handles.append(matplotlib.lines.Line2D(
-                    [], [], color=st["color"], marker=st["marker"], linestyle=st["linestyle"], markersize=4,
-                    label=(" ".join(describe(members[0], series_axes).split()) or "runs")[:MAX_SERIES_LABEL]))
-        if logx:
-            log2_ticks(ax, {num(r.get(x)) for r in rows})
-        else:
-            ax.set_xticks(sorted({num(r.get(x)) for r in rows}))
-        ax.set_title("%s — %s" % (title, scene), fontsize=10)
-        ax.set_xlabel(x.replace("_", " "))
-        ax.set_ylabel(ylabel)
-        ax.set_ylim(bottom=0)  # ratios read true from a zero baseline
-        ax.grid(alpha=0.3)
-        if extra_axes:
-            ax.legend(handles=handles, fontsize=7 if len(handles) <= 12 else 6, loc="upper left",
-                      bbox_to_anchor=(1.01, 1.0), borderaxespad=0, ncol=1 if len(handles) <= 16 else 2)
-        else:
-            srows = [r for ms in lines.values() for r in ms]
-            styles.legend(ax, data.values(srows, "builder"), data.values(srows, "kernel"))
-    fig.tight_layout()
-    return fig, None
-
-
-def deep_rows(data, rows):
-    """The rows of scenes whose effective depth exceeds 1 (unknown counts as deep), and a note per other scene."""
-    kept, notes = [], []
-    for scene in data.values(rows, "scene"):
-        srows = [r for r in rows if label(r, "scene") == scene]
-        depths = [num(data.value(r, "effective_depth")) for r in srows]
-        if depths and all(d is not None and d <= 1 for d in depths):
-            notes.append("%s: not plotted, its effective depth is 1 (nothing in it reflects or refracts, so every "
-                         "depth traces the same rays)." % html.escape(scene))
-        else:
-            kept += srows
-    return kept, notes
-
-
 def tree_rows(data, rows):
     """Per scene, the runs that differ only in builder, kernel, leaf size or bins (see shared_setting): a depth or
     anti-aliasing sweep would otherwise put one tree at several costs and times."""
@@ -405,3 +320,65 @@ def heatmap_scale(max_visits=None):
     ax.set_xlabel("node visits per pixel (all of the pixel's rays)%s" % ("" if max_visits else
                   ", relative to each image's 99th percentile"), fontsize=7)
     return fig
+
+
+# ---------------------------------------------------------------- ratios to a baseline (findings.json)
+def log_ratio_axis(ax):
+    """A log y axis of time ratios: a line at 1 (the baseline), ticks written as ratios."""
+    ax.axhline(1.0, color="0.3", linewidth=1)
+    ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _pos: "%.3g×" % v))
+    ax.yaxis.set_minor_formatter(matplotlib.ticker.FuncFormatter(lambda v, _pos: "%.3g" % v))
+    ax.tick_params(axis="y", which="minor", labelsize=6)
+
+
+def ratio_plot(data, axis, title):
+    """findings.json's comparisons along `axis` against its fixed baseline value: each ratio with its paired 95%
+    interval on a log axis (the interval of the ratio, not of either run's time, so the machine's drift over
+    the session does not hide the effect). One panel per scene, one series per setting of the other axes."""
+    findings = data.findings or {}
+    comps = [c for c in findings.get("comparisons") or []
+             if c.get("kind") == "axis" and c.get("axis") == axis and c.get("baseline") is True
+             and isinstance(c.get("a_values"), dict) and num(c["a_values"].get(axis)) is not None
+             and num(c.get("ratio")) is not None and num(c.get("ratio")) > 0]
+    if not comps:
+        return None, "findings.json has no comparison along %s against its baseline value" % axis.replace("_", " ")
+    base = num((findings.get("baselines") or {}).get(axis))
+    scenes = [s for s in data.values(data.rows, "scene") if any(c.get("scene") == s for c in comps)]
+    fig, axs = facet_axes(len(scenes))
+    for ax, scene in zip(axs, scenes):
+        mine = [c for c in comps if c.get("scene") == scene]
+        series = group(mine, lambda c: tuple(sorted((k, str(v)) for k, v in c["a_values"].items() if k != axis)))
+        # Label a series by the axes that differ between series only.
+        keys = sorted(series, key=str)
+        differ = [k for k in {k for key in keys for k, _ in key}
+                  if len({dict(key).get(k) for key in keys}) > 1]
+        xs_all = set()
+        for i, key in enumerate(keys):
+            cs = sorted(series[key], key=lambda c: num(c["a_values"][axis]))
+            xs = [num(c["a_values"][axis]) for c in cs]
+            ys = [num(c["ratio"]) for c in cs]
+            lo = [max(0.0, y - num(c.get("ci_low"))) if num(c.get("ci_low")) is not None else 0.0
+                  for c, y in zip(cs, ys)]
+            hi = [max(0.0, num(c.get("ci_high")) - y) if num(c.get("ci_high")) is not None else 0.0
+                  for c, y in zip(cs, ys)]
+            if base is not None:  # the baseline itself: 1 by definition
+                xs, ys, lo, hi = [base] + xs, [1.0] + ys, [0.0] + lo, [0.0] + hi
+            xs_all.update(xs)
+            name = " ".join("%s=%s" % (k, v) for k, v in key if k in sorted(differ)) or "runs"
+            ax.errorbar(nudge(xs, i, len(keys), axis == "leaf_size"), ys, yerr=[lo, hi],
+                        marker=MARKERS[i % len(MARKERS)], linestyle=LINESTYLES[i % len(LINESTYLES)], markersize=4,
+                        linewidth=1.0, elinewidth=0.9, capsize=2, label=name[:MAX_SERIES_LABEL])
+        if axis == "leaf_size":
+            log2_ticks(ax, xs_all)
+        else:
+            ax.set_xticks(sorted(xs_all))
+        log_ratio_axis(ax)
+        ax.set_title("%s — %s" % (title, scene), fontsize=10)
+        ax.set_xlabel(axis.replace("_", " "))
+        ax.set_ylabel("time / baseline's (log)")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7 if len(keys) <= 12 else 6, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                  borderaxespad=0, ncol=1 if len(keys) <= 16 else 2)
+    fig.tight_layout()
+    return fig, None
