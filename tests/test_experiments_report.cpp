@@ -4,6 +4,7 @@
 #include <functional>
 #include <regex>
 
+#include "experiments/provenance.hpp"
 #include "test_experiments_fixture.hpp"
 
 using namespace bvhlab::experiments_test;
@@ -89,6 +90,42 @@ TEST_F(Experiments, SeedFiguresReportMirrorsFigures8To12AndOmitsPlotsWithoutData
   // No kernel or aa-with-reference data: the Pareto plot is omitted with a note, not drawn empty.
   EXPECT_NE(html.find("id=\"plot-pareto\""), std::string::npos);
   EXPECT_NE(html.find("no image-error data"), std::string::npos);
+}
+
+// The machine's load over a group: steal as a share of the CPU time that passed, nothing from unknown samples.
+TEST(MachineLoad, StealIsTheShareOfCpuTimeThatPassed) {
+  MachineLoad a{true, 1.5, 1000, 10}, b{true, 2.5, 1200, 20};
+  const json load = machineLoadDuring(a, b);
+  EXPECT_DOUBLE_EQ(load["load_avg_1m_start"].get<double>(), 1.5);
+  EXPECT_DOUBLE_EQ(load["load_avg_1m_end"].get<double>(), 2.5);
+  EXPECT_DOUBLE_EQ(load["steal_pct"].get<double>(), 5.0);  // 10 of 200 jiffies
+  EXPECT_TRUE(machineLoadDuring(a, a)["steal_pct"].is_null()) << "no CPU time passed";
+  EXPECT_EQ(machineLoadDuring(MachineLoad{}, b), json::object());
+  const MachineLoad now = machineLoadNow();
+  if (fs::exists("/proc/loadavg") && fs::exists("/proc/stat")) {
+    EXPECT_TRUE(now.known);
+    EXPECT_GE(now.loadAvg1m, 0.0);
+    EXPECT_GT(now.totalJiffies, 0u);
+  }
+}
+
+// Every measured run's row carries its group's load: the sweep's rows read from /proc around each run.
+TEST_F(Experiments, RowsCarryTheirGroupsMachineLoad) {
+  if (!fs::exists("/proc/loadavg") || !fs::exists("/proc/stat")) GTEST_SKIP() << "no /proc/loadavg or /proc/stat";
+  FakeRenderer fake;
+  const fs::path out = root / "out";
+  runSweep(options(kFixtures / "report.toml", out, fake));
+  const json rows = readJsonFile(out / "results.json")["rows"];
+  ASSERT_FALSE(rows.empty());
+  for (const json& row : rows) {
+    SCOPED_TRACE(row["key"].get<std::string>());
+    ASSERT_TRUE(row.contains("load_avg_1m_start") && row["load_avg_1m_start"].is_number()) << row.dump();
+    EXPECT_GE(row["load_avg_1m_end"].get<double>(), 0.0);
+    if (!row["steal_pct"].is_null()) {
+      EXPECT_GE(row["steal_pct"].get<double>(), 0.0);
+      EXPECT_LE(row["steal_pct"].get<double>(), 100.0);
+    }
+  }
 }
 
 // The report's first screen (experiments/report_summary.py) from a hand-made results directory
