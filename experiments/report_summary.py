@@ -44,6 +44,12 @@ def _setting(c):
     return tuple(sorted((str(k), str(v)) for k, v in values.items() if k not in ("builder", "rays")))
 
 
+def _at_baseline(data, setting):
+    """Whether every held axis that findings.json names a baseline for is at that baseline."""
+    want = {str(k): str(v) for k, v in ((data.findings or {}).get("baselines") or {}).items()}
+    return all(want.get(k, v) == v for k, v in setting)
+
+
 def _baseline_builder(data):
     base = ((data.findings or {}).get("baselines") or {}).get("builder")
     return str(base) if base is not None else data.baseline("builder")
@@ -54,7 +60,6 @@ def builder_cells(data, scene):
     comparisons at the config's baseline setting (else, when no run of the column was made there, the
     setting with the most builders)."""
     findings = data.findings or {}
-    want = {str(k): str(v) for k, v in (findings.get("baselines") or {}).items() if k not in ("builder", "rays")}
     comps = [c for c in findings.get("comparisons") or []
              if c.get("scene") == scene and c.get("kind") == "axis" and c.get("axis") == "builder"
              and c.get("baseline") is True and isinstance(c.get("a_values"), dict)]
@@ -63,7 +68,7 @@ def builder_cells(data, scene):
         by_column.setdefault(_column(c), {}).setdefault(_setting(c), []).append(c)
     cells, settings = {}, {}
     for col, per_setting in by_column.items():
-        at_base = [s for s in per_setting if all(want.get(k, v) == v for k, v in s)]
+        at_base = [s for s in per_setting if _at_baseline(data, s)]
         pool = at_base or list(per_setting)
         best = max(pool, key=lambda s: (len({str(c["a_values"].get("builder")) for c in per_setting[s]}), s))
         settings[col] = best
@@ -85,14 +90,22 @@ def _cell(c):
                fmt_ratio(c.get("ratio"), c.get("ci_low"), c.get("ci_high")), html.escape(verdict or "–")))
 
 
-def _setting_text(setting):
-    return ", ".join("%s %s" % (k.replace("_", " "), v) for k, v in setting) or "the only setting run"
+def _setting_text(data, setting):
+    text = ", ".join("%s %s" % (k.replace("_", " "), v) for k, v in setting) or "the only setting run"
+    if _at_baseline(data, setting):
+        return text + ": the config's baseline setting"
+    return text + ": not the config's baseline setting, where no builder was compared"
+
+
+def table_builders(data, cells, base):
+    """The table's rows: the baseline and every compared builder, in config order (unknown ones last)."""
+    order = [str(b) for b in data.order.get("builder", [])]
+    present = {b for col in cells.values() for b in col} | {base}
+    return [b for b in order if b in present] + sorted(present - set(order))
 
 
 def summary_table(page, data, scene, columns, cells, settings, base):
-    builders = [str(b) for b in data.order.get("builder", [])]
-    present = {b for col in cells.values() for b in col} | {base}
-    builders = [b for b in builders if b in present] + sorted(present - set(builders))
+    builders = table_builders(data, cells, base)
     out = ['<div class="scroll"><table class="summary" id="summary-%s" data-scene="%s"><thead><tr><th>builder</th>'
            % (_slug(scene), html.escape(scene))]
     out += ["<th>%s</th>" % html.escape(col) for col in columns]
@@ -110,11 +123,11 @@ def summary_table(page, data, scene, columns, cells, settings, base):
         out.append("</tr>")
     out.append("</tbody></table></div>")
     distinct = sorted(set(settings.values()))
-    held = "; ".join("%s: %s" % (", ".join(col for col in columns if settings[col] == s), _setting_text(s))
-                     for s in distinct) if len(distinct) > 1 else _setting_text(distinct[0]) if distinct else ""
+    held = "; ".join("%s: %s" % (", ".join(col for col in columns if settings[col] == s), _setting_text(data, s))
+                     for s in distinct) if len(distinct) > 1 else _setting_text(data, distinct[0]) if distinct else ""
     page.add("<p><b>%s</b> — time of each builder's tree / the baseline builder's (%s), with the 95%% interval "
              "and verdict from findings.json; below 1 is faster. Every other axis is held equal within a cell "
-             "(%s: the config's baseline setting; other kernels and leaf sizes are in the findings below).</p>"
+             "(%s; other kernels and leaf sizes are in the findings below).</p>"
              % (html.escape(scene), html.escape(base), html.escape(held)))
     page.add("".join(out))
 
@@ -217,9 +230,9 @@ def load_line(page, groups, scene):
 
 
 # ---------------------------------------------------------------- the plot
-def ratio_figure(scene, columns, cells, base):
+def ratio_figure(scene, columns, cells, builders, base):
     """The table as a log-ratio plot: each builder's ratio to the baseline with its interval, per column."""
-    builders = sorted({b for col in cells.values() for b in col})
+    builders = [b for b in builders if b != base]
     if not builders:
         return None
     fig, ax = plt.subplots(figsize=(8.5, 3.2))
@@ -272,7 +285,7 @@ def section_summary(page, data):
         summary_table(page, data, scene, columns, cells, settings, base)
         noise_line(page, data, scene)
         load_line(page, groups, scene)
-        fig = ratio_figure(scene, columns, cells, base)
+        fig = ratio_figure(scene, columns, cells, table_builders(data, cells, base), base)
         if fig is not None:
             alt = ("Log-scale plot of each builder's time ratio to %s on %s with 95%% intervals, one marker per "
                    "ray type; the line at 1 is the baseline." % (base, scene))

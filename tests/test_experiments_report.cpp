@@ -19,6 +19,14 @@ bool reportToolsAvailable() {
   }
 }
 
+// Every <img> of a page has alt text.
+void expectAltOnEveryImage(const std::string& html) {
+  size_t images = 0;
+  for (size_t img = html.find("<img"); img != std::string::npos; img = html.find("<img", img + 1), ++images)
+    EXPECT_NE(html.substr(img, html.find('>', img) - img).find(" alt=\""), std::string::npos) << html.substr(img, 120);
+  EXPECT_GT(images, 0u);
+}
+
 TEST_F(Experiments, ReportHasEveryPlotTableAndFinding) {
   if (!reportToolsAvailable()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)";
   FakeRenderer fake;
@@ -33,6 +41,7 @@ TEST_F(Experiments, ReportHasEveryPlotTableAndFinding) {
   EXPECT_EQ(html.find("http://"), std::string::npos) << "the report must work offline";
   EXPECT_EQ(html.find("https://"), std::string::npos) << "the report must work offline";
   EXPECT_EQ(html.find("id=\"seed-fig8\""), std::string::npos) << "not a seed-figures config";
+  expectAltOnEveryImage(html);
   // Every run appears in the full table.
   const json rowsOf1 = readJsonFile(out / "results.json")["rows"];  // named: a range-for over a temporary's member dangles
   for (const json& row : rowsOf1)
@@ -90,6 +99,7 @@ TEST_F(Experiments, SeedFiguresReportMirrorsFigures8To12AndOmitsPlotsWithoutData
   // No kernel or aa-with-reference data: the Pareto plot is omitted with a note, not drawn empty.
   EXPECT_NE(html.find("id=\"plot-pareto\""), std::string::npos);
   EXPECT_NE(html.find("no image-error data"), std::string::npos);
+  expectAltOnEveryImage(html);
 }
 
 // The machine's load over a group: steal as a share of the CPU time that passed, nothing from unknown samples.
@@ -221,8 +231,7 @@ TEST_F(SummaryReport, OpensWithABuilderByRayTypeTableWhoseCellsAreFindingsJson) 
   // Noise floor and machine load lines under each table; alt text on every image of the page.
   EXPECT_NE(tables.find("Noise floor (A/A band of each group, 3): "), std::string::npos);
   EXPECT_NE(tables.find("0.40\u21920.60, steal 0.0%"), std::string::npos);
-  for (size_t img = html.find("<img"); img != std::string::npos; img = html.find("<img", img + 1))
-    EXPECT_NE(html.substr(img, html.find('>', img) - img).find(" alt=\""), std::string::npos) << html.substr(img, 120);
+  expectAltOnEveryImage(html);
 }
 
 // The warning banner: shown iff some group ran on a busy machine (load average above the cores, or more than
