@@ -323,13 +323,27 @@ def heatmap_scale(max_visits=None):
 
 
 # ---------------------------------------------------------------- ratios to a baseline (findings.json)
+# Tick steps of a ratio axis, finest first: the first that puts at most RATIO_TICKS ticks in view wins.
+RATIO_STEPS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.25, 0.5, 1.0, 2.0, 5.0)
+RATIO_TICKS = 8
+
+
 def log_ratio_axis(ax):
-    """A log y axis of time ratios: a line at 1 (the baseline), ticks written as ratios."""
+    """A log y axis of time ratios: a line at 1 (the baseline), evenly stepped ticks around 1 written as ratios
+    (call after plotting: the ticks cover the data's range)."""
     ax.axhline(1.0, color="0.3", linewidth=1)
     ax.set_yscale("log")
+    lo, hi = ax.get_ylim()
+    lo, hi = min(lo, 1.0), max(hi, 1.0)
+    for step in RATIO_STEPS:
+        ticks = [1.0 + i * step for i in range(int(math.floor((lo - 1.0) / step)), int(math.ceil((hi - 1.0) / step)) + 1)]
+        ticks = [t for t in ticks if lo <= t <= hi and t > 0]
+        if len(ticks) <= RATIO_TICKS:
+            break
+    ax.yaxis.set_major_locator(matplotlib.ticker.FixedLocator(ticks))
+    ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
     ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _pos: "%.3g×" % v))
-    ax.yaxis.set_minor_formatter(matplotlib.ticker.FuncFormatter(lambda v, _pos: "%.3g" % v))
-    ax.tick_params(axis="y", which="minor", labelsize=6)
+    ax.set_ylim(lo, hi)
 
 
 def ratio_plot(data, axis, title):
@@ -341,9 +355,12 @@ def ratio_plot(data, axis, title):
              if c.get("kind") == "axis" and c.get("axis") == axis and c.get("baseline") is True
              and isinstance(c.get("a_values"), dict) and num(c["a_values"].get(axis)) is not None
              and num(c.get("ratio")) is not None and num(c.get("ratio")) > 0]
+    base = num((findings.get("baselines") or {}).get(axis))
+    # A run at the baseline value itself (a twin of the baseline run, e.g. one config setting reached by two
+    # sweeps) is not a point on the curve: the baseline is drawn at 1.
+    comps = [c for c in comps if base is None or num(c["a_values"][axis]) != base]
     if not comps:
         return None, "findings.json has no comparison along %s against its baseline value" % axis.replace("_", " ")
-    base = num((findings.get("baselines") or {}).get(axis))
     scenes = [s for s in data.values(data.rows, "scene") if any(c.get("scene") == s for c in comps)]
     fig, axs = facet_axes(len(scenes))
     for ax, scene in zip(axs, scenes):

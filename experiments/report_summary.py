@@ -33,15 +33,22 @@ p.load,p.noise{font-size:12px;margin:.3em 0}
 """
 
 
+# a_values' name for the ray type: "rays" (the config's axis name) or "workload" (the row column's name).
+RAY_KEYS = ("rays", "workload")
+# Axes a caption always names (the tree and how it is walked); others only where the scene's cells vary.
+CAPTION_AXES = ("kernel", "layout", "leaf_size", "triangle_format")
+
+
 def _column(c):
-    rays = (c.get("a_values") or {}).get("rays")
-    return str(rays) if rays else FRAMES
+    values = c.get("a_values") or {}
+    rays = next((values[k] for k in RAY_KEYS if isinstance(values.get(k), str) and values[k]), None)
+    return rays or FRAMES
 
 
 def _setting(c):
-    """The comparison's held axes (all but builder and rays), as a sorted tuple of (axis, label)."""
+    """The comparison's held axes (all but builder and the ray type), as a sorted tuple of (axis, label)."""
     values = c.get("a_values") or {}
-    return tuple(sorted((str(k), str(v)) for k, v in values.items() if k not in ("builder", "rays")))
+    return tuple(sorted((str(k), str(v)) for k, v in values.items() if k != "builder" and k not in RAY_KEYS))
 
 
 def _at_baseline(data, setting):
@@ -90,8 +97,9 @@ def _cell(c):
                fmt_ratio(c.get("ratio"), c.get("ci_low"), c.get("ci_high")), html.escape(verdict or "–")))
 
 
-def _setting_text(data, setting):
-    text = ", ".join("%s %s" % (k.replace("_", " "), v) for k, v in setting) or "the only setting run"
+def _setting_text(data, setting, shown=None):
+    text = ", ".join("%s %s" % (k.replace("_", " "), v) for k, v in (setting if shown is None else shown))
+    text = text or "the only setting run"
     if _at_baseline(data, setting):
         return text + ": the config's baseline setting"
     return text + ": not the config's baseline setting, where no builder was compared"
@@ -123,8 +131,15 @@ def summary_table(page, data, scene, columns, cells, settings, base):
         out.append("</tr>")
     out.append("</tbody></table></div>")
     distinct = sorted(set(settings.values()))
-    held = "; ".join("%s: %s" % (", ".join(col for col in columns if settings[col] == s), _setting_text(data, s))
-                     for s in distinct) if len(distinct) > 1 else _setting_text(data, distinct[0]) if distinct else ""
+    # Name the tree axes and whatever differs between the columns' settings; the rest is one value throughout.
+    varying = {k for k in {k for st in distinct for k, _ in st}
+               if len({dict(st)[k] for st in distinct if k in dict(st)}) > 1}
+    distinct_shown = {st: tuple((k, v) for k, v in st if k in CAPTION_AXES or k in varying) for st in distinct}
+    texts = {}  # caption text -> the columns held there
+    for col in columns:
+        texts.setdefault(_setting_text(data, settings[col], distinct_shown[settings[col]]), []).append(col)
+    held = "; ".join("%s: %s" % (", ".join(cols), t) for t, cols in texts.items()) if len(texts) > 1 else \
+        next(iter(texts), "")
     page.add("<p><b>%s</b> — time of each builder's tree / the baseline builder's (%s), with the 95%% interval "
              "and verdict from findings.json; below 1 is faster. Every other axis is held equal within a cell "
              "(%s; other kernels and leaf sizes are in the findings below).</p>"
@@ -146,9 +161,10 @@ def noise_line(page, data, scene):
     parts = []
     for n in entries:
         band = band_of(n.get("ci_low"), n.get("ci_high"))
-        parts.append('<span title="%s">%s</span>' % (html.escape("%s, %s control: %s [%s, %s]" % (
-            n.get("description") or n.get("key"), n.get("control"), n.get("ratio"), n.get("ci_low"),
-            n.get("ci_high"))), fmt_band(band)))
+        parts.append('<span title="%s">%s</span>' % (html.escape("%s, %s control: %s" % (
+            n.get("description") or n.get("key"), n.get("control"),
+            html.unescape(fmt_ratio(n.get("ratio"), n.get("ci_low"), n.get("ci_high"))).replace(
+                '<span class="ci">', "").replace("</span>", ""))), fmt_band(band)))
     widest = max((b for b in (band_of(n.get("ci_low"), n.get("ci_high")) for n in entries) if b is not None),
                  default=None)
     page.add('<p class="noise">Noise floor (A/A band of each group, %d): %s; widest %s.</p>'

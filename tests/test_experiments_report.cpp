@@ -228,6 +228,12 @@ TEST_F(SummaryReport, OpensWithABuilderByRayTypeTableWhoseCellsAreFindingsJson) 
   const std::string tables = html.substr(summary, firstFinding - summary);
   EXPECT_EQ(tables.find("1.600\u00d7"), std::string::npos);
   EXPECT_EQ(tables.find("0.500\u00d7"), std::string::npos);
+  // The leaf-size plot draws findings.json's ratios to the baseline leaf size (the depth plot has none: a note).
+  const size_t leaf = html.find("id=\"plot-frame-vs-leaf\"");
+  ASSERT_NE(leaf, std::string::npos);
+  EXPECT_EQ(html.find("<figure><img src=\"data:image/png;base64,", leaf), html.find("<figure>", leaf));
+  EXPECT_LT(html.find("<figure>", leaf), html.find("id=\"plot-frame-vs-depth\""));
+  EXPECT_NE(html.find("Plot omitted: findings.json has no comparison along depth"), std::string::npos);
   // Noise floor and machine load lines under each table; alt text on every image of the page.
   EXPECT_NE(tables.find("Noise floor (A/A band of each group, 3): "), std::string::npos);
   EXPECT_NE(tables.find("0.40\u21920.60, steal 0.0%"), std::string::npos);
