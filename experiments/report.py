@@ -59,11 +59,12 @@ def build(root):
                  ratio_plot(data, "depth", "Time ratio vs depth"),
                  ratio_caption + " Depth = path segments per pixel, primary ray included; scenes whose effective "
                  "depth is 1 are not compared (findings.json's skipped list).")
-    section_plot(body, "plot-time-vs-costs", "Frame time vs the deterministic cost measures",
-                 time_vs_costs(data, styles, data.sweep),
-                 "Each point is a run (bars = 95% interval of its median frame time); per scene, the runs that "
-                 "differ only in builder, kernel, leaf size or bins. How well each measure ranks the runs is in "
-                 "the findings (Spearman).")
+    section_plot(body, "plot-time-vs-costs", "Frame time vs the deterministic cost measures, as ratios to the baseline",
+                 time_vs_costs(data, styles),
+                 "Each point is a builder against the baseline builder with every other axis equal: its time ratio "
+                 "(findings.json, bars = the paired 95% interval) against the same ratio of each cost measure, "
+                 "log-log; on the dotted diagonal the measure predicted the time. Colour = builder, marker = ray "
+                 "type or frames. How well each measure ranks the runs is in the findings (Spearman).")
     section_plot(body, "plot-visits-vs-sah", "Node visits per ray vs SAH cost",
                  scatter_visits_vs_sah(data, styles, data.sweep),
                  "Each point is a run (per scene, the runs that differ only in builder, kernel, leaf size or bins); "

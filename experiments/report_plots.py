@@ -124,42 +124,72 @@ PREDICTOR_AXES = [("sah_cost", "SAH cost"), ("epo", "EPO"), ("node_visits_per_ra
                   ("ray_cost", "ray cost (Ct·visits + Ci·tests)")]
 
 
-def time_vs_costs(data, styles, rows):
-    """Measured frame time against each deterministic cost measure, one row of panels per scene."""
-    rows = tree_rows(data, rows)
-    metrics = [(m, t) for m, t in PREDICTOR_AXES if len({num(r.get(m)) for r in rows} - {None}) >= 2]
+def _cost_ratio(c, metric):
+    """a / b of one deterministic count of a comparison (findings.json's counts), or None."""
+    pair = (c.get("counts") or {}).get(metric)
+    if not isinstance(pair, list) or len(pair) != 2:
+        return None
+    a, b = num(pair[0]), num(pair[1])
+    return a / b if a is not None and b is not None and a > 0 and b > 0 else None
+
+
+def time_vs_costs(data, styles):
+    """Each builder's time ratio to the baseline builder (findings.json, with its paired 95% interval) against
+    the same ratio of each deterministic cost measure, log-log, one row of panels per scene: where a point
+    sits on the diagonal, the measure predicted the time. Colour = builder, marker = ray type (or frames)."""
+    findings = data.findings or {}
+    base = str((findings.get("baselines") or {}).get("builder") or data.baseline("builder"))
+    comps = [c for c in findings.get("comparisons") or []
+             if c.get("kind") == "axis" and c.get("axis") == "builder" and c.get("baseline") is True
+             and num(c.get("ratio")) is not None and num(c.get("ratio")) > 0
+             and str((c.get("a_values") or {}).get("builder")) != base]  # not a twin of the baseline run
+    metrics = [(m, t) for m, t in PREDICTOR_AXES
+               if len({_cost_ratio(c, m) for c in comps} - {None}) >= 2]
     if not metrics:
-        return None, "no cost measure takes two different values in this sweep (one tree and kernel per scene)"
-    scenes = [s for s in data.values(rows, "scene") if sum(1 for r in rows if label(r, "scene") == s) >= 2]
-    if not scenes:
-        return None, "fewer than two runs per scene"
+        return None, ("findings.json has no builder compared with the baseline builder on a cost measure "
+                      "that differs between them")
+    scenes = [s for s in data.values(data.rows, "scene") if any(c.get("scene") == s for c in comps)]
     fig, axs = plt.subplots(len(scenes), len(metrics), figsize=(3.4 * len(metrics) + 1.6, 3.2 * len(scenes)),
                             squeeze=False)
+    columns = []
+    for c in comps:
+        v = c.get("a_values") or {}
+        col = v.get("rays") or v.get("workload") or "frames"
+        c["_column"] = str(col)
+        if c["_column"] not in columns:
+            columns.append(c["_column"])
+    cmark = dict(zip(columns, "osD^v<>pH*"))
     for panel, scene in zip(axs, scenes):
-        srows = [r for r in rows if label(r, "scene") == scene]
-        kernels = data.values(srows, "kernel")
-        kmark = dict(zip(kernels, "o^sDv<>pH*"))
+        mine = [c for c in comps if c.get("scene") == scene]
         for ax, (m, title) in zip(panel, metrics):
-            for r in srows:
-                xv, yv = num(r.get(m)), num(r.get("frame_ms"))
-                if xv is None:
+            for c in mine:
+                x, y = _cost_ratio(c, m), num(c["ratio"])
+                if x is None:
                     continue
-                st = styles.of(r)
-                ci = frame_ci(r)
-                ax.errorbar([xv], [yv], yerr=[[yv - ci[0]], [ci[1] - yv]] if ci else None, color=st["color"],
-                            marker=kmark.get(label(r, "kernel"), "o") if len(kernels) > 1 else st["marker"],
+                lo, hi = num(c.get("ci_low")), num(c.get("ci_high"))
+                err = [[y - lo], [hi - y]] if lo is not None and hi is not None and lo <= y <= hi else None
+                b = str((c.get("a_values") or {}).get("builder") or c.get("a_label"))
+                ax.errorbar([x], [y], yerr=err, color=styles.colour.get(b, "0.3"), marker=cmark[c["_column"]],
                             markersize=4, linestyle="none", elinewidth=0.8, capsize=1.5, alpha=0.85)
-            ax.set_xlabel(title, fontsize=8)
-            ax.set_ylabel("frame time (ms)", fontsize=8)
+            log_ratio_axis(ax, "x")
+            log_ratio_axis(ax, "y")
+            (lo_x, hi_x), (lo_y, hi_y) = ax.get_xlim(), ax.get_ylim()
+            span = (max(lo_x, lo_y), min(hi_x, hi_y))
+            ax.plot(span, span, color="0.6", linewidth=0.8, linestyle=":")  # time ratio = cost ratio
+            ax.set_xlabel("%s / baseline builder's" % title, fontsize=8)
+            ax.set_ylabel("time / baseline builder's", fontsize=8)
             ax.set_title(scene, fontsize=9)
             ax.tick_params(labelsize=7)
             ax.grid(alpha=0.3)
-        handles = [matplotlib.lines.Line2D([], [], color=styles.colour.get(b, "0.3"),
-                                           marker="o" if len(kernels) > 1 else styles.marker.get(b, "o"),
-                                           linestyle="none", label=b) for b in data.values(srows, "builder")]
-        handles += [matplotlib.lines.Line2D([], [], color="0.35", marker=kmark[k], linestyle="none", label=k)
-                    for k in kernels] if len(kernels) > 1 else []
+        builders = [b for b in data.values(data.rows, "builder")
+                    if any(str((c.get("a_values") or {}).get("builder")) == b for c in mine)]
+        handles = [matplotlib.lines.Line2D([], [], color=styles.colour.get(b, "0.3"), marker="o", linestyle="none",
+                                           label=b) for b in builders]
+        handles += [matplotlib.lines.Line2D([], [], color="0.35", marker=cmark[k], linestyle="none", label=k)
+                    for k in columns] if len(columns) > 1 else []
         panel[-1].legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
+    for c in comps:
+        c.pop("_column", None)
     fig.tight_layout()
     return fig, None
 
@@ -328,22 +358,23 @@ RATIO_STEPS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.25, 0.5, 1.0, 2.0, 5.0)
 RATIO_TICKS = 8
 
 
-def log_ratio_axis(ax):
-    """A log y axis of time ratios: a line at 1 (the baseline), evenly stepped ticks around 1 written as ratios
-    (call after plotting: the ticks cover the data's range)."""
-    ax.axhline(1.0, color="0.3", linewidth=1)
-    ax.set_yscale("log")
-    lo, hi = ax.get_ylim()
+def log_ratio_axis(ax, which="y"):
+    """A log axis of time (or cost) ratios: a line at 1 (the baseline), evenly stepped ticks around 1 written as
+    ratios (call after plotting: the ticks cover the data's range)."""
+    axis = ax.yaxis if which == "y" else ax.xaxis
+    (ax.axhline if which == "y" else ax.axvline)(1.0, color="0.3", linewidth=1)
+    (ax.set_yscale if which == "y" else ax.set_xscale)("log")
+    lo, hi = ax.get_ylim() if which == "y" else ax.get_xlim()
     lo, hi = min(lo, 1.0), max(hi, 1.0)
     for step in RATIO_STEPS:
         ticks = [1.0 + i * step for i in range(int(math.floor((lo - 1.0) / step)), int(math.ceil((hi - 1.0) / step)) + 1)]
         ticks = [t for t in ticks if lo <= t <= hi and t > 0]
         if len(ticks) <= RATIO_TICKS:
             break
-    ax.yaxis.set_major_locator(matplotlib.ticker.FixedLocator(ticks))
-    ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
-    ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _pos: "%.3g×" % v))
-    ax.set_ylim(lo, hi)
+    axis.set_major_locator(matplotlib.ticker.FixedLocator(ticks))
+    axis.set_minor_locator(matplotlib.ticker.NullLocator())
+    axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _pos: "%.3g×" % v))
+    (ax.set_ylim if which == "y" else ax.set_xlim)(lo, hi)
 
 
 def ratio_plot(data, axis, title):
