@@ -234,6 +234,10 @@ TEST_F(SummaryReport, OpensWithABuilderByRayTypeTableWhoseCellsAreFindingsJson) 
   EXPECT_EQ(html.find("<figure><img src=\"data:image/png;base64,", leaf), html.find("<figure>", leaf));
   EXPECT_LT(html.find("<figure>", leaf), html.find("id=\"plot-frame-vs-depth\""));
   EXPECT_NE(html.find("Plot omitted: findings.json has no comparison along depth"), std::string::npos);
+  // Time ratio vs cost ratio: drawn from the builder comparisons' SAH counts.
+  const size_t costs = html.find("id=\"plot-time-vs-costs\"");
+  ASSERT_NE(costs, std::string::npos);
+  EXPECT_LT(html.find("<figure><img src=\"data:image/png;base64,", costs), html.find("id=\"plot-visits-vs-sah\""));
   // Noise floor and machine load lines under each table; alt text on every image of the page.
   EXPECT_NE(tables.find("Noise floor (A/A band of each group, 3): "), std::string::npos);
   EXPECT_NE(tables.find("0.40\u21920.60, steal 0.0%"), std::string::npos);
