@@ -220,7 +220,7 @@ def busy_banner(page, groups):
              'a load average up to %.2f on %s cores%s. %d of their %d runs have intervals wider than the target '
              '(%s): fewer differences could be called, so "no detectable difference" here may only mean '
              '"not resolved"; rerun on an idle machine to narrow them.</div>'
-             % (len(busy), len(groups), max(loads) if loads else float("nan"),
+             % (len(busy), len(groups), max(loads),  # every listed group has a load sample (load_groups)
                 "/".join(str(c) for c in sorted(cores)) or "?",
                 ", CPU time stolen up to %.1f%%" % max(steals) if steals and max(steals) > 0 else "",
                 len(wide), len(runs), ", ".join("±%g%%" % t for t in sorted(
