@@ -9,8 +9,9 @@ separate control rows (control_of set) are kept out of every plot and table but 
 and a run's own A/A columns (aa_control_*) are only read through findings.json's noise entries.
 
 Modules, next to this file: report_data (rows, findings.json, formatting), report_html (the page),
-report_plots, report_findings, report_tables, report_summary (the first screen), report_seed (seed figures, anti-aliasing),
-report_robust (robustness variants), report_rays (traced workloads), report_layouts (layouts: memory vs time).
+report_plots, report_findings, report_tables, report_summary (the first screen), report_seed (seed figures,
+anti-aliasing), report_robust (robustness variants), report_rays (traced workloads), report_layouts
+(layouts: memory vs time).
 
 Run with Debian's interpreter, which has python3-matplotlib:
     /usr/bin/python3 experiments/report.py DIR

@@ -367,7 +367,8 @@ def log_ratio_axis(ax, which="y"):
     lo, hi = ax.get_ylim() if which == "y" else ax.get_xlim()
     lo, hi = min(lo, 1.0), max(hi, 1.0)
     for step in RATIO_STEPS:
-        ticks = [1.0 + i * step for i in range(int(math.floor((lo - 1.0) / step)), int(math.ceil((hi - 1.0) / step)) + 1)]
+        first, last = int(math.floor((lo - 1.0) / step)), int(math.ceil((hi - 1.0) / step))
+        ticks = [1.0 + i * step for i in range(first, last + 1)]
         ticks = [t for t in ticks if lo <= t <= hi and t > 0]
         if len(ticks) <= RATIO_TICKS:
             break

@@ -46,7 +46,8 @@ def section_images(page, data):
                 html.escape(b or "–"),
                 '<img class="render" src="%s" alt="%s">' % (img, html.escape("render: " + (b or "the run"))) if img
                 else "no image",
-                '<img class="render" src="%s" alt="%s">' % (heat, html.escape("node visits heatmap: " + (b or "the run")))
+                '<img class="render" src="%s" alt="%s">'
+                % (heat, html.escape("node visits heatmap: " + (b or "the run")))
                 if heat else "no heatmap", cap))
         page.add('<div class="pair" id="images-%s">%s</div>' % (html.escape(scene), "".join(blocks)))
 

@@ -180,7 +180,8 @@ TEST_F(SummaryReport, OpensWithABuilderByRayTypeTableWhoseCellsAreFindingsJson) 
   EXPECT_EQ(html.find("id=\"busy-machine\""), std::string::npos) << "an idle machine gets no warning";
 
   const json& baselines = findings["baselines"];
-  const std::regex cell(R"re(<td class="cell (c-[a-z]+)" data-a="([^"]*)" data-b="([^"]*)" data-verdict="([^"]*)">(.*?)</td>)re");
+  const std::regex cell(
+      R"re(<td class="cell (c-[a-z]+)" data-a="([^"]*)" data-b="([^"]*)" data-verdict="([^"]*)">(.*?)</td>)re");
   const std::map<std::string, std::vector<std::string>> columns = {{"bunny", {"frames", "primary", "diffuse"}},
                                                                    {"cloud", {"frames"}}};
   for (const auto& [scene, cols] : columns) {
@@ -256,7 +257,8 @@ TEST_F(SummaryReport, BusyMachineBannerFollowsTheRecordedLoad) {
     if (row["scene"] == "cloud") row["load_avg_1m_end"] = 3.2;
   });
   EXPECT_NE(loaded.find(banner), std::string::npos) << "load 3.2 on 2 cores";
-  EXPECT_NE(loaded.find("1 of 4 groups ran at a load average up to 3.20 on 2 cores. 8 of their 8 runs"), std::string::npos);
+  EXPECT_NE(loaded.find("1 of 4 groups ran at a load average up to 3.20 on 2 cores. 8 of their 8 runs"),
+            std::string::npos);
   EXPECT_NE(render([&](json& row) {
               wide(row);
               row["steal_pct"] = 12.5;
