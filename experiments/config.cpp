@@ -529,6 +529,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
     }
     const size_t sweepRuns = cfg.runs.size();
     for (size_t i = 0; i < sweepRuns; ++i) {
+      if (cfg.runs[i].axis("workload")) continue;  // a traced run (rays axis) draws no image to compare
       RunSpec ref = cfg.runs[i];
       for (const auto& override : overrides) {
         const auto& [name, value] = override;
