@@ -21,6 +21,7 @@
 #include "layout/layout.hpp"
 #include "render/workloads.hpp"
 #include "traversal/embree_tracer.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -210,7 +211,7 @@ TEST_P(BenchScene, LoadsWithTheDocumentedCountAndItsCameraSeesTriangles) {
     // importer, for the ship, not being built in).
     if (!generated && (what.find("fetch.sh") != std::string::npos || what.find("not found") != std::string::npos ||
                        what.find("unsupported mesh format") != std::string::npos))
-      GTEST_SKIP() << file << ": " << what;
+      BVHLAB_SKIP_OR_FAIL(file << ": " << what);
     FAIL() << what;
   }
   const TriangleSoup soup = gatherTriangles(scene);
