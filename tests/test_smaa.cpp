@@ -454,11 +454,11 @@ TEST(SmaaAccuracy, ErrorAgainst16xSupersamplingIsTheMeasuredShareOfNoAntiAliasin
                 noAa, err / noAa);
     RecordProperty(std::string("ratio_") + smaaPresetName(preset), std::to_string(err / noAa));
     // Measured on this image (llvmpipe, Mesa 22.3.6), error / no-AA error: low 0.755, medium 0.757, high
-    // 0.573, ultra 0.573 (high and ultra search diagonal patterns). A target of 0.5x is NOT met by any
-    // preset. Asserted: the measured ratio of each preset, with 0.025 of headroom for another driver's
-    // rounding of the blend; diagonal patterns' gain shows as high/ultra's bound below low/medium's.
-    const bool diagonal = preset == SmaaPreset::High || preset == SmaaPreset::Ultra;
-    EXPECT_LE(err, (diagonal ? 0.60 : 0.78) * noAa) << smaaPresetName(preset);
+    // 0.573, ultra 0.573. A target of 0.5x is NOT met by any preset. Asserted: each preset's measured
+    // ratio with ~0.012 of headroom (the passes are deterministic on one driver). The headroom is small
+    // on purpose: high without its diagonal patterns (maxDiagSearchSteps 0) measures 0.597 and must fail.
+    const bool high = preset == SmaaPreset::High || preset == SmaaPreset::Ultra;
+    EXPECT_LE(err, (high ? 0.585 : 0.77) * noAa) << smaaPresetName(preset);
     if (const char* dir = std::getenv("BVHLAB_SMAA_DUMP")) {
       saveImageRgba8(std::filesystem::path(dir) / (std::string("smaa_") + smaaPresetName(preset) + ".png"), w, h, out);
       saveImageRgba8(std::filesystem::path(dir) / "noaa.png", w, h, aliased);
