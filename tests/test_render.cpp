@@ -1,5 +1,6 @@
 // The GLSL tracer: specialisation is invisible in the image, unused modules are absent from the
-// source, the GLSL image matches the C++ mirror, and shader errors name module and line.
+// source, the GLSL image matches the C++ mirror, cwbvh's image is v1's, and shader errors name module
+// and line.
 #include <cstdio>
 #include <cstring>
 #include <fstream>
