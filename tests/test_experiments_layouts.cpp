@@ -8,6 +8,7 @@
 #include "experiments/findings.hpp"
 #include "layout/layouts.hpp"
 #include "traversal/kernels.hpp"
+#include "require.hpp"
 
 using namespace bvhlab::experiments_test;
 
@@ -304,7 +305,7 @@ bool reportToolsAvailable() {
 }
 
 TEST_F(LayoutAxis, ReportHasALayoutTablePerSceneAndTheMemoryPlot) {
-  if (!reportToolsAvailable()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)";
+  if (!reportToolsAvailable()) BVHLAB_SKIP_OR_FAIL("/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)");
   writeText(root / "a.off", "OFF\n0 10 0\n");
   writeText(root / "b.off", "OFF\n0 20 0\n");
   writeText(root / "cfg.toml", kTwoLayouts);

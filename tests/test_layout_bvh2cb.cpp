@@ -29,6 +29,7 @@
 #include "shaders/assemble.hpp"
 #include "traversal/intersectors.hpp"
 #include "traversal/kernels.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -202,7 +203,7 @@ TEST(LayoutKernels, Bvh2cbHardCasesLeakNothingInWatertightMode) {
 // on a builder's tree and on a tree whose root is a leaf; v1's stack-ordered alongside as a control.
 TEST(LayoutKernelsGlsl, EqualTheMirrorPerRay) {
   auto ctx = contextOrNull();
-  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
   const TestMesh& m = testMeshes()[1];
   const TriangleSoup few = firstTriangles(m.soup, 7);
   struct Case {

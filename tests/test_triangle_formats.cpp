@@ -26,6 +26,7 @@
 #include "shaders/assemble.hpp"
 #include "traversal/intersectors.hpp"
 #include "traversal/kernels.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -321,7 +322,7 @@ TEST(TriangleFormatKernels, EveryFormatLayoutAndKernelFindTheBruteForceHits) {
 // counters per ray, closest and any hit: the same triangle, t within llvmpipe's fused multiply-adds.
 TEST(TriangleFormatKernelsGlsl, EqualTheMirrorPerRay) {
   auto ctx = contextOrNull();
-  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
   const TestMesh& m = meshes().back();
   const std::vector<BatchRay> rays = testRays(m.soup, 800, 13);
   const Bvh bvh = build("sah-binned", m.soup);
@@ -370,7 +371,7 @@ TEST(TriangleFormatKernelsGlsl, EqualTheMirrorPerRay) {
 // multiply-adds; 1e-6 is far below the oct bound and far above that), flat corners included.
 TEST(TriangleFormatKernelsGlsl, AccessorsEqualTheMirror) {
   auto ctx = contextOrNull();
-  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
   const char* kMain = R"(
 layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer In { vec4 unused[]; };
