@@ -6,6 +6,7 @@
 
 #include "experiments/provenance.hpp"
 #include "test_experiments_fixture.hpp"
+#include "require.hpp"
 
 using namespace bvhlab::experiments_test;
 
@@ -28,7 +29,7 @@ void expectAltOnEveryImage(const std::string& html) {
 }
 
 TEST_F(Experiments, ReportHasEveryPlotTableAndFinding) {
-  if (!reportToolsAvailable()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)";
+  if (!reportToolsAvailable()) BVHLAB_SKIP_OR_FAIL("/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)");
   FakeRenderer fake;
   const fs::path out = root / "out";
   runSweep(options(kFixtures / "report.toml", out, fake));
@@ -52,7 +53,7 @@ TEST_F(Experiments, ReportHasEveryPlotTableAndFinding) {
 // split, crops) and the robustness table, whose hard-case columns come from the real `bvhlab hard-cases`
 // run by the sweep (DIR/hard_cases.json) while the frame times are the fake's.
 TEST_F(Experiments, AccuracyReportHasTheAntiAliasingAndRobustnessTables) {
-  if (!reportToolsAvailable()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)";
+  if (!reportToolsAvailable()) BVHLAB_SKIP_OR_FAIL("/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)");
   FakeRenderer fake;
   const fs::path out = root / "out";
   RunOptions o = options(kFixtures / "accuracy.toml", out, fake);
@@ -88,7 +89,7 @@ TEST_F(Experiments, AccuracyReportHasTheAntiAliasingAndRobustnessTables) {
 }
 
 TEST_F(Experiments, SeedFiguresReportMirrorsFigures8To12AndOmitsPlotsWithoutData) {
-  if (!reportToolsAvailable()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)";
+  if (!reportToolsAvailable()) BVHLAB_SKIP_OR_FAIL("/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)");
   FakeRenderer fake;
   const fs::path out = root / "out";
   runSweep(options(kFixtures / "seed.toml", out, fake));
@@ -121,7 +122,7 @@ TEST(MachineLoad, StealIsTheShareOfCpuTimeThatPassed) {
 
 // Every measured run's row carries its group's load: the sweep's rows read from /proc around each run.
 TEST_F(Experiments, RowsCarryTheirGroupsMachineLoad) {
-  if (!fs::exists("/proc/loadavg") || !fs::exists("/proc/stat")) GTEST_SKIP() << "no /proc/loadavg or /proc/stat";
+  if (!fs::exists("/proc/loadavg") || !fs::exists("/proc/stat")) BVHLAB_SKIP_OR_FAIL("no /proc/loadavg or /proc/stat");
   FakeRenderer fake;
   const fs::path out = root / "out";
   runSweep(options(kFixtures / "report.toml", out, fake));
@@ -171,7 +172,7 @@ std::string ratioText(const json& c) {
 }
 
 TEST_F(SummaryReport, OpensWithABuilderByRayTypeTableWhoseCellsAreFindingsJson) {
-  if (!reportToolsAvailable()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)";
+  if (!reportToolsAvailable()) BVHLAB_SKIP_OR_FAIL("/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)");
   const std::string html = render();
   const size_t summary = html.find("id=\"summary\""), firstFinding = html.find("id=\"findings\"");
   ASSERT_NE(summary, std::string::npos);
@@ -248,7 +249,7 @@ TEST_F(SummaryReport, OpensWithABuilderByRayTypeTableWhoseCellsAreFindingsJson) 
 // The warning banner: shown iff some group ran on a busy machine (load average above the cores, or more than
 // 3% of CPU time stolen) and runs of those groups missed the config's interval target.
 TEST_F(SummaryReport, BusyMachineBannerFollowsTheRecordedLoad) {
-  if (!reportToolsAvailable()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)";
+  if (!reportToolsAvailable()) BVHLAB_SKIP_OR_FAIL("/usr/bin/python3 with matplotlib is not installed (python3-matplotlib)");
   const std::string banner = "id=\"busy-machine\"";
   const auto wide = [](json& row) { row["ci_pct"] = 3.5; };  // the target is 2%
   EXPECT_EQ(render(wide).find(banner), std::string::npos) << "idle (load 0.4-0.6 on 2 cores, no steal)";
