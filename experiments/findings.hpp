@@ -25,7 +25,7 @@ namespace bvhlab {
 // A kernel walks one layout, so along `layout` the context leaves the kernel free: each layout at its
 // fastest kernel against the fastest layout.
 const std::vector<std::string>& findingDesignAxes();  // builder, layout, triangle_format, kernel, leaf_size
-const std::vector<std::string>& findingKnobAxes();    // depth, storage, aa, robust, branching, view, uber, smaa_edges
+const std::vector<std::string>& findingKnobAxes();    // depth, storage, aa, robust, branching, view, uber, smaa_edges, texture_lod
 
 // `rows`: results.json's rows; `axisOrder`: plan.json's experiment.axes (singular axis -> labels in
 // config order: a knob's baseline is its first value). Returns findings.json's object (format 1):
