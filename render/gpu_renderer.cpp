@@ -192,9 +192,10 @@ void GpuRenderer::upload() {
   const int layers = std::max(1, ta.layers);
   std::vector<glm::vec4> texels = ta.texels;
   if (texels.empty()) texels.assign(size_t(ta.width) * ta.height, glm::vec4(1.0f));
+  const TextureMips mips = mipmapped ? buildTextureMips(d) : TextureMips{};  // the mirror's levels
   glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &texArray_);
   if (mipmapped) {
-    const std::vector<MipLevel> chain = buildMipChain(texels, ta.width, ta.height, layers);
+    const std::vector<MipLevel>& chain = mips.textures;
     glTextureStorage3D(texArray_, GLsizei(chain.size()), GL_RGBA32F, ta.width, ta.height, layers);
     for (size_t k = 0; k < chain.size(); ++k)
       glTextureSubImage3D(texArray_, GLint(k), 0, 0, 0, chain[k].width, chain[k].height, layers, GL_RGBA, GL_FLOAT,
@@ -210,7 +211,7 @@ void GpuRenderer::upload() {
 
   glCreateTextures(GL_TEXTURE_2D, 1, &worldTex_);
   if (d.worldMap && mipmapped) {
-    const std::vector<MipLevel> chain = buildMipChain(d.worldMap->texels, d.worldMap->width, d.worldMap->height);
+    const std::vector<MipLevel>& chain = mips.world;
     glTextureStorage2D(worldTex_, GLsizei(chain.size()), GL_RGBA32F, d.worldMap->width, d.worldMap->height);
     for (size_t k = 0; k < chain.size(); ++k)
       glTextureSubImage2D(worldTex_, GLint(k), 0, 0, chain[k].width, chain[k].height, GL_RGBA, GL_FLOAT,

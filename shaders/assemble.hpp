@@ -15,7 +15,8 @@ enum class View { Shaded, Normal, Depth, PrimId };
 enum class Branching { Full, Report };  // full: trace both Fresnel branches; report: Algorithm 1's compromise
 enum class Storage { Tbo, Tex2D, Ssbo };
 // Texture level of detail (shaders/texture_lod.glsl): none = level 0 everywhere (bilinear, no mipmaps);
-// cones = ray cones, isotropic level; cones-aniso = ray cones, footprint ellipse through textureGrad.
+// cones = ray cones, isotropic level; cones-aniso = ray cones, the footprint ellipse sampled by taps
+// along its major axis.
 enum class TextureLod { None, Cones, ConesAniso };
 
 View parseView(const std::string&);

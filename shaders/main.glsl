@@ -60,7 +60,7 @@ vec3 idColor(int id) {
 
 void main() {
 #ifdef TEXTURE_LOD
-  // The primary cone's spread: one pixel's angle (Ray Tracing Gems ch. 20, eq. 30), per sub-sample.
+  // The primary cone's spread: one pixel's angle (Ray Tracing Gems ch. 20), per sub-sample.
   g_pixelSpread = atan(2.0 * length(u_up) / u_resolution.y) / float(SSAA_GRID);
 #endif
   Ray ray = cameraRay(gl_FragCoord.xy);

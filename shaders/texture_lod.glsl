@@ -11,7 +11,8 @@
 //  - at a hit the width's footprint on the surface selects the level:
 //      lambda = log2(|w| / |cos theta|) - 0.5 log2(texel area in world units)
 //    (isotropic), or the footprint ellipse (minor axis |w|, major |w| / |cos theta| in the plane of
-//    incidence) goes to textureGrad (cones-aniso, the 2021 paper's anisotropic variant);
+//    incidence) is sampled by taps along its major axis (cones-aniso, after the 2021 paper's
+//    anisotropic variant);
 //  - at a reflection the spread widens by the surface's curvature across the footprint: the normal
 //    turns by kappa w over it and a mirror doubles that, 2 kappa w (kappa: mean curvature, positive
 //    where the surface bulges towards the ray). A refraction scales the spread by eta and adds

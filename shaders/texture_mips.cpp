@@ -45,4 +45,14 @@ std::vector<MipLevel> buildMipChain(const std::vector<glm::vec4>& texels, int wi
   return chain;
 }
 
+TextureMips buildTextureMips(const SceneData& data) {
+  TextureMips mips;
+  const TextureArray& ta = data.textures;
+  std::vector<glm::vec4> texels = ta.texels;
+  if (texels.empty()) texels.assign(size_t(ta.width) * ta.height, glm::vec4(1.0f));
+  mips.textures = buildMipChain(texels, ta.width, ta.height, std::max(1, ta.layers));
+  if (data.worldMap) mips.world = buildMipChain(data.worldMap->texels, data.worldMap->width, data.worldMap->height);
+  return mips;
+}
+
 }  // namespace bvhlab

@@ -6,6 +6,8 @@
 
 #include <glm/glm.hpp>
 
+#include "shaders/scene_data.hpp"
+
 namespace bvhlab {
 
 struct MipLevel {
@@ -17,5 +19,13 @@ struct MipLevel {
 // Each texel is the mean of the 2x2 texels it covers; on an odd side the last texel also takes the
 // row or column left over, so every texel of a level contributes to the next one.
 std::vector<MipLevel> buildMipChain(const std::vector<glm::vec4>& texels, int width, int height, int layers = 1);
+
+// The chains of a scene's material texture array (a scene without textures: the renderer's 1x1 white
+// layer) and of its world map (empty without one).
+struct TextureMips {
+  std::vector<MipLevel> textures;  // all layers per level
+  std::vector<MipLevel> world;
+};
+TextureMips buildTextureMips(const SceneData& data);
 
 }  // namespace bvhlab

@@ -53,12 +53,6 @@ struct PathVertex {
   vec2 cone;  // TEXTURE_LOD
 };
 
-// Texture levels for TEXTURE_LOD (shaders/texture_mips.hpp): the same chains the GPU renderer uploads.
-struct TextureMips {
-  std::vector<MipLevel> textures;  // all layers per level
-  std::vector<MipLevel> world;
-};
-
 struct Tracer {
   // "uniforms"
   const Scene& scene;
@@ -396,7 +390,8 @@ struct Tracer {
         if (s.kLocal > 0.0f)
           color += v.weight * s.kLocal * shadeLocal(m, surfaceAlbedoCone(m, h, dir, cone.x), p, magnitude, s.n, dir);
       } else {
-        if (s.kLocal > 0.0f) color += v.weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, magnitude, s.n, dir);
+        if (s.kLocal > 0.0f)
+          color += v.weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, magnitude, s.n, dir);
       }
       if (MAX_DEPTH > 1) {
         if (v.depth >= MAX_DEPTH) continue;
@@ -568,14 +563,7 @@ ReferenceImage renderReference(const Scene& scene, const SceneData& data, const 
   CameraBasis cam = cameraBasis(frame.camera, frame.width, frame.height);
   const KernelInfo& kernel = findKernel(options.kernel);
   const bool cones = usesTextureLod(features, options);
-  TextureMips mips;
-  if (cones) {  // the levels GpuRenderer uploads (render/gpu_renderer.cpp)
-    const TextureArray& ta = data.textures;
-    std::vector<vec4> texels = ta.texels;
-    if (texels.empty()) texels.assign(size_t(ta.width) * ta.height, vec4(1.0f));
-    mips.textures = buildMipChain(texels, ta.width, ta.height, std::max(1, ta.layers));
-    if (data.worldMap) mips.world = buildMipChain(data.worldMap->texels, data.worldMap->width, data.worldMap->height);
-  }
+  const TextureMips mips = cones ? buildTextureMips(data) : TextureMips{};  // the levels GpuRenderer uploads
 
   auto worker = [&](int first, int step) {
     Tracer tr{scene, data, bvh, options, kernel, glsl::Storage(bvh, std::max(1, options.bvhStackSize)), effectiveDepth(features, options.maxDepth, options.uber),

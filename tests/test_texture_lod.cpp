@@ -249,7 +249,8 @@ TEST(TextureLod, ConeWidensAtACurvedMirror) {
     EXPECT_NEAR(la - lb, expected, 0.1) << "r = " << r << ": level " << la << " with curvature, " << lb << " without";
     const ReferenceImage ca = renderReference(p->scene, p->data, p->packed, with, f);
     const ReferenceImage cb = renderReference(p->scene, p->data, p->packed, without, f);
-    EXPECT_NEAR(decodeLevel(ca.rgba[4 * centre]) - decodeLevel(cb.rgba[4 * centre]), expected, 0.1) << "mirror, r = " << r;
+    EXPECT_NEAR(decodeLevel(ca.rgba[4 * centre]) - decodeLevel(cb.rgba[4 * centre]), expected, 0.1)
+        << "mirror, r = " << r;
   }
 }
 
