@@ -188,9 +188,11 @@ TEST(TextureLod, ConesChangeTheImageAndMatchTheMirror) {
 // Per pixel, the level of the first texture lookup along the path: GLSL and mirror agree to the
 // view's 1/16-level step except where floating point decides (counted and printed), and to one level
 // everywhere but the few pixels whose path takes another branch.
-void expectLevelsAgree(const PreparedScene& p, int width, int height, TextureLod mode) {
+void expectLevelsAgree(const PreparedScene& p, int width, int height, TextureLod mode,
+                       Branching branching = Branching::Full) {
   const FrameOptions f = smallFrame(p.scene, width, height);
-  const ShaderOptions o = lodView(p, mode);
+  ShaderOptions o = lodView(p, mode);
+  o.branching = branching;
   const Rendered gl = renderGpu(p, o, f);
   const ReferenceImage cpu = renderReference(p.scene, p.data, p.packed, o, f);
   const float step = 1.0f / 16.0f;
@@ -205,9 +207,9 @@ void expectLevelsAgree(const PreparedScene& p, int width, int height, TextureLod
     else if (d > 0.5f * step) ++rounding;
   }
   const int pixels = width * height;
-  std::printf("%s: %d of %d pixels looked a texture up (%zu whole levels); GLSL vs mirror: one step (1/16) apart at "
+  std::printf("%s, %s branching: %d of %d pixels looked a texture up (%zu whole levels); GLSL vs mirror: one step (1/16) apart at "
               "%d, up to one level at %d, more at %d\n",
-              textureLodName(mode), looked, pixels, levels.size(), rounding, withinOne, beyondOne);
+              textureLodName(mode), branchingName(branching), looked, pixels, levels.size(), rounding, withinOne, beyondOne);
   EXPECT_GT(looked, pixels / 2);
   EXPECT_GE(levels.size(), 4u) << "the view should span several levels";
   // Pixels where floating point decides: a path that takes another branch (a hit decided by one ulp)
@@ -221,6 +223,7 @@ TEST(TextureLod, MirrorPicksTheGlslLevel) {
   auto p = prepareToml(kTexturedScene);
   expectLevelsAgree(*p, 96, 54, TextureLod::Cones);
   expectLevelsAgree(*p, 96, 54, TextureLod::ConesAniso);
+  expectLevelsAgree(*p, 96, 54, TextureLod::Cones, Branching::Report);  // trace_report.glsl's cones
 }
 
 TEST(TextureLod, MirrorPicksTheGlslLevelOnTheReportScene) {
