@@ -257,6 +257,62 @@ TEST(TextureLod, ConeWidensAtACurvedMirror) {
   }
 }
 
+// The same for a mesh: a latitude-longitude unit sphere with exact vertex normals (n = p), whose
+// per-triangle estimate (n_j - n_i).(p_j - p_i) / |p_j - p_i|^2 is exactly 1 on every edge. The facets sit
+// inside the sphere by at most r (1 - cos(pi / 64)) ~ 1.2e-3, so the centre ray's t differs from 4 by
+// less than that; the 0.1 tolerance covers it.
+TEST(TextureLod, ConeWidensAtACurvedMeshMirror) {
+  std::string obj;
+  const int rings = 64, segments = 128;
+  for (int i = 0; i <= rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const double th = M_PI * i / rings, ph = 2.0 * M_PI * j / segments;
+      const double x = std::sin(th) * std::cos(ph), y = std::cos(th), z = std::sin(th) * std::sin(ph);
+      obj += "v " + std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
+      obj += "vn " + std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
+    }
+  auto at = [&](int i, int j) { return std::to_string(i * segments + (j % segments) + 1); };
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const std::string a = at(i, j), b = at(i, j + 1), c = at(i + 1, j), d = at(i + 1, j + 1);
+      // Counter-clockwise seen from outside: the geometric normal points out, as the vertex normals do.
+      obj += "f " + a + "//" + a + " " + b + "//" + b + " " + c + "//" + c + "\n";
+      obj += "f " + b + "//" + b + " " + d + "//" + d + " " + c + "//" + c + "\n";
+    }
+  const std::filesystem::path file = clitest::writeTemp("sphere.obj", obj);
+  auto p = prepareToml(R"(
+[camera]
+eye = [0, 0, 5]
+target = [0, 0, 0]
+fov = 45
+[render]
+max_depth = 2
+[world]
+kind = "map"
+map = "builtin:checker"
+[[material]]
+name = "mirror"
+color = [0, 0, 0]
+reflectivity = 1.0
+[[object]]
+kind = "mesh"
+material = "mirror"
+mesh = ")" + file.string() + "\"\n");
+  const int w = 25, h = 15;
+  const FrameOptions f = smallFrame(p->scene, w, h);
+  ShaderOptions with = lodView(*p, TextureLod::Cones), without = with;
+  without.coneCurvature = false;
+  const size_t centre = size_t(h / 2) * w + w / 2;
+  const float expected = std::log2(1.0f + 2.0f * 4.0f / 1.0f);
+  const Rendered a = renderGpu(*p, with, f), b = renderGpu(*p, without, f);
+  EXPECT_NEAR(decodeLevel(a.rgba[4 * centre]) - decodeLevel(b.rgba[4 * centre]), expected, 0.1)
+      << "level " << decodeLevel(a.rgba[4 * centre]) << " with curvature, " << decodeLevel(b.rgba[4 * centre])
+      << " without";
+  const ReferenceImage ca = renderReference(p->scene, p->data, p->packed, with, f);
+  const ReferenceImage cb = renderReference(p->scene, p->data, p->packed, without, f);
+  EXPECT_NEAR(decodeLevel(ca.rgba[4 * centre]) - decodeLevel(cb.rgba[4 * centre]), expected, 0.1) << "mirror";
+}
+
 TEST(TextureLod, MipChainAveragesEveryTexel) {
   // 3x2 -> 1x1: the odd column joins the last texel, so the 1x1 level is the mean of all six.
   std::vector<glm::vec4> t;
