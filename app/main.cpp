@@ -12,6 +12,7 @@
 #include "builders/epo.hpp"
 #include "datasets/scene.hpp"
 #include "datasets/scene_io.hpp"
+#include "experiments/findings_command.hpp"
 #include "experiments/provenance.hpp"
 #include "experiments/runner.hpp"
 #include "layout/layout.hpp"
@@ -218,6 +219,15 @@ int main(int argc, char** argv) {
   auto* reportCmd = app.add_subcommand("report", "regenerate DIR/report.html from DIR/results.json");
   reportCmd->add_option("dir", reportDir, "experiment output directory")->required();
 
+  std::string findingsDir;
+  bool findingsCheck = false;
+  auto* findingsCmd = app.add_subcommand(
+      "findings", "compute DIR/findings.json again from DIR/results.json with the current rules (docs/measurement.md)");
+  findingsCmd->add_option("dir", findingsDir, "experiment output directory (with results.json)")->required();
+  findingsCmd->add_flag("--check", findingsCheck,
+                        "write nothing; exit 1 naming the first difference when DIR/findings.json does not follow "
+                        "from the rows");
+
   ViewerOptions vo;
   std::string viewEye, viewTarget, viewUp;
   auto* viewCmd = app.add_subcommand("view", "interactive first-person viewer (needs a display; docs/viewer.md)");
@@ -310,6 +320,7 @@ int main(int argc, char** argv) {
       return mergeCommand(std::vector<std::filesystem::path>(mergeDirs.begin(), mergeDirs.end()), mergeOut,
                           mergeReplicates);
     if (reportCmd->parsed()) return reportCommand(reportDir);
+    if (findingsCmd->parsed()) return findingsCommand(findingsDir, findingsCheck);
     if (hardCmd->parsed()) return runHardCases(hc);
     if (build->parsed()) return buildCommand(bc);
     if (listBuilders->parsed()) {

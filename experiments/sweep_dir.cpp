@@ -59,7 +59,8 @@ json makePlan(const ExperimentConfig& config) {
                         {"seed_figures", config.seedFigures},
                         {"reference", config.reference.is_null() ? json::object() : config.reference},
                         {"sweeps", config.sweepNames},
-                        {"axes", config.axisLabels}};
+                        {"axes", config.axisLabels},
+                        {"findings", {{"baseline", config.findingsBaseline}}}};
   plan["config"] = {{"file", fs::absolute(config.file).lexically_normal().string()},
                     {"hash", config.hash},
                     {"text", config.text}};
@@ -367,7 +368,11 @@ json writeResults(const SweepDir& dir, const json& plan, const std::map<std::str
   writeFileAtomic(dir.root / "results.csv", csv.str(), false);
   // The comparisons the report draws, with their intervals and verdicts (experiments/findings.hpp).
   writeFileAtomic(dir.root / "findings.json",
-                  computeFindings(rows, plan["experiment"].value("axes", json::object())).dump(1) + "\n", false);
+                  computeFindings(rows, plan["experiment"].value("axes", json::object()),
+                                  plan["experiment"].value("findings", json::object()).value("baseline", json::object()))
+                          .dump(1) +
+                      "\n",
+                  false);
   return summary;
 }
 

@@ -67,6 +67,7 @@ TEST(CliErrors, UnknownFlagIsAUsageErrorInEveryCommand) {
                                                         {"run", "cfg.toml"},
                                                         {"merge", dir + " --out " + dir + "/merged"},
                                                         {"report", dir},
+                                                        {"findings", dir},
                                                         {"view", mesh},
                                                         {"hard-cases", ""},
                                                         {"builders", ""},

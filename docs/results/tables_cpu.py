@@ -5,7 +5,7 @@ import math
 import os
 
 from tables_io import (DataError, num, pick, read_csv, read_json, read_json_lines, result_path, rel, source,
-                       commands, provenance, table, sig, f3, with_ci, check_paired)
+                       commands, provenance, table, sig, f3, with_ci, band_cell)
 
 # ---- CPU runs on the development machine -------------------------------------------------------
 
@@ -165,20 +165,17 @@ def cpu_robust_cost():
     fpath, findings = read_json(RB, "findings.json")
     cpath, rows = read_csv(RB, "results.csv")
     src = source(RB)
-    rpath, results = read_json(RB, "results.json")
-    by_key = {r.get("key"): r for r in results.get("rows") or []}
+    rpath, _ = read_json(RB, "results.json")
     out = []
     for c in findings.get("comparisons") or []:
         if c.get("kind") != "axis" or c.get("axis") != "robust":
             continue
-        check_paired(c, by_key, fpath, rpath)
         lo, hi = c.get("ci_low"), c.get("ci_high")
         ratio = num(c, "ratio", fpath)
         cell = with_ci(ratio, num(c, "ci_low", fpath), num(c, "ci_high", fpath), f3) \
             if lo is not None and hi is not None else f3(ratio)
-        band = float(c.get("band") or 0)
         out.append([str(c.get("scene")), f"`{c.get('a_label')}`", f"`{c.get('b_label')}`", cell,
-                    str(c.get("verdict")), f"±{100 * (math.exp(band) - 1):.1f}%"])
+                    str(c.get("verdict")), band_cell(c)])
     if not out:
         raise DataError(f"{rel(fpath)}: no comparison along the robust axis")
     r0 = rows[0]
@@ -186,8 +183,8 @@ def cpu_robust_cost():
     lines = table(header, out)
     lines += ["", f"{r0.get('width')}x{r0.get('height')} frames, {r0.get('builder')}, {r0.get('kernel')}, leaf "
                   f"{r0.get('leaf_size')}; every variant of a scene interleaved in one process. Every ratio, interval, "
-                  f"band and verdict is findings.json's (docs/measurement.md); generate.py re-derives each ratio "
-                  f"and interval from the per-round times in results.json."]
+                  f"band and verdict is findings.json's (docs/measurement.md); `bvhlab findings "
+                  f"docs/results/{RB} --check` re-derives them from the per-round times in results.json."]
     return lines + provenance([(cpath, rows), (fpath, []), (rpath, [])], src, commands(RB, src))
 
 
@@ -201,22 +198,19 @@ def cpu_sbvh_knobs():
     comps = findings.get("comparisons")
     if not isinstance(comps, list):
         raise DataError(f"{rel(fpath)}: key 'comparisons' is not a list")
-    rpath, results = read_json(KNOBS, "results.json")
-    by_key = {r.get("key"): r for r in results.get("rows") or []}
+    rpath, _ = read_json(KNOBS, "results.json")
     out = []
     for c in comps:
         if c.get("kind") != "axis" or c.get("axis") != "builder":
             continue
-        check_paired(c, by_key, fpath, rpath)
         a = pick(rows, cpath, key=c.get("a"))
         b = pick(rows, cpath, key=c.get("b"))
         lo, hi = c.get("ci_low"), c.get("ci_high")
         ratio = num(c, "ratio", fpath)
         cell = with_ci(ratio, num(c, "ci_low", fpath), num(c, "ci_high", fpath), f3) \
             if lo is not None and hi is not None else f3(ratio)
-        band = float(c.get("band") or 0)
         out.append([str(c.get("scene", "?")), f"`{c.get('a_label')}`", f"`{c.get('b_label')}`", cell,
-                    str(c.get("verdict", "?")), f"±{100 * (math.exp(band) - 1):.1f}%",
+                    str(c.get("verdict", "?")), band_cell(c),
                     f3(num(a, "sah_cost", cpath) / num(b, "sah_cost", cpath)),
                     f3(num(a, "ray_cost", cpath) / num(b, "ray_cost", cpath))])
     if not out:
@@ -242,10 +236,8 @@ def cpu_texture_lod():
     fpath, findings = read_json(TL, "findings.json")
     cpath, rows = read_csv(TL, "results.csv")
     src = source(TL)
-    rpath, results = read_json(TL, "results.json")
-    by_key = {r.get("key"): r for r in results.get("rows") or []}
+    rpath, _ = read_json(TL, "results.json")
     runs = [r for r in rows if r.get("status") == "ok" and r.get("reference_only") not in ("true", "1", "True")]
-    by_csv_key = {r.get("key"): r for r in runs}
     # Paired frame-time ratios along the texture_lod axis, keyed by (a's key): mode over the same run without LOD.
     cost = {}
     for c in findings.get("comparisons") or []:
@@ -254,7 +246,6 @@ def cpu_texture_lod():
         labels = (c.get("a_label"), c.get("b_label"))
         if "none" not in labels or labels[0] == labels[1]:
             continue
-        check_paired(c, by_key, fpath, rpath)
         ratio, lo, hi = num(c, "ratio", fpath), num(c, "ci_low", fpath), num(c, "ci_high", fpath)
         key = c.get("a")
         if labels[0] == "none":  # b over a: invert to "with LOD over without"
@@ -296,6 +287,7 @@ def cpu_texture_lod():
     lines += ["", f"Error: mean absolute difference over 8-bit RGB against the scene's 16x supersampled render "
                   f"without texture LOD. {r0.get('width')}x{r0.get('height')} frames, {r0.get('builder')}, "
                   f"{r0.get('kernel')}, depth {r0.get('depth')}; every run of a scene interleaved in one process. "
-                  f"Ratios, intervals and verdicts are findings.json's paired comparisons (docs/measurement.md), "
-                  f"re-derived here from the per-round times in results.json."]
+                  f"Ratios, intervals and verdicts are findings.json's paired comparisons (docs/measurement.md); "
+                  f"`bvhlab findings docs/results/{TL} --check` re-derives them from the per-round times in "
+                  f"results.json."]
     return lines + provenance([(cpath, rows), (fpath, []), (rpath, [])], src, commands(TL, src))

@@ -149,61 +149,15 @@ def commands(dirname, src):
     return command_of
 
 
-# ---- re-deriving paired intervals from per-round times -------------------------------------------
-# The same arithmetic as render/frame_stats.cpp (pairedRatio, medianInterval): the median of the
-# per-round log ratios with a distribution-free order-statistic interval, so that every ratio and
-# interval a table quotes from findings.json is checked against the per-round times in results.json.
-
-CONFIDENCE = 0.95
-MIN_VALUES_FOR_INTERVAL = 6  # below this even [min, max] covers less than 95% (render/frame_stats.hpp)
+# ---- quoting findings.json -------------------------------------------------------------------------
+# Tables quote ratios, intervals, bands and verdicts from a result directory's findings.json verbatim.
+# That they follow from the per-round times in its results.json with the current rules is checked by
+# the C++ that computes them (`bvhlab findings DIR --check`, test_findings), never re-implemented here.
 
 
-def _binomial_half_cdf(n, j):
-    """P(B <= j) for B ~ Binomial(n, 1/2), summed in log space."""
-    log_half_n = n * math.log(0.5)
-    return sum(math.exp(math.lgamma(n + 1) - math.lgamma(i + 1) - math.lgamma(n - i + 1) + log_half_n)
-               for i in range(0, min(j, n) + 1))
-
-
-def _median(v):
-    n = len(v)
-    return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
-
-
-def paired_ratio(a, b):
-    """(estimate, low, high) of a/b over paired rounds, or None with fewer than 6 usable pairs."""
-    logs = sorted(math.log(x) - math.log(y) for x, y in zip(a, b)
-                  if isinstance(x, (int, float)) and isinstance(y, (int, float))
-                  and math.isfinite(x) and math.isfinite(y) and x > 0 and y > 0)
-    n = len(logs)
-    if n < MIN_VALUES_FOR_INTERVAL:
-        return None
-    k_best = 0
-    for k in range(1, (n + 1) // 2 + 1):
-        if 1.0 - 2.0 * _binomial_half_cdf(n, k - 1) < CONFIDENCE:
-            break
-        k_best = k
-    if k_best == 0:
-        return None
-    return math.exp(_median(logs)), math.exp(logs[k_best - 1]), math.exp(logs[n - k_best])
-
-
-# Relative tolerance when comparing with the C++ result: both sides use IEEE doubles and the C
-# library's log/exp, which may differ in the last bit; 1e-9 is far above that and far below the
-# three decimals the tables print.
-REDERIVE_TOLERANCE = 1e-9
-
-
-def check_paired(comparison, rows_by_key, fpath, rpath):
-    """Raises DataError unless a paired comparison's ratio and interval follow from the rows' rounds."""
-    if comparison.get("interval_over") != "rounds" or comparison.get("ci_low") is None:
-        raise DataError(f"{rel(fpath)}: comparison {comparison.get('a')} / {comparison.get('b')} is not over paired "
-                        f"rounds ('{comparison.get('interval_over')}'): its interval cannot be re-derived here")
-    ra, rb = rows_by_key.get(comparison.get("a")), rows_by_key.get(comparison.get("b"))
-    if ra is None or rb is None:
-        raise DataError(f"{rel(rpath)}: no row for run {comparison.get('a')} or {comparison.get('b')}")
-    got = paired_ratio(ra.get("frame_ms_all") or [], rb.get("frame_ms_all") or [])
-    want = (num(comparison, "ratio", fpath), num(comparison, "ci_low", fpath), num(comparison, "ci_high", fpath))
-    if got is None or any(abs(g - w) > REDERIVE_TOLERANCE * abs(w) for g, w in zip(got, want)):
-        raise DataError(f"{rel(fpath)}: comparison {comparison.get('a')} / {comparison.get('b')}: ratio and interval "
-                        f"{want} do not follow from frame_ms_all in {rel(rpath)} (re-derived: {got})")
+def band_cell(comparison):
+    """A comparison's noise band as "±x.x%", or "none" when its runs had no band (docs/measurement.md)."""
+    band = comparison.get("band")
+    if band is None:
+        return "none"
+    return f"±{100 * (math.exp(float(band)) - 1):.1f}%"

@@ -2,12 +2,11 @@
 """Tests of docs/results/generate.py (CTest: doc_tables_generator). Python 3's standard library only.
 
 They check that the committed tables are current, that --check fails naming a table whose text no
-longer matches its data, that a bad marker is an error naming the file and line, and that the paired
-intervals quoted from findings.json are re-derived from the per-round times (and a changed round is
-caught)."""
+longer matches its data, that a bad marker is an error naming the file and line. That the intervals quoted
+from findings.json follow from the per-round times is checked by `bvhlab findings DIR --check`
+(test_findings), the C++ that computes them."""
 
 import contextlib
-import copy
 import io
 import os
 import shutil
@@ -84,35 +83,6 @@ class CopiedDocs(unittest.TestCase):
         status, err = run("--check", "--root", self.root)
         self.assertEqual(status, 2)
         self.assertIn("docs/extra.md:1: table 'gpu-render' has no", err)
-
-
-class PairedIntervals(unittest.TestCase):
-    def test_order_statistic_interval(self):
-        # 7 pairs: [x_(1), x_(7)] covers the median with 1 - 2/2^7 >= 95%, [x_(2), x_(6)] with 87.5% only.
-        est, lo, hi = tables_io.paired_ratio([1, 2, 3, 4, 5, 6, 7], [1] * 7)
-        self.assertAlmostEqual(est, 4.0, places=12)
-        self.assertAlmostEqual(lo, 1.0, places=12)
-        self.assertAlmostEqual(hi, 7.0, places=12)
-        self.assertIsNone(tables_io.paired_ratio([1, 2, 3, 4, 5], [1] * 5))  # too few pairs for 95%
-
-    def test_committed_findings_follow_from_their_rounds(self):
-        for name in ["sbvh-knobs", "robustness"]:
-            fpath, findings = tables_io.read_json(name, "findings.json")
-            rpath, results = tables_io.read_json(name, "results.json")
-            rows = {r["key"]: r for r in results["rows"]}
-            comparisons = [c for c in findings["comparisons"] if c.get("ci_low") is not None]
-            self.assertGreater(len(comparisons), 0, name)
-            for c in comparisons:
-                tables_io.check_paired(c, rows, fpath, rpath)
-
-    def test_a_changed_round_is_caught(self):
-        fpath, findings = tables_io.read_json("sbvh-knobs", "findings.json")
-        rpath, results = tables_io.read_json("sbvh-knobs", "results.json")
-        rows = {r["key"]: copy.deepcopy(r) for r in results["rows"]}
-        c = next(c for c in findings["comparisons"] if c.get("ci_low") is not None)
-        rows[c["a"]]["frame_ms_all"] = [x * 1.01 for x in rows[c["a"]]["frame_ms_all"]]
-        with self.assertRaises(tables_io.DataError):
-            tables_io.check_paired(c, rows, fpath, rpath)
 
 
 if __name__ == "__main__":
