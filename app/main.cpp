@@ -250,6 +250,7 @@ int main(int argc, char** argv) {
   viewCmd->add_option("--scale", vo.resolutionScale, "render at this fraction of the window (0.05..1)");
   viewCmd->add_option("--aa", vo.aa, "none | smaa-low|medium|high|ultra | ssaa4 | ssaa16 (M cycles)");
   viewCmd->add_option("--robust", vo.robust, "robustness variant, as render --robust (T cycles)");
+  viewCmd->add_option("--texture-lod", vo.textureLod, "none | cones | cones-aniso, as render --texture-lod");
   viewCmd->add_flag("--readback-present", vo.readbackPresent, "display via CPU read-back (to measure the blit)");
   viewCmd->add_option("--eye", viewEye, "camera position x,y,z");
   viewCmd->add_option("--target", viewTarget, "camera target x,y,z");

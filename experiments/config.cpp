@@ -388,7 +388,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   for (const Sweep& s : sweeps) {
     if (!s.axes.count("workload")) continue;
     const std::string where = s.name == "main" ? "axes.rays" : "sweep '" + s.name + "'.rays";
-    for (const char* a : {"depth", "aa", "view", "uber", "branching", "smaa_edges"})
+    for (const char* a : {"depth", "aa", "view", "uber", "branching", "smaa_edges", "texture_lod"})
       if (s.axes.count(a))
         r.fail(root.source(), where,
                std::string("rays traces workloads without shading; it cannot be swept together with '") + a +

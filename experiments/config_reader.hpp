@@ -37,6 +37,7 @@ const std::vector<std::string> kRobustness = {"fast", "watertight"};
 #endif
 const std::vector<std::string> kBranching = {"full", "report"};
 const std::vector<std::string> kSmaaEdges = {"luma", "color"};
+const std::vector<std::string> kTextureLod = {"none", "cones", "cones-aniso"};
 const std::vector<std::string> kViews = {"shaded", "normal", "depth", "primid", "visits"};
 const std::vector<std::string> kBackends = {"osmesa", "egl"};
 inline const std::vector<std::string>& kWorkloads = workloadNames();  // render/workloads.hpp
@@ -153,6 +154,7 @@ class ConfigReader {
                                             : a == "robust" ? kRobustness
                                             : a == "branching" ? kBranching
                                             : a == "smaa_edges" ? kSmaaEdges
+                                            : a == "texture_lod" ? kTextureLod
                                             : a == "workload" ? kWorkloads
                                                                : kViews;
     std::string v = oneOf(node, key, valid, std::string(a).c_str());

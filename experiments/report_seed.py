@@ -133,7 +133,10 @@ def aa_preset(row):
     v = label(row, "aa")
     v = "smaa-%s" % row["smaa_preset"] if v == "smaa" and row.get("smaa_preset") else v
     # Colour edge detection is a variant of the SMAA mode, not another scene setting (luma: the default).
-    return v + " (colour edges)" if v.startswith("smaa") and row.get("smaa_edges") == "color" else v
+    v = v + " (colour edges)" if v.startswith("smaa") and row.get("smaa_edges") == "color" else v
+    # Texture filtering by ray cones is part of the mode too (issue 40): "smaa-high + cones".
+    lod = row.get("texture_lod")
+    return v + " + " + str(lod) if lod and lod != "none" else v
 
 
 def worst_window(diff, frac=6):
@@ -162,9 +165,12 @@ def section_antialiasing(page, data):
            "passes alone, included in the frame time. The frame-time ratio cannot fall below time(none) / "
            "time(SSAA 4×), because the SMAA frame still traces every pixel once; the added-time column "
            "compares what each mode adds to the frame without AA, (t − t_none) / (t_SSAA4 − t_none), which "
-           "is the anti-aliasing's own cost.")
+           "is the anti-aliasing's own cost. A mode ending in + cones or + cones-aniso also filters textures by "
+           "ray cones (docs/texture-lod.md); targets from issue 40: with SMAA, error ≤ 0.5× the error without AA "
+           "and texture LOD, frame time ≤ 1.1× the same mode's without texture LOD (the interval shown is the "
+           "conservative one from the two runs' own intervals).")
     by_key = {r.get("key"): r for r in data.ok}
-    others = [a for a in AXES if a not in ("aa", "smaa_edges")]
+    others = [a for a in AXES if a not in ("aa", "smaa_edges", "texture_lod")]
     for combo, members in sorted(group(rows, lambda r: tuple(label(r, a) for a in others)).items(),
                                  key=lambda kv: [str(x) for x in kv[0]]):
         modes = {}
@@ -173,7 +179,7 @@ def section_antialiasing(page, data):
         if len(modes) < 2:
             continue
         scene = label(members[0], "scene")
-        varying = [a for a in data.varying(rows, exclude=("aa", "smaa_edges"))]
+        varying = [a for a in data.varying(rows, exclude=("aa", "smaa_edges", "texture_lod"))]
         title = describe(members[0], varying) or scene
         page.add("<h3>%s</h3>" % html.escape(title))
         none, ssaa4 = modes.get("none"), modes.get("ssaa4")
@@ -191,7 +197,25 @@ def section_antialiasing(page, data):
             if mode != "none" and None not in (t, t_none, t_ssaa4) and t_ssaa4 > t_none:
                 added_vs_ssaa4 = ratio(t - t_none, t_ssaa4 - t_none)
             verdict = ""
-            if mode.startswith("smaa"):
+            base = modes.get(mode.split(" + ")[0]) if " + " in mode else None
+            if base is not None:  # a texture-LOD mode: issue 40's targets
+                checks = []
+                if err_ratio is not None and mode.startswith("smaa"):
+                    checks.append("error %s" % ("✓" if err_ratio <= 0.5 else "✗ (target ≤ 0.5)"))
+                lo, hi = num(r.get("frame_ms_ci_low")), num(r.get("frame_ms_ci_high"))
+                blo, bhi = num(base.get("frame_ms_ci_low")), num(base.get("frame_ms_ci_high"))
+                cost = ratio(t, num(base["frame_ms"]))
+                # Conservative interval of the ratio from the two runs' own intervals; a verdict only
+                # when it lies on one side of the 1.1 target.
+                if cost is not None and None not in (lo, hi, blo, bhi) and blo > 0 and bhi > 0:
+                    clo, chi = lo / bhi, hi / blo
+                    checks.append("time / without LOD %s [%s, %s] %s" % (
+                        fmt(cost), fmt(clo), fmt(chi),
+                        "✓" if chi <= 1.1 else "✗ (target ≤ 1.1)" if clo > 1.1 else "undecided (interval spans 1.1)"))
+                elif cost is not None:
+                    checks.append("time / without LOD %s (no interval, no verdict)" % fmt(cost))
+                verdict = ", ".join(checks)
+            elif mode.startswith("smaa"):
                 checks = []
                 if err_ratio is not None:
                     checks.append("error %s" % ("✓" if err_ratio <= 0.5 else "✗ (target ≤ 0.5)"))

@@ -34,6 +34,8 @@ const std::vector<AxisInfo>& experimentAxes() {
       {"views", "view", "--view"},
       {"uber", "uber", "--uber"},
       {"smaa_edges", "smaa_edges", "--smaa-edges"},
+      // Texture level of detail by ray cones (shaders/texture_lod.glsl): none | cones | cones-aniso.
+      {"texture_lod", "texture_lod", "--texture-lod"},
       // A ray workload: the run traces it (`bvhlab trace --rays`) instead of rendering frames.
       {"rays", "workload", "--rays"},
   };

@@ -8,6 +8,7 @@
 #include <glad/gl.h>
 
 #include "render/gl_context.hpp"
+#include "shaders/texture_mips.hpp"
 
 namespace bvhlab {
 
@@ -182,21 +183,40 @@ void GpuRenderer::upload() {
   streams_[2] = uploadBvhStream(p.attributes, options_.storage, "attribute", &streamBuffers_[2]);
   streams_[3] = uploadBvhStream(p.vertices, options_.storage, "vertex", &streamBuffers_[3]);  // indexed only
 
-  // Material textures (a 1x1x1 dummy keeps the uber shader's sampler complete).
+  // Material textures (a 1x1x1 dummy keeps the uber shader's sampler complete) and the world map.
+  // With ray cones (texture_lod.glsl) both carry the host's mip chains (shaders/texture_mips.hpp, the
+  // mirror's texels) and filter trilinearly (cones-aniso takes its own taps). Without, one level.
+  const bool mipmapped = usesTextureLod(analyzeScene(scene_.scene), options_);
+  const GLint minFilter = mipmapped ? GL_LINEAR_MIPMAP_LINEAR : GL_LINEAR;
   const TextureArray& ta = d.textures;
   const int layers = std::max(1, ta.layers);
-  glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &texArray_);
-  glTextureStorage3D(texArray_, 1, GL_RGBA32F, ta.width, ta.height, layers);
   std::vector<glm::vec4> texels = ta.texels;
   if (texels.empty()) texels.assign(size_t(ta.width) * ta.height, glm::vec4(1.0f));
-  glTextureSubImage3D(texArray_, 0, 0, 0, 0, ta.width, ta.height, layers, GL_RGBA, GL_FLOAT, texels.data());
-  glTextureParameteri(texArray_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  const TextureMips mips = mipmapped ? buildTextureMips(d) : TextureMips{};  // the mirror's levels
+  glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &texArray_);
+  if (mipmapped) {
+    const std::vector<MipLevel>& chain = mips.textures;
+    glTextureStorage3D(texArray_, GLsizei(chain.size()), GL_RGBA32F, ta.width, ta.height, layers);
+    for (size_t k = 0; k < chain.size(); ++k)
+      glTextureSubImage3D(texArray_, GLint(k), 0, 0, 0, chain[k].width, chain[k].height, layers, GL_RGBA, GL_FLOAT,
+                          chain[k].texels.data());
+  } else {
+    glTextureStorage3D(texArray_, 1, GL_RGBA32F, ta.width, ta.height, layers);
+    glTextureSubImage3D(texArray_, 0, 0, 0, 0, ta.width, ta.height, layers, GL_RGBA, GL_FLOAT, texels.data());
+  }
+  glTextureParameteri(texArray_, GL_TEXTURE_MIN_FILTER, minFilter);
   glTextureParameteri(texArray_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   glTextureParameteri(texArray_, GL_TEXTURE_WRAP_S, GL_REPEAT);
   glTextureParameteri(texArray_, GL_TEXTURE_WRAP_T, GL_REPEAT);
 
   glCreateTextures(GL_TEXTURE_2D, 1, &worldTex_);
-  if (d.worldMap) {
+  if (d.worldMap && mipmapped) {
+    const std::vector<MipLevel>& chain = mips.world;
+    glTextureStorage2D(worldTex_, GLsizei(chain.size()), GL_RGBA32F, d.worldMap->width, d.worldMap->height);
+    for (size_t k = 0; k < chain.size(); ++k)
+      glTextureSubImage2D(worldTex_, GLint(k), 0, 0, chain[k].width, chain[k].height, GL_RGBA, GL_FLOAT,
+                          chain[k].texels.data());
+  } else if (d.worldMap) {
     glTextureStorage2D(worldTex_, 1, GL_RGBA32F, d.worldMap->width, d.worldMap->height);
     glTextureSubImage2D(worldTex_, 0, 0, 0, d.worldMap->width, d.worldMap->height, GL_RGBA, GL_FLOAT,
                         d.worldMap->texels.data());
@@ -205,7 +225,7 @@ void GpuRenderer::upload() {
     glTextureStorage2D(worldTex_, 1, GL_RGBA32F, 1, 1);
     glTextureSubImage2D(worldTex_, 0, 0, 0, 1, 1, GL_RGBA, GL_FLOAT, &black);
   }
-  glTextureParameteri(worldTex_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTextureParameteri(worldTex_, GL_TEXTURE_MIN_FILTER, d.worldMap ? minFilter : GL_LINEAR);
   glTextureParameteri(worldTex_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   glTextureParameteri(worldTex_, GL_TEXTURE_WRAP_S, GL_REPEAT);
   glTextureParameteri(worldTex_, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);

@@ -39,6 +39,7 @@ struct RenderCommand {
   std::string aa = "none";          // none | smaa | smaa-PRESET | ssaa4 | ssaa16 (regular 2x2 / 4x4 grid in the tracer)
   std::string smaaPreset = "high";  // low | medium | high | ultra
   std::string smaaEdges = "luma";   // luma | color: what SMAA's edge detection compares
+  std::string textureLod = "none";  // none | cones | cones-aniso (shaders/texture_lod.glsl)
   std::string robust = "watertight";  // one of robustnessNames(); the default is ShaderOptions's (see there)
   bool cpu = false;  // render with the C++ mirror instead of GL
   // A recorded camera path (render/fly_camera.hpp): warm-up and timed frame i use pose i mod N, the

@@ -102,6 +102,11 @@ RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
   so.reinhard = rs.reinhard;
   so.uber = cmd.uber;
   so.robust = parseRobustness(cmd.robust);
+  try {
+    so.textureLod = parseTextureLod(cmd.textureLod);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--texture-lod: ") + e.what());
+  }
   s.backend = parseBackend(cmd.backend);
   // "smaa-PRESET" is "smaa" with --smaa-preset PRESET, so an experiment axis can sweep the presets.
   const bool smaaNamed = cmd.aa.rfind("smaa-", 0) == 0;
@@ -257,6 +262,7 @@ nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, 
   out["storage"] = storageName(so.storage);
   out["aa"] = cmd.aa;
   out["robust"] = robustnessName(so.robust);
+  out["texture_lod"] = textureLodName(so.textureLod);
   if (!setup.path.empty()) {
     out["camera_path"] = cmd.cameraPath;
     out["path_poses"] = setup.path.size();

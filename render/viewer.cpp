@@ -42,6 +42,11 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
   if (std::string e = settingError("aa", o.aa, layout_, triangles_); !e.empty()) throw std::invalid_argument("--aa: " + e);
   if (std::string e = settingError("robust", o.robust, layout_, triangles_); !e.empty())
     throw std::invalid_argument("--robust: " + e);
+  try {
+    parseTextureLod(o.textureLod);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--texture-lod: ") + e.what());
+  }
   if (o.frames < 0) throw std::invalid_argument("--frames must be >= 0");
   if ((o.width && (*o.width < 1 || *o.width > 16384)) || (o.height && (*o.height < 1 || *o.height > 16384)))
     throw std::invalid_argument("--width/--height must be in 1..16384");
@@ -323,6 +328,7 @@ ShaderOptions Viewer::shaderOptions(bool countStats) const {
   so.countStats = countStats;
   so.ssaaGrid = ssaaGridOf(aa_);
   so.robust = parseRobustness(robust_);
+  so.textureLod = parseTextureLod(opt_.textureLod);
   return so;
 }
 

@@ -25,6 +25,7 @@ struct ViewerOptions {
   float resolutionScale = 1.0f;       // render at this fraction of the window, upscaled (0.05..1)
   std::string aa = "none";            // none | smaa-low|medium|high|ultra | ssaa4 | ssaa16
   std::string robust = "watertight";  // one of robustnessNames() (traversal/kernels.hpp); default as render's
+  std::string textureLod = "none";    // none | cones | cones-aniso (shaders/texture_lod.glsl), as render's
   bool readbackPresent = false;       // display through a CPU read-back + upload (the old path; for
                                       // measuring what the direct blit saves)
   std::optional<glm::dvec3> eye, target;  // world coordinates (a far scene is stored relative to its origin)

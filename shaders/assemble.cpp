@@ -28,6 +28,15 @@ Storage parseStorage(const std::string& s) {
   if (s == "ssbo") return Storage::Ssbo;
   throw std::invalid_argument("unknown storage '" + s + "' (valid: tbo, tex2d, ssbo)");
 }
+TextureLod parseTextureLod(const std::string& s) {
+  if (s == "none") return TextureLod::None;
+  if (s == "cones") return TextureLod::Cones;
+  if (s == "cones-aniso") return TextureLod::ConesAniso;
+  throw std::invalid_argument("unknown texture LOD '" + s + "' (valid: none, cones, cones-aniso)");
+}
+const char* textureLodName(TextureLod t) {
+  return t == TextureLod::None ? "none" : t == TextureLod::Cones ? "cones" : "cones-aniso";
+}
 const char* viewName(View v) {
   static const char* names[] = {"shaded", "normal", "depth", "primid"};
   return names[static_cast<int>(v)];
@@ -57,6 +66,10 @@ SceneFeatures analyzeScene(const Scene& scene) {
   }
   f.world = scene.world.kind;
   return f;
+}
+
+bool usesTextureLod(const SceneFeatures& f, const ShaderOptions& o) {
+  return o.textureLod != TextureLod::None && (o.uber || f.textures || f.world == WorldKind::Map);
 }
 
 int effectiveDepth(const SceneFeatures& f, int requested, bool uber) {
@@ -134,6 +147,12 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   if (uber || f.shadows) d << "#define HAS_SHADOWS 1\n";
   if (uber || f.refraction) d << "#define HAS_REFRACTION 1\n";
   if (uber || f.textures) d << "#define HAS_TEXTURES 1\n";
+  const bool cones = usesTextureLod(f, o);
+  if (cones) {
+    d << "#define TEXTURE_LOD " << (o.textureLod == TextureLod::ConesAniso ? 2 : 1) << "\n";
+    if (!o.coneCurvature) d << "#define CONE_NO_CURVATURE 1\n";
+    if (o.lodView) d << "#define LOD_VIEW 1\n";
+  }
   if (!uber) {
     d << (f.world == WorldKind::Color ? "#define WORLD_COLOR 1\n"
           : f.world == WorldKind::Sky ? "#define WORLD_SKY 1\n"
@@ -156,6 +175,7 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   for (int k = 0; k < 6; ++k)
     if (uber || f.kinds[k]) a.module(kKindModules[k]);
   if (uber || f.textures) a.module("textures.glsl");
+  if (cones) a.module("texture_lod.glsl");
   a.module("scene.glsl");
   if (uber || f.world == WorldKind::Color) a.module("world_color.glsl");
   if (uber || f.world == WorldKind::Sky) a.module("world_sky.glsl");

@@ -14,10 +14,16 @@ namespace bvhlab {
 enum class View { Shaded, Normal, Depth, PrimId };
 enum class Branching { Full, Report };  // full: trace both Fresnel branches; report: Algorithm 1's compromise
 enum class Storage { Tbo, Tex2D, Ssbo };
+// Texture level of detail (shaders/texture_lod.glsl): none = level 0 everywhere (bilinear, no mipmaps);
+// cones = ray cones, isotropic level; cones-aniso = ray cones, the footprint ellipse sampled by taps
+// along its major axis.
+enum class TextureLod { None, Cones, ConesAniso };
 
 View parseView(const std::string&);
 Branching parseBranching(const std::string&);
 Storage parseStorage(const std::string&);
+TextureLod parseTextureLod(const std::string&);  // throws std::invalid_argument listing the valid names
+const char* textureLodName(TextureLod);
 const char* viewName(View);
 const char* branchingName(Branching);
 const char* storageName(Storage);
@@ -51,6 +57,10 @@ struct ShaderOptions {
   bool reinhard = false;
   bool uber = false;
   int ssaaGrid = 1;  // shaded view: ssaaGrid^2 regular sub-pixel rays per pixel (1 = off)
+  // Ray-cone texture filtering; compiled in only when the scene samples a texture (usesTextureLod).
+  TextureLod textureLod = TextureLod::None;
+  bool coneCurvature = true;  // false: cones keep their spread at curved surfaces (a test switch)
+  bool lodView = false;       // shaded view writes the first lookup's level instead (main.glsl; tests)
   // Triangle test, box test and secondary-ray offset, each on its own. Default: all three robust
   // ("watertight"), chosen on these measurements (bench_robust, quiet 2-core machine, one process,
   // frames interleaved; `bvhlab hard-cases --gpu`):
@@ -83,6 +93,10 @@ struct AssembledShader {
   // message names the module and its own line.
   std::string mapLog(const std::string& log) const;
 };
+
+// Whether the tracer compiles ray cones in: a cone mode is asked for and the scene samples a texture
+// (a material texture or a world map), or the uber shader.
+bool usesTextureLod(const SceneFeatures& features, const ShaderOptions& options);
 
 // Effective max depth: lowered to 1 when nothing reflects or refracts (uber keeps the request).
 int effectiveDepth(const SceneFeatures& features, int requested, bool uber);

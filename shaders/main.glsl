@@ -59,6 +59,10 @@ vec3 idColor(int id) {
 }
 
 void main() {
+#ifdef TEXTURE_LOD
+  // The primary cone's spread: one pixel's angle (Ray Tracing Gems ch. 20), per sub-sample.
+  g_pixelSpread = atan(2.0 * length(u_up) / u_resolution.y) / float(SSAA_GRID);
+#endif
   Ray ray = cameraRay(gl_FragCoord.xy);
   int primaryId = -1;
   bool nonFiniteValue = false;  // the radiance (shaded) or view value of some sample was not finite
@@ -95,6 +99,11 @@ void main() {
 #endif
   }
   nonFiniteValue = nonFinite(color);
+#endif
+#ifdef LOD_VIEW
+  // Test view: the level of the first texture lookup along the primary path, 16 steps per level
+  // (0: no lookup). C++ mirror: the same encoding (tracer.cpp).
+  color = vec3(g_firstLod < 0.0 ? 0.0 : (g_firstLod * 16.0 + 1.0) / 255.0);
 #endif
   o_color = vec4(color, 1.0);
 #ifdef COUNT_STATS

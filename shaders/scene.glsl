@@ -44,6 +44,11 @@ struct Hit {
   vec2 uv;
   int material;
   int id;           // analytic object index, or NUM_OBJECTS + original triangle id
+#ifdef TEXTURE_LOD
+  vec3 dpdu;        // world-space uv parametrisation at the hit (texture_lod.glsl)
+  vec3 dpdv;
+  float curvature;  // mean curvature, positive where the surface bulges along the outward normal
+#endif
 };
 
 vec3 objectPoint(ObjectData o, vec3 p) {
@@ -109,6 +114,12 @@ bool intersectScene(Ray ray, float tMax, out Hit hit) {
   hit.uv = vec2(0.0);
   hit.material = 0;
   hit.id = -1;
+#ifdef TEXTURE_LOD
+  hit.dpdu = vec3(0.0);
+  hit.dpdv = vec3(0.0);
+  hit.curvature = 0.0;
+  vec3 objectNormal = vec3(0.0, 1.0, 0.0);  // the closest object's, in its own space
+#endif
   bool found = false;
   for (int i = 0; i < NUM_OBJECTS; ++i) {
     ObjectData o = u_objects[i];
@@ -124,8 +135,24 @@ bool intersectScene(Ray ray, float tMax, out Hit hit) {
       hit.uv = uv;
       hit.material = o.info.y;
       hit.id = i;
+#ifdef TEXTURE_LOD
+      objectNormal = n;
+#endif
     }
   }
+#ifdef TEXTURE_LOD
+  if (found) {  // the closest object's parametrisation, mapped to world space
+    ObjectData o = u_objects[hit.id];
+    Ray r = Ray(objectPoint(o, ray.origin), objectVector(o, ray.dir));
+    vec3 q = r.origin + hit.t * r.dir;
+    objectSurface(o.info.x, o.params.xy, q, objectNormal, hit.dpdu, hit.dpdv, hit.curvature);
+    mat3 objectToWorld = inverse(transpose(mat3(o.worldToObject0.xyz, o.worldToObject1.xyz, o.worldToObject2.xyz)));
+    hit.dpdu = objectToWorld * hit.dpdu;
+    hit.dpdv = objectToWorld * hit.dpdv;
+    // Curvature is 1/length: divided by the object's mean scale (the cube root of the volume scale).
+    hit.curvature *= pow(abs(determinant(objectToWorld)), -1.0 / 3.0);
+  }
+#endif
 #ifdef HAS_MESH
   if (MESH_PRESENT) {  // constant true unless the uber shader runs a scene without a mesh
     g_meshRays++;
@@ -145,6 +172,9 @@ bool intersectScene(Ray ray, float tMax, out Hit hit) {
       hit.uv = uv;
       hit.material = triangleMaterial(mh.tri);
       hit.id = NUM_OBJECTS + triangleId(mh.tri);
+#ifdef TEXTURE_LOD
+      meshSurface(mh.tri, v0, v1, v2, hit.dpdu, hit.dpdv, hit.curvature);
+#endif
     }
   }
 #endif

@@ -29,6 +29,40 @@ vec3 surfaceAlbedo(MaterialData m, vec2 uv) {
   return albedo;
 }
 
+#ifdef TEXTURE_LOD
+// surfaceAlbedo with the level chosen by the ray cone of width w at the hit (texture_lod.glsl).
+vec3 surfaceAlbedoCone(MaterialData m, Hit h, vec3 dir, float w) {
+  vec3 albedo = m.color.rgb;
+#ifdef HAS_TEXTURES
+  if (m.color.w >= 0.0) {
+    vec2 texSize = vec2(textureSize(u_textures, 0).xy) * m.uvScale.xy;
+    vec3 at = vec3(h.uv * m.uvScale.xy, m.color.w);
+#if TEXTURE_LOD_ANISO
+    vec2 g1, g2;
+    coneEllipse(w, dir, h.normal, h.dpdu, h.dpdv, g1, g2);
+    AnisoTaps taps = anisoTaps(g1 * m.uvScale.xy, g2 * m.uvScale.xy, vec2(textureSize(u_textures, 0).xy));
+#ifdef LOD_VIEW
+    recordLod(taps.lod);
+#endif
+    vec3 sum = vec3(0.0);
+    for (int i = 0; i < taps.count; ++i) {
+      vec2 offset = ((float(i) + 0.5) / float(taps.count) - 0.5) * taps.major;
+      sum += textureLod(u_textures, at + vec3(offset, 0.0), taps.lod).rgb;
+    }
+    albedo *= sum / float(taps.count);
+#else
+    float lod = coneLodIsotropic(w, dot(dir, h.normal), h.dpdu, h.dpdv, texSize);
+#ifdef LOD_VIEW
+    recordLod(lod);
+#endif
+    albedo *= textureLod(u_textures, at, lod).rgb;
+#endif
+  }
+#endif
+  return albedo;
+}
+#endif
+
 // n faces the incoming ray (the caller flips it); p is the hit point, magnitude its hitMagnitude.
 vec3 shadeLocal(MaterialData m, vec3 albedo, vec3 p, float magnitude, vec3 n, vec3 viewDir) {
   vec3 color = m.emission.rgb + albedo * m.lighting.y * u_ambient.rgb;
@@ -111,3 +145,19 @@ Scatter scatterAt(MaterialData m, Hit h, vec3 dir) {
 #endif
   return s;
 }
+
+#ifdef TEXTURE_LOD
+// The cones (width, spread) of the rays leaving a hit, from the incoming cone at the hit (coneAt).
+// Curvature is taken against the normal facing the incoming ray (texture_lod.glsl's sign).
+vec2 reflectedCone(Hit h, Scatter s, vec2 cone) {
+  float kappa = s.entering ? h.curvature : -h.curvature;
+  return vec2(cone.x, coneSpreadAfter(cone.y, cone.x, kappa, true, 1.0, 1.0, 1.0));
+}
+vec2 refractedCone(MaterialData m, Hit h, Scatter s, vec3 dir, vec2 cone) {
+  float kappa = s.entering ? h.curvature : -h.curvature;
+  float eta = s.entering ? 1.0 / m.optics.z : m.optics.z;
+  float cosI = min(-dot(dir, s.n), 1.0);
+  float cosT = -dot(s.refracted, s.n);
+  return vec2(cone.x, coneSpreadAfter(cone.y, cone.x, kappa, false, eta, cosI, cosT));
+}
+#endif

@@ -9,6 +9,8 @@
 #include "shaders/common.hpp"
 #include "shaders/offset_ulp.hpp"
 #include "shaders/primitives.hpp"
+#include "shaders/texture_lod.hpp"
+#include "shaders/texture_mips.hpp"
 #include "traversal/kernels.hpp"
 
 namespace bvhlab {
@@ -18,20 +20,6 @@ namespace {
 
 // GLSL built-ins that GLM lacks or names differently.
 float atan2f_(float y, float x) { return std::atan2(y, x); }
-
-// texture()/textureLod() with GL_LINEAR: texel centres at (i + 0.5) / size.
-vec4 bilinear(const vec4* texels, int w, int h, vec2 uv, bool repeatT) {
-  float x = uv.x * float(w) - 0.5f, y = uv.y * float(h) - 0.5f;
-  float fx = floor(x), fy = floor(y);
-  float ax = x - fx, ay = y - fy;
-  auto at = [&](int i, int j) {
-    i = ((i % w) + w) % w;  // GL_REPEAT in s
-    j = repeatT ? ((j % h) + h) % h : clamp(j, 0, h - 1);
-    return texels[size_t(j) * size_t(w) + size_t(i)];
-  };
-  int i0 = int(fx), j0 = int(fy);
-  return mix(mix(at(i0, j0), at(i0 + 1, j0), ax), mix(at(i0, j0 + 1), at(i0 + 1, j0 + 1), ax), ay);
-}
 
 constexpr int KIND_SPHERE = 0, KIND_BOX = 1, KIND_CYLINDER = 2, KIND_CONE = 3, KIND_TORUS = 4, KIND_PLANE = 5;
 constexpr float RAY_OFFSET_SCALE = 1e-4f;
@@ -44,6 +32,9 @@ struct Hit {
   vec2 uv;
   int material;
   int id;
+  vec3 dpdu;  // TEXTURE_LOD
+  vec3 dpdv;
+  float curvature;
 };
 
 struct Scatter {
@@ -59,6 +50,7 @@ struct PathVertex {
   Ray ray;
   vec3 weight;
   int depth;
+  vec2 cone;  // TEXTURE_LOD
 };
 
 struct Tracer {
@@ -73,8 +65,15 @@ struct Tracer {
   int NUM_OBJECTS;
   int NUM_LIGHTS;
   bool MESH_PRESENT;
+  bool TEXTURE_LOD;        // usesTextureLod(features, options): cones compiled in
+  const TextureMips* mips;  // with TEXTURE_LOD
   // "globals"
   Counters counters;
+  float g_pixelSpread = 0.0f;
+  float g_firstLod = -1.0f;  // LOD_VIEW
+  void recordLod(float lod) {
+    if (g_firstLod < 0.0f) g_firstLod = clamp(lod, 0.0f, 15.0f);
+  }
 
   // ---- scene.glsl -------------------------------------------------------------------------
   static vec3 objectPoint(const ObjectData& o, vec3 p) {
@@ -120,6 +119,10 @@ struct Tracer {
     hit.uv = vec2(0.0f);
     hit.material = 0;
     hit.id = -1;
+    hit.dpdu = vec3(0.0f);
+    hit.dpdv = vec3(0.0f);
+    hit.curvature = 0.0f;
+    vec3 objectNormal = vec3(0.0f, 1.0f, 0.0f);
     bool found = false;
     for (int i = 0; i < NUM_OBJECTS; ++i) {
       const ObjectData& o = data.objects[size_t(i)];
@@ -135,7 +138,19 @@ struct Tracer {
         hit.uv = uv;
         hit.material = o.info.y;
         hit.id = i;
+        objectNormal = n;
       }
+    }
+    if (TEXTURE_LOD && found) {
+      const ObjectData& o = data.objects[size_t(hit.id)];
+      Ray r = Ray{objectPoint(o, ray.origin), objectVector(o, ray.dir)};
+      vec3 q = r.origin + hit.t * r.dir;
+      objectSurface(o.info.x, vec2(o.params), q, objectNormal, hit.dpdu, hit.dpdv, hit.curvature);
+      mat3 objectToWorld =
+          inverse(transpose(mat3(vec3(o.worldToObject0), vec3(o.worldToObject1), vec3(o.worldToObject2))));
+      hit.dpdu = objectToWorld * hit.dpdu;
+      hit.dpdv = objectToWorld * hit.dpdv;
+      hit.curvature *= pow(abs(determinant(objectToWorld)), -1.0f / 3.0f);
     }
     if (MESH_PRESENT) {
       counters.meshRays++;
@@ -154,6 +169,7 @@ struct Tracer {
         hit.uv = uv;
         hit.material = triangleMaterial(mh.tri);
         hit.id = NUM_OBJECTS + triangleId(mh.tri);
+        if (TEXTURE_LOD) meshSurface(storage, mh.tri, v0, v1, v2, hit.dpdu, hit.dpdv, hit.curvature);
       }
     }
     return found;
@@ -198,6 +214,33 @@ struct Tracer {
     vec3 c = k == WorldKind::Color ? worldColor(dir) : (k == WorldKind::Sky ? worldSky(dir) : worldMap(dir));
     return c * scene.world.intensity;
   }
+  // world_map.glsl's worldMapCone
+  vec3 worldMapCone(vec3 dir, float spread) {
+    const Image* m = data.worldMap;
+    if (!m) return vec3(0.0f);
+    vec2 size = vec2(float(m->width), float(m->height));
+    float cosLat = max(sqrt(max(1.0f - dir.y * dir.y / dot(dir, dir), 0.0f)), PI / size.y);
+    vec2 uv = equirectUv(dir);
+    if (options.textureLod == TextureLod::ConesAniso) {
+      AnisoTaps taps = anisoTaps(vec2(abs(spread) / (2.0f * PI * cosLat), 0.0f), vec2(0.0f, abs(spread) / PI), size);
+      recordLod(taps.lod);
+      vec3 sum = vec3(0.0f);
+      for (int i = 0; i < taps.count; ++i)
+        sum += vec3(trilinear(mips->world, 0, uv + ((float(i) + 0.5f) / float(taps.count) - 0.5f) * taps.major,
+                              taps.lod, false));
+      return sum / float(taps.count);
+    }
+    float texel = sqrt(2.0f * PI * cosLat / size.x * PI / size.y);
+    float lod = abs(spread) > 0.0f ? log2(abs(spread) / texel) : 0.0f;
+    recordLod(lod);
+    return vec3(trilinear(mips->world, 0, uv, lod, false));
+  }
+  // world.glsl's worldRadianceCone
+  vec3 worldRadianceCone(vec3 dir, float spread) {
+    WorldKind k = scene.world.kind;
+    if (k != WorldKind::Map) return worldRadiance(dir);
+    return worldMapCone(dir, spread) * scene.world.intensity;
+  }
 
   // ---- shade.glsl -------------------------------------------------------------------------
   static float hitMagnitude(const Ray& ray, float t) {
@@ -214,6 +257,34 @@ struct Tracer {
       const TextureArray& ta = data.textures;
       const vec4* layer = ta.texels.data() + size_t(m.color.w) * size_t(ta.width) * size_t(ta.height);
       albedo *= vec3(bilinear(layer, ta.width, ta.height, uv * vec2(m.uvScale), true));
+    }
+    return albedo;
+  }
+
+  vec3 surfaceAlbedoCone(const MaterialData& m, const Hit& h, vec3 dir, float w) {
+    vec3 albedo = vec3(m.color);
+    if (m.color.w >= 0.0f) {
+      const TextureArray& ta = data.textures;
+      const int layer = int(m.color.w);
+      vec2 uvScale = vec2(m.uvScale);
+      vec2 at = h.uv * uvScale;
+      if (options.textureLod == TextureLod::ConesAniso) {
+        vec2 g1, g2;
+        coneEllipse(w, dir, h.normal, h.dpdu, h.dpdv, g1, g2);
+        AnisoTaps taps = anisoTaps(g1 * uvScale, g2 * uvScale, vec2(float(ta.width), float(ta.height)));
+        recordLod(taps.lod);
+        vec3 sum = vec3(0.0f);
+        for (int i = 0; i < taps.count; ++i) {
+          vec2 offset = ((float(i) + 0.5f) / float(taps.count) - 0.5f) * taps.major;
+          sum += vec3(trilinear(mips->textures, layer, at + offset, taps.lod, true));
+        }
+        albedo *= sum / float(taps.count);
+      } else {
+        vec2 texSize = vec2(float(ta.width), float(ta.height)) * uvScale;
+        float lod = coneLodIsotropic(w, dot(dir, h.normal), h.dpdu, h.dpdv, texSize);
+        recordLod(lod);
+        albedo *= vec3(trilinear(mips->textures, layer, at, lod, true));
+      }
     }
     return albedo;
   }
@@ -280,17 +351,33 @@ struct Tracer {
     return s;
   }
 
+  // shade.glsl's reflectedCone / refractedCone
+  vec2 reflectedCone(const Hit& h, const Scatter& s, vec2 cone) const {
+    float kappa = s.entering ? h.curvature : -h.curvature;
+    return vec2(cone.x, coneSpreadAfter(cone.y, cone.x, kappa, true, 1.0f, 1.0f, 1.0f, options.coneCurvature));
+  }
+  vec2 refractedCone(const MaterialData& m, const Hit& h, const Scatter& s, vec3 dir, vec2 cone) const {
+    float kappa = s.entering ? h.curvature : -h.curvature;
+    float eta = s.entering ? 1.0f / m.optics.z : m.optics.z;
+    float cosI = min(-dot(dir, s.n), 1.0f);
+    float cosT = -dot(s.refracted, s.n);
+    return vec2(cone.x, coneSpreadAfter(cone.y, cone.x, kappa, false, eta, cosI, cosT, options.coneCurvature));
+  }
+
   // ---- trace_full.glsl --------------------------------------------------------------------
   vec3 radianceFull(Ray primary) {
     vec3 color = vec3(0.0f);
     std::vector<PathVertex> stack(size_t(MAX_DEPTH + 1));
     int sp = 0;
-    stack[size_t(sp++)] = PathVertex{primary, vec3(1.0f), 1};
+    stack[size_t(sp++)] = PathVertex{primary, vec3(1.0f), 1, vec2(0.0f, g_pixelSpread)};
     while (sp > 0) {
       PathVertex v = stack[size_t(--sp)];
       Hit h;
       if (!intersectScene(v.ray, INF, h)) {
-        color += v.weight * worldRadiance(v.ray.dir);
+        if (TEXTURE_LOD)
+          color += v.weight * worldRadianceCone(v.ray.dir, v.cone.y);
+        else
+          color += v.weight * worldRadiance(v.ray.dir);
         continue;
       }
       const MaterialData& m = data.materials[size_t(h.material)];
@@ -298,38 +385,50 @@ struct Tracer {
       vec3 p = v.ray.origin + h.t * v.ray.dir;
       float magnitude = hitMagnitude(v.ray, h.t);
       Scatter s = scatterAt(m, h, dir);
-      if (s.kLocal > 0.0f) color += v.weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, magnitude, s.n, dir);
+      vec2 cone = coneAt(v.cone, h.t * length(v.ray.dir));  // TEXTURE_LOD
+      if (TEXTURE_LOD) {
+        if (s.kLocal > 0.0f)
+          color += v.weight * s.kLocal * shadeLocal(m, surfaceAlbedoCone(m, h, dir, cone.x), p, magnitude, s.n, dir);
+      } else {
+        if (s.kLocal > 0.0f)
+          color += v.weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, magnitude, s.n, dir);
+      }
       if (MAX_DEPTH > 1) {
         if (v.depth >= MAX_DEPTH) continue;
         vec3 wt = v.weight * s.kt;
         if (max(max(wt.r, wt.g), wt.b) > MIN_BRANCH_WEIGHT)
-          stack[size_t(sp++)] = PathVertex{Ray{offsetRayOrigin(p, -s.n, magnitude), s.refracted}, wt, v.depth + 1};
+          stack[size_t(sp++)] = PathVertex{Ray{offsetRayOrigin(p, -s.n, magnitude), s.refracted}, wt, v.depth + 1,
+                                           TEXTURE_LOD ? refractedCone(m, h, s, dir, cone) : vec2(0.0f)};
         vec3 wr = v.weight * s.kr;
         if (max(max(wr.r, wr.g), wr.b) > MIN_BRANCH_WEIGHT)
-          stack[size_t(sp++)] = PathVertex{Ray{offsetRayOrigin(p, s.n, magnitude), reflect(dir, s.n)}, wr, v.depth + 1};
+          stack[size_t(sp++)] = PathVertex{Ray{offsetRayOrigin(p, s.n, magnitude), reflect(dir, s.n)}, wr, v.depth + 1,
+                                           TEXTURE_LOD ? reflectedCone(h, s, cone) : vec2(0.0f)};
       }
     }
     return color;
   }
 
   // ---- trace_report.glsl ------------------------------------------------------------------
-  vec3 reflectedColor(Ray ray) {
+  vec3 reflectedColor(Ray ray, vec2 cone) {
     Hit h;
-    if (!intersectScene(ray, INF, h)) return worldRadiance(ray.dir);
+    if (!intersectScene(ray, INF, h)) return TEXTURE_LOD ? worldRadianceCone(ray.dir, cone.y) : worldRadiance(ray.dir);
     const MaterialData& m = data.materials[size_t(h.material)];
     vec3 dir = normalize(ray.dir);
     Scatter s = scatterAt(m, h, dir);
-    return shadeLocal(m, surfaceAlbedo(m, h.uv), ray.origin + h.t * ray.dir, hitMagnitude(ray, h.t), s.n, dir);
+    vec3 albedo = TEXTURE_LOD ? surfaceAlbedoCone(m, h, dir, coneAt(cone, h.t * length(ray.dir)).x)
+                              : surfaceAlbedo(m, h.uv);
+    return shadeLocal(m, albedo, ray.origin + h.t * ray.dir, hitMagnitude(ray, h.t), s.n, dir);
   }
 
   vec3 radianceReport(Ray primary) {
     vec3 color = vec3(0.0f);
     Ray ray = primary;
     vec3 weight = vec3(1.0f);
+    vec2 cone = vec2(0.0f, g_pixelSpread);  // TEXTURE_LOD
     for (int depth = 1; depth <= MAX_DEPTH; ++depth) {
       Hit h;
       if (!intersectScene(ray, INF, h)) {
-        color += weight * worldRadiance(ray.dir);
+        color += weight * (TEXTURE_LOD ? worldRadianceCone(ray.dir, cone.y) : worldRadiance(ray.dir));
         break;
       }
       const MaterialData& m = data.materials[size_t(h.material)];
@@ -337,17 +436,24 @@ struct Tracer {
       vec3 p = ray.origin + h.t * ray.dir;
       float magnitude = hitMagnitude(ray, h.t);
       Scatter s = scatterAt(m, h, dir);
-      if (s.kLocal > 0.0f) color += weight * s.kLocal * shadeLocal(m, surfaceAlbedo(m, h.uv), p, magnitude, s.n, dir);
+      vec2 hitCone = coneAt(cone, h.t * length(ray.dir));
+      if (s.kLocal > 0.0f)
+        color += weight * s.kLocal *
+                 shadeLocal(m, TEXTURE_LOD ? surfaceAlbedoCone(m, h, dir, hitCone.x) : surfaceAlbedo(m, h.uv), p,
+                            magnitude, s.n, dir);
       if (depth == MAX_DEPTH) break;
       Ray reflected = Ray{offsetRayOrigin(p, s.n, magnitude), reflect(dir, s.n)};
       if (s.kr > 0.0f && s.kt > 0.0f) {
-        color += weight * s.kr * reflectedColor(reflected);
+        color += weight * s.kr * reflectedColor(reflected, TEXTURE_LOD ? reflectedCone(h, s, hitCone) : vec2(0.0f));
+        if (TEXTURE_LOD) cone = refractedCone(m, h, s, dir, hitCone);
         weight *= s.kt;
         ray = Ray{offsetRayOrigin(p, -s.n, magnitude), s.refracted};
       } else if (s.kt > 0.0f) {
+        if (TEXTURE_LOD) cone = refractedCone(m, h, s, dir, hitCone);
         weight *= s.kt;
         ray = Ray{offsetRayOrigin(p, -s.n, magnitude), s.refracted};
       } else if (s.kr > 0.0f) {
+        if (TEXTURE_LOD) cone = reflectedCone(h, s, hitCone);
         weight *= s.kr;
         ray = reflected;
       } else {
@@ -388,6 +494,9 @@ struct Tracer {
   vec3 renderPixel(const CameraBasis& cam, vec2 resolution, vec2 fragCoord, float exposure, float sceneRadius,
                    uvec4& stats, uint32_t& boxTests) {
     counters = Counters{};
+    g_firstLod = -1.0f;
+    // main.glsl: the primary cone's spread, one pixel's angle per sub-sample (cam.up carries tan(fov/2))
+    if (TEXTURE_LOD) g_pixelSpread = atan(2.0f * length(cam.up) / resolution.y) / float(options.ssaaGrid);
     Ray ray = cameraRay(cam, resolution, fragCoord);
     int primaryId = -1;
     bool nonFiniteValue = false;
@@ -421,6 +530,8 @@ struct Tracer {
       }
       nonFiniteValue = nonFinite(color);
     }
+    if (TEXTURE_LOD && options.lodView)  // LOD_VIEW
+      color = vec3(g_firstLod < 0.0f ? 0.0f : (g_firstLod * 16.0f + 1.0f) / 255.0f);
     stats = uvec4(counters.nodeVisits, counters.triTests,
                   counters.meshRays | (counters.stackOverflow ? 0x80000000u : 0u),
                   uint32_t(primaryId + 1) | (nonFiniteValue ? 0x80000000u : 0u));
@@ -451,10 +562,12 @@ ReferenceImage renderReference(const Scene& scene, const SceneData& data, const 
   img.boxTests.resize(size_t(frame.width) * frame.height);
   CameraBasis cam = cameraBasis(frame.camera, frame.width, frame.height);
   const KernelInfo& kernel = findKernel(options.kernel);
+  const bool cones = usesTextureLod(features, options);
+  const TextureMips mips = cones ? buildTextureMips(data) : TextureMips{};  // the levels GpuRenderer uploads
 
   auto worker = [&](int first, int step) {
     Tracer tr{scene, data, bvh, options, kernel, glsl::Storage(bvh, std::max(1, options.bvhStackSize)), effectiveDepth(features, options.maxDepth, options.uber),
-              features.numObjects, features.numLights, !bvh.triangles.empty(), {}};
+              features.numObjects, features.numLights, !bvh.triangles.empty(), cones, &mips, {}};
     const vec2 resolution(float(frame.width), float(frame.height));
     for (int y = first; y < frame.height; y += step)
       for (int x = 0; x < frame.width; ++x) {

@@ -17,3 +17,17 @@ vec3 worldRadiance(vec3 dir) {
 #endif
   return c * u_worldIntensity;
 }
+
+#ifdef TEXTURE_LOD
+// worldRadiance for a ray whose cone has spread angle `spread`: only the map has texels to filter.
+vec3 worldRadianceCone(vec3 dir, float spread) {
+#if defined(UBER)
+  vec3 c = u_worldKind == 0 ? worldColor(dir) : (u_worldKind == 1 ? worldSky(dir) : worldMapCone(dir, spread));
+  return c * u_worldIntensity;
+#elif defined(WORLD_MAP)
+  return worldMapCone(dir, spread) * u_worldIntensity;
+#else
+  return worldRadiance(dir);
+#endif
+}
+#endif

@@ -211,7 +211,9 @@ TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
   const fs::path dir = fs::path(BVHLAB_SOURCE_DIR) / "experiments" / "configs";
   std::map<std::string, size_t> expectedRuns = {
       {"quick.toml", 72},      {"seed-figures.toml", 18}, {"builders.toml", 1990}, {"accuracy-vs-time.toml", 30},
-      {"antialiasing.toml", 16}, {"flythrough.toml", 15}, {"large.toml", 2}, {"bench.toml", 400},
+      {"antialiasing.toml", 28},  // 2 scenes x (6 modes + colour edges + {none, smaa-high} x 3 texture LODs) + 2 references
+      {"texture-lod.toml", 14},   // 2 scenes x {none, smaa-high} x 3 texture LODs + 2 references
+      {"flythrough.toml", 15}, {"large.toml", 2}, {"bench.toml", 400},
       {"morton-grid.toml", 20}, {"ploc-top-down.toml", 12}, {"storage.toml", 15},
       {"sbvh-knobs.toml", 15},  // 3 scenes x (sah-binned + 4 sbvh settings)
       {"builders-gpu.toml", 72},   // 3 scenes x 2 workloads x 9 builders + 2 rendered scenes x 9

@@ -46,6 +46,7 @@ TABLES = {
     "cpu-hard-cases": tables_cpu.cpu_hard_cases,
     "cpu-robust-cost": tables_cpu.cpu_robust_cost,
     "cpu-sbvh-knobs": tables_cpu.cpu_sbvh_knobs,
+    "cpu-texture-lod": tables_cpu.cpu_texture_lod,
 }
 
 

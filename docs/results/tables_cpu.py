@@ -225,3 +225,69 @@ def cpu_sbvh_knobs():
                   f"generate.py re-derives each ratio and interval from the per-round times in results.json. "
                   f"SAH and ray cost are exact counts from results.csv."]
     return lines + provenance([(cpath, rows), (fpath, []), (rpath, [])], src, commands(KNOBS, src))
+
+
+TL = "texture-lod"
+
+
+def cpu_texture_lod():
+    """Issue 40: texture LOD by ray cones, without AA and with SMAA high: image error against the 16x
+    supersampled reference (no LOD) and the frame time over the same AA mode without LOD (paired)."""
+    fpath, findings = read_json(TL, "findings.json")
+    cpath, rows = read_csv(TL, "results.csv")
+    src = source(TL)
+    rpath, _ = read_json(TL, "results.json")
+    runs = [r for r in rows if r.get("status") == "ok" and r.get("reference_only") not in ("true", "1", "True")]
+    # Paired frame-time ratios along the texture_lod axis, keyed by (a's key): mode over the same run without LOD.
+    cost = {}
+    for c in findings.get("comparisons") or []:
+        if c.get("kind") != "axis" or c.get("axis") != "texture_lod":
+            continue
+        labels = (c.get("a_label"), c.get("b_label"))
+        if "none" not in labels or labels[0] == labels[1]:
+            continue
+        ratio, lo, hi = num(c, "ratio", fpath), num(c, "ci_low", fpath), num(c, "ci_high", fpath)
+        key = c.get("a")
+        if labels[0] == "none":  # b over a: invert to "with LOD over without"
+            ratio, lo, hi, key = 1.0 / ratio, 1.0 / hi, 1.0 / lo, c.get("b")
+        cost[key] = (ratio, lo, hi, str(c.get("verdict")))
+    scenes = []
+    for r in runs:
+        if r.get("scene") not in scenes:
+            scenes.append(r.get("scene"))
+    out = []
+    for s in scenes:
+        mine = [r for r in runs if r.get("scene") == s]
+        base = [r for r in mine if r.get("aa") == "none" and r.get("texture_lod") == "none"]
+        if len(base) != 1:
+            raise DataError(f"{rel(cpath)}: {len(base)} runs of {s} without AA and without LOD, expected 1")
+        e0 = num(base[0], "image_mae", cpath)
+        for aa in ("none", "smaa-high"):
+            for lod in ("none", "cones", "cones-aniso"):
+                r = [x for x in mine if x.get("aa") == aa and x.get("texture_lod") == lod]
+                if len(r) != 1:
+                    raise DataError(f"{rel(cpath)}: {len(r)} runs of {s} with aa={aa}, texture_lod={lod}, expected 1")
+                r = r[0]
+                e = num(r, "image_mae", cpath)
+                ms = with_ci(num(r, "frame_ms", cpath), num(r, "frame_ms_ci_low", cpath),
+                             num(r, "frame_ms_ci_high", cpath), lambda x: f"{x:.1f}")
+                if lod == "none":
+                    c = "1"
+                    verdict = "–"
+                else:
+                    if r.get("key") not in cost:
+                        raise DataError(f"{rel(fpath)}: no paired texture_lod comparison for run {r.get('key')}")
+                    ratio, lo, hi, verdict = cost[r.get("key")]
+                    c = with_ci(ratio, lo, hi, f3)
+                out.append([str(s), f"`{aa}`", f"`{lod}`", f"{e:.2f}", f3(e / e0), ms, c, verdict])
+    header = ["scene", "aa", "texture_lod", "error", "error / (none, none)", "frame ms [95%]",
+              "time / same aa without LOD [95%]", "verdict"]
+    lines = table(header, out)
+    r0 = runs[0]
+    lines += ["", f"Error: mean absolute difference over 8-bit RGB against the scene's 16x supersampled render "
+                  f"without texture LOD. {r0.get('width')}x{r0.get('height')} frames, {r0.get('builder')}, "
+                  f"{r0.get('kernel')}, depth {r0.get('depth')}; every run of a scene interleaved in one process. "
+                  f"Ratios, intervals and verdicts are findings.json's paired comparisons (docs/measurement.md); "
+                  f"`bvhlab findings docs/results/{TL} --check` re-derives them from the per-round times in "
+                  f"results.json."]
+    return lines + provenance([(cpath, rows), (fpath, []), (rpath, [])], src, commands(TL, src))
