@@ -87,6 +87,29 @@ TEST_P(FuzzRegressions, EveryFileParsesOrIsAnInputError) {
   RecordProperty("replayed", replayed);
 }
 
+// The seeds of the image and JSON targets are valid inputs: each must parse to a well-formed result
+// (an InputError here means the harness never gets past the reader's first check, and the fuzzer
+// would mutate from a dead end). Every target has at least one.
+class FuzzSeeds : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(FuzzSeeds, EverySeedParses) {
+  const std::string parser = GetParam();
+  ScratchDir dir;
+  std::error_code ec;
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(fs::path(BVHLAB_SOURCE_DIR) / "tests/fuzz/seeds" / parser, ec))
+    if (e.is_regular_file()) files.push_back(e.path());
+  ASSERT_FALSE(files.empty()) << "no seeds for " << parser;
+  for (const fs::path& file : files) {
+    SCOPED_TRACE(file.string());
+    EXPECT_NO_THROW(fuzz::parseAs(parser, readBytes(file), dir.path));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(ImageAndJsonTargets, FuzzSeeds,
+                         ::testing::Values("png", "jpeg", "exr", "hdr", "group", "merge"),
+                         [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
+
 // Every folder is a known parser, so a misspelt folder cannot silently replay nothing.
 TEST(FuzzRegressionsLayout, FoldersNameKnownParsers) {
   const auto& names = fuzz::parserNames();
