@@ -17,6 +17,7 @@
 
 #include <gtest/gtest.h>
 
+#include "datasets/image_io.hpp"
 #include "datasets/mesh_io.hpp"
 #include "fuzz/parsers.hpp"
 
@@ -240,6 +241,35 @@ TEST(ImporterGuards, GlbContainerAndGltfJsonAreCheckedBeforeAssimp) {
   e = writeGltf("strings.gltf", R"({"asset": {"version": "2.0", "generator": ")" + std::string(300, '[') + "\"}}" +
                                     std::string(1, '\0') + "garbage");
   EXPECT_EQ(e.find("JSON"), std::string::npos) << e;
+}
+
+// Peak resident memory of this process so far (VmHWM, /proc/self/status), in bytes; 0 if unknown.
+namespace {
+uint64_t peakResidentBytes() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stoull(line.substr(6)) * 1024;  // "VmHWM:  1234 kB"
+  return 0;
+}
+}  // namespace
+
+// A 40-byte Radiance HDR file whose header claims 16000 x 16000 pixels: loadImage once decoded the
+// whole image into one buffer sized from the header (3 GB allocated and zeroed, 18 s, before the
+// decoder found no data). Decoded in bands now, it fails at the first band. The bound: the band is
+// 4 MiB of floats and the decoder's row buffers less; the old path added 3 GB to the peak.
+TEST(ImageGuards, AHeaderClaimingHugeSizeCostsWhatTheFileHolds) {
+  const fs::path file = kRegressions / "hdr/header-claims-16000x16000-decoded-whole-took-3gb.hdr";
+  const uint64_t before = peakResidentBytes();
+  ASSERT_GT(before, 0u) << "no VmHWM in /proc/self/status";
+  std::string error = "(loaded)";
+  try {
+    loadImage(file);
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  EXPECT_NE(error.find(file.string() + ": cannot decode image"), std::string::npos) << error;
+  EXPECT_LT(peakResidentBytes(), before + (uint64_t(256) << 20)) << "peak resident memory grew past 256 MiB";
 }
 
 TEST(ImporterGuards, AZipArchiveIsNotReadAsAModel) {
