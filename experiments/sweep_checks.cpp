@@ -1,6 +1,8 @@
 #include "experiments/sweep_checks.hpp"
 
 #include <set>
+#include <utility>
+#include <vector>
 
 #include "datasets/scene.hpp"  // InputError
 #include "experiments/config.hpp"  // RunSpec
@@ -21,6 +23,18 @@ void needObject(const json& parent, const char* key, const std::string& source, 
 }
 
 }  // namespace
+
+void checkNesting(const json& value, const std::string& source, int maxDepth) {
+  std::vector<std::pair<const json*, int>> todo{{&value, 1}};
+  while (!todo.empty()) {
+    const auto [v, depth] = todo.back();
+    todo.pop_back();
+    if (!v->is_structured()) continue;
+    if (depth > maxDepth)
+      throw InputError(source + ": JSON nested deeper than " + std::to_string(maxDepth) + " levels");
+    for (const json& child : *v) todo.push_back({&child, depth + 1});
+  }
+}
 
 void checkPlan(const json& plan, const std::string& source) {
   if (!plan.is_object() || !plan.contains("format") || plan["format"] != 1)

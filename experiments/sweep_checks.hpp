@@ -10,6 +10,15 @@
 
 namespace bvhlab {
 
+// Sweep files nest a few levels (a record: params.axes[i].value.file is 5). nlohmann::json parses
+// without recursion but copies and prints recursively, one stack frame per level: a record of 200,000
+// nested arrays (400 KB) crashed `merge` with a stack overflow. 64 levels leave ample room for what
+// a renderer reports and stay far below the stack.
+constexpr int kMaxJsonDepth = 64;
+
+// Throws InputError "SOURCE: JSON nested deeper than 64 levels" (checked without recursion).
+void checkNesting(const nlohmann::json& value, const std::string& source, int maxDepth = kMaxJsonDepth);
+
 // plan.json: format 1; "experiment" an object whose "axes" (if any) map axis names to lists;
 // "config" an object with a string "hash"; "runs" a list of run specs (RunSpec::fromJson reads each)
 // with distinct keys. Throws InputError "SOURCE: KEY: what".

@@ -75,11 +75,14 @@ namespace {
 json readJson(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string() + ": cannot open");
+  json value;
   try {
-    return json::parse(in);
+    value = json::parse(in);
   } catch (const json::parse_error& e) {
     throw InputError(file.string() + ": not valid JSON (" + e.what() + ")");
   }
+  checkNesting(value, file.string());  // before anything copies or prints it (recursively)
+  return value;
 }
 
 }  // namespace

@@ -272,6 +272,25 @@ TEST(ImageGuards, AHeaderClaimingHugeSizeCostsWhatTheFileHolds) {
   EXPECT_LT(peakResidentBytes(), before + (uint64_t(256) << 20)) << "peak resident memory grew past 256 MiB";
 }
 
+// A run record nested 200,000 arrays deep (400 KB, written here rather than kept as a file):
+// nlohmann::json parses it without recursion but copies and prints it recursively, and `merge`
+// crashed with a stack overflow (SIGSEGV). Now the record is refused when read (nested deeper than
+// kMaxJsonDepth) and, like any unreadable record, ignored with a warning: its run counts as pending.
+TEST(SweepGuards, ADeeplyNestedRunRecordIsIgnoredNotACrash) {
+  ScratchDir dir;
+  const std::string seed = readBytes(fs::path(BVHLAB_SOURCE_DIR) / "tests/fuzz/seeds/merge/tiny-sweep-3-runs.txt");
+  const size_t status = seed.find("\"status\": \"ok\"");
+  ASSERT_NE(status, std::string::npos);
+  const int depth = 200000;
+  const std::string deep = seed.substr(0, status) + "\"deep\": " + std::string(depth, '[') + std::string(depth, ']') +
+                           ", " + seed.substr(status);
+  fuzz::writeSweepDir(deep, dir.path / "in");
+  const nlohmann::json summary = mergeSweeps({dir.path / "in"}, dir.path / "out", false);
+  EXPECT_EQ(summary.at("planned"), 3);
+  EXPECT_EQ(summary.at("ok"), 2);
+  EXPECT_EQ(summary.at("pending"), 1);
+}
+
 TEST(ImporterGuards, AZipArchiveIsNotReadAsAModel) {
   ScratchDir dir;
   const fs::path zip = dir.path / "packed.glb";
