@@ -1,5 +1,6 @@
 #include "experiments/sweep_checks.hpp"
 
+#include <cmath>
 #include <set>
 #include <utility>
 #include <vector>
@@ -55,6 +56,17 @@ void checkPlan(const json& plan, const std::string& source) {
   for (size_t i = 0; i < runs.size(); ++i) {
     const std::string at = "runs[" + std::to_string(i) + "]";
     if (!runs[i].is_object()) fail(source, at, "not an object");
+    // RunSpec::fromJson converts these to C++ integers with a cast, which is undefined for a
+    // floating-point value outside the integer's range (UBSan: float-cast-overflow): every one of
+    // them must be a number of int's magnitude (no setting means anything beyond).
+    auto checkCast = [&](const json& v, const std::string& key) {
+      if (v.is_number_float() && !(std::fabs(v.get<double>()) < 2147483648.0)) fail(source, key, v.dump() + " out of range");
+    };
+    if (runs[i].contains("index")) checkCast(runs[i]["index"], at + ".index");
+    if (runs[i].contains("index") && runs[i]["index"].is_number() && runs[i]["index"].get<double>() < 0)
+      fail(source, at + ".index", "negative");
+    if (runs[i].contains("render") && runs[i]["render"].is_object())
+      for (const auto& [k, v] : runs[i]["render"].items()) checkCast(v, at + ".render." + k);
     RunSpec spec;
     try {
       spec = RunSpec::fromJson(runs[i]);
