@@ -19,10 +19,11 @@ namespace {
 int intField(const json& spec, const std::string& source, const char* name, int fallback, int lo, int hi) {
   if (!spec.contains(name)) return fallback;
   const json& v = spec[name];
-  // An integral JSON number only (5.0 is read as a float by the parser and refused too). Unsigned
-  // values past int64's range are compared as unsigned, before a conversion could wrap them.
+  // An integral JSON number only (5.0 is read as a float by the parser and refused too). The parser
+  // keeps every non-negative integer as unsigned: those are compared as unsigned (lo >= 1 here),
+  // before a conversion could wrap one past int64's range.
   if (!v.is_number_integer()) fail(source, name, "not an integer");
-  const bool outside = v.is_number_unsigned() ? v.get<uint64_t>() > uint64_t(hi)
+  const bool outside = v.is_number_unsigned() ? v.get<uint64_t>() > uint64_t(hi) || v.get<uint64_t>() < uint64_t(lo)
                                               : v.get<int64_t>() < lo || v.get<int64_t>() > hi;
   if (outside) fail(source, name, v.dump() + " outside " + std::to_string(lo) + ".." + std::to_string(hi));
   const int64_t x = v.get<int64_t>();
