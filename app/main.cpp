@@ -1,5 +1,5 @@
 // bvhlab — command line. Each subcommand is a thin shell over a library call; every error ends in
-// one line on stderr and a non-zero exit code.
+// "bvhlab: error: ..." on stderr and exit status 2 (usage) or 1 (runtime failure): render/exit_status.hpp.
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
@@ -12,12 +12,14 @@
 #include "builders/epo.hpp"
 #include "datasets/scene.hpp"
 #include "datasets/scene_io.hpp"
+#include "experiments/findings_command.hpp"
 #include "experiments/provenance.hpp"
 #include "experiments/runner.hpp"
 #include "layout/layout.hpp"
 #include "layout/layouts.hpp"
 #include "layout/triangle_formats.hpp"
 #include "layout/tree_hash.hpp"
+#include "render/exit_status.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/hard_cases_command.hpp"
 #include "render/measure_command.hpp"
@@ -111,6 +113,36 @@ int buildCommand(const BuildCommand& c) {
   return 0;
 }
 
+// A CLI11 parse failure (everything but --help and --version) as a usage error: one line naming the
+// command, what CLI11 refused (it names the flag or argument) and where help is; exit status 2.
+int reportParseError(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
+  std::vector<std::string> names;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) names.push_back(sub->get_name());
+  const bool known = argc > 1 && std::find(names.begin(), names.end(), argv[1]) != names.end();
+  if (argc < 2 || (!known && argv[1][0] != '-')) {
+    // A mistyped or missing command: name it and list the real ones (CLI11 would only say that an
+    // argument was not expected).
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    if (argc < 2)
+      std::fprintf(stderr, "bvhlab: error: no command given; commands: %s (bvhlab COMMAND --help)\n", list.c_str());
+    else
+      std::fprintf(stderr, "bvhlab: error: unknown command '%s'; commands: %s (bvhlab COMMAND --help)\n", argv[1],
+                   list.c_str());
+    return kExitUsage;
+  }
+  if (!known) {  // an option before any command (CLI11 would only ask for a command)
+    std::fprintf(stderr, "bvhlab: error: unknown option '%s' (options follow the command: bvhlab COMMAND --help)\n",
+                 argv[1]);
+    return kExitUsage;
+  }
+  const std::vector<CLI::App*> selected = app.get_subcommands();
+  const std::string command = selected.empty() ? std::string() : selected.front()->get_name();
+  std::fprintf(stderr, "bvhlab: error: %s%s (bvhlab %s--help)\n", command.empty() ? "" : (command + ": ").c_str(),
+               e.what(), command.empty() ? "" : (command + " ").c_str());
+  return kExitUsage;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -187,6 +219,15 @@ int main(int argc, char** argv) {
   auto* reportCmd = app.add_subcommand("report", "regenerate DIR/report.html from DIR/results.json");
   reportCmd->add_option("dir", reportDir, "experiment output directory")->required();
 
+  std::string findingsDir;
+  bool findingsCheck = false;
+  auto* findingsCmd = app.add_subcommand(
+      "findings", "compute DIR/findings.json again from DIR/results.json with the current rules (docs/measurement.md)");
+  findingsCmd->add_option("dir", findingsDir, "experiment output directory (with results.json)")->required();
+  findingsCmd->add_flag("--check", findingsCheck,
+                        "write nothing; exit 1 naming the first difference when DIR/findings.json does not follow "
+                        "from the rows");
+
   ViewerOptions vo;
   std::string viewEye, viewTarget, viewUp;
   auto* viewCmd = app.add_subcommand("view", "interactive first-person viewer (needs a display; docs/viewer.md)");
@@ -241,27 +282,13 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", [] {
     return std::string("bvhlab ") + BVHLAB_VERSION + " (commit " + gitCommit(findSourceDir()) + ")";
   });
+  app.footer(kExitStatusHelp);  // after the subcommands: they would copy it
   try {
     app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);  // --help, --help-all, --version: printed on stdout, exit status 0
   } catch (const CLI::ParseError& e) {
-    // A mistyped or missing subcommand: name it and list the real ones (CLI11 would only say that
-    // an argument was not expected).
-    std::vector<std::string> names;
-    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) names.push_back(sub->get_name());
-    const bool help = dynamic_cast<const CLI::CallForHelp*>(&e) || dynamic_cast<const CLI::CallForAllHelp*>(&e) ||
-                      dynamic_cast<const CLI::CallForVersion*>(&e);
-    const bool known = argc > 1 && std::find(names.begin(), names.end(), argv[1]) != names.end();
-    if (!help && (argc < 2 || (!known && argv[1][0] != '-'))) {
-      std::string list;
-      for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-      if (argc < 2)
-        std::fprintf(stderr, "bvhlab: error: no command given; commands: %s (bvhlab COMMAND --help)\n", list.c_str());
-      else
-        std::fprintf(stderr, "bvhlab: error: unknown command '%s'; commands: %s (bvhlab COMMAND --help)\n", argv[1],
-                     list.c_str());
-      return 2;
-    }
-    return app.exit(e);
+    return reportParseError(app, e, argc, argv);
   }
   try {
     if (render->parsed()) {
@@ -292,6 +319,7 @@ int main(int argc, char** argv) {
       return mergeCommand(std::vector<std::filesystem::path>(mergeDirs.begin(), mergeDirs.end()), mergeOut,
                           mergeReplicates);
     if (reportCmd->parsed()) return reportCommand(reportDir);
+    if (findingsCmd->parsed()) return findingsCommand(findingsDir, findingsCheck);
     if (hardCmd->parsed()) return runHardCases(hc);
     if (build->parsed()) return buildCommand(bc);
     if (listBuilders->parsed()) {
@@ -316,12 +344,8 @@ int main(int argc, char** argv) {
                     f.name == kDefaultTriangleFormat ? " (default)" : "");
       return 0;
     }
-  } catch (const ShaderError& e) {
-    std::fprintf(stderr, "bvhlab: shader error: %s\n", e.what());
-    return 4;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "bvhlab: error: %s\n", e.what());
-    return 1;
+    return reportError(e);  // a ShaderError is a runtime failure like any other GL failure
   }
   return 0;
 }

@@ -23,6 +23,10 @@ constexpr int64_t kMaxPixels = int64_t(1) << 28;
 [[noreturn]] void fail(const fs::path& path, const std::string& what) {
   throw InputError(path.string() + ": " + what);
 }
+// A file that is missing or cannot be written, as opposed to one whose content is refused.
+[[noreturn]] void failFile(const fs::path& path, const std::string& what) {
+  throw FileError(path.string() + ": " + what);
+}
 
 // OIIO error text can span lines; our messages are one line.
 std::string oneLine(std::string s) {
@@ -33,7 +37,7 @@ std::string oneLine(std::string s) {
 
 std::unique_ptr<OIIO::ImageInput> openInput(const fs::path& path) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) fail(path, "image file not found");
+  if (!fs::exists(path, ec)) failFile(path, "image file not found");
   if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
   // Keep alpha unassociated (straight), as stored in PNG: by default OIIO premultiplies on read.
   OIIO::ImageSpec config;
@@ -68,7 +72,7 @@ void writeAtomically(const fs::path& path, WriteFn&& write) {
   const fs::path dir = path.parent_path();
   if (!dir.empty()) {
     fs::create_directories(dir, ec);
-    if (ec) fail(path, "cannot create directory " + dir.string() + " (" + ec.message() + ")");
+    if (ec) failFile(path, "cannot create directory " + dir.string() + " (" + ec.message() + ")");
   }
   fs::path tmp = path;
   tmp += uniqueSuffix();
@@ -82,7 +86,7 @@ void writeAtomically(const fs::path& path, WriteFn&& write) {
   if (ec) {
     std::error_code ignored;
     fs::remove(tmp, ignored);
-    fail(path, "cannot rename temporary file into place (" + ec.message() + ")");
+    failFile(path, "cannot rename temporary file into place (" + ec.message() + ")");
   }
 }
 
@@ -91,11 +95,11 @@ void writeOiio(const fs::path& path, const fs::path& tmp, const char* format, co
                const void* bottomUp, size_t rowBytes) {
   auto out = OIIO::ImageOutput::create(format);
   if (!out) fail(path, std::string("no OpenImageIO writer for ") + format);
-  if (!out->open(tmp.string(), spec)) fail(path, "cannot write image (" + oneLine(out->geterror()) + ")");
+  if (!out->open(tmp.string(), spec)) failFile(path, "cannot write image (" + oneLine(out->geterror()) + ")");
   const auto* lastRow = static_cast<const uint8_t*>(bottomUp) + rowBytes * size_t(spec.height - 1);
   bool ok = out->write_image(spec.format, lastRow, OIIO::AutoStride, -OIIO::stride_t(rowBytes));
   ok = out->close() && ok;
-  if (!ok) fail(path, "cannot write image (" + oneLine(out->geterror()) + ")");
+  if (!ok) failFile(path, "cannot write image (" + oneLine(out->geterror()) + ")");
 }
 
 }  // namespace

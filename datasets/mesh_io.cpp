@@ -185,6 +185,10 @@ bool isMeshFile(const fs::path& path) {
 }
 
 MeshData loadMeshData(const fs::path& path) {
+  // Missing or unopenable: a FileError, not a complaint about the content (the readers check again).
+  if (std::error_code ec; !fs::exists(path, ec)) throw FileError(path.string() + ": mesh file not found");
+  if (!std::ifstream(path, std::ios::binary))
+    throw FileError(path.string() + ": cannot open the mesh file");
   try {
     return loadMeshImpl(path);
   } catch (const MeshFileError& e) {
@@ -231,7 +235,7 @@ void saveMeshObj(const fs::path& path, const Mesh& mesh) {
   tmp += uniqueSuffix();
   {
     std::ofstream out(tmp);
-    if (!out) throw InputError(path.string() + ": cannot write file");
+    if (!out) throw FileError(path.string() + ": cannot write file");
     out.precision(9);  // float round-trips exactly with 9 significant digits
     out << "# " << mesh.positions.size() << " vertices, " << mesh.triangles.size() << " triangles\n";
     for (const glm::vec3& p : mesh.positions) out << "v " << p.x << ' ' << p.y << ' ' << p.z << '\n';
@@ -252,7 +256,7 @@ void saveMeshObj(const fs::path& path, const Mesh& mesh) {
     out.flush();
     if (!out) {
       fs::remove(tmp, ec);
-      throw InputError(path.string() + ": cannot write file");
+      throw FileError(path.string() + ": cannot write file");
     }
   }
   fs::rename(tmp, path, ec);

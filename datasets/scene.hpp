@@ -133,4 +133,10 @@ struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A file that is missing or cannot be opened or read: the content is not at fault, so the command line
+// counts it as a runtime failure (exit 1), not as bad input (exit 2). Caught as an InputError elsewhere.
+struct FileError : InputError {
+  using InputError::InputError;
+};
+
 }  // namespace bvhlab

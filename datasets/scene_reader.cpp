@@ -66,9 +66,9 @@ class SceneReader {
 
   Scene read() {
     std::error_code ec;
-    if (!fs::exists(file_, ec)) throw InputError(file_.string() + ": scene file not found");
+    if (!fs::exists(file_, ec)) throw FileError(file_.string() + ": scene file not found");
     std::ifstream in(file_, std::ios::binary);
-    if (!in) throw InputError(file_.string() + ": cannot open the scene file");
+    if (!in) throw FileError(file_.string() + ": cannot open the scene file");
     std::ostringstream bytes;
     bytes << in.rdbuf();
     const std::string text = bytes.str();

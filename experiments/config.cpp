@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 #include <set>
+#include <tuple>
 #include <sstream>
 #include <unordered_map>
 
@@ -154,6 +155,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   const toml::node *framesNode = nullptr, *measureMinNode = nullptr, *maxFramesNode = nullptr,
                    *programCopiesNode = nullptr;
   std::optional<int> measureMin;
+  std::vector<std::tuple<std::string, std::string, const toml::node*, std::string>> baselineNodes;  // axis label node key
 
   auto readAxes = [&](const toml::table& t, const std::string& section, Sweep& into,
                       const std::set<std::string>& skip) {
@@ -290,6 +292,18 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
           r.fail(tk.source(), key, "unknown key; [trace] has count, seed, ao_radius, embree_threads, min_sample_ms");
         }
       }
+    } else if (section == "findings") {
+      for (auto&& [fk, fv] : r.table(v, section)) {
+        const std::string key = "findings." + std::string(fk.str());
+        if (fk != "baseline") r.fail(fk.source(), key, "unknown key; [findings] has baseline");
+        for (auto&& [ak, av] : r.table(fv, key)) {
+          const std::string sub = key + "." + std::string(ak.str());
+          const AxisInfo* axis = findAxis(ak.str());
+          if (!axis || axis->singular == "scene")
+            r.fail(ak.source(), sub, "not an axis findings compare along (a singular axis name other than scene)");
+          baselineNodes.emplace_back(std::string(axis->singular), scalarLabel(r, av, sub), &av, sub);
+        }
+      }
     } else if (section == "axes") {
       readAxes(r.table(v, section), "axes", topAxes, {});
     } else if (section == "sweep") {
@@ -333,7 +347,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         exclusions.push_back(std::move(ex));
       }
     } else {
-      r.fail(k.source(), section, "unknown section; a config has [experiment], [render], [measure], [trace], [axes], [[sweep]], [[exclude]]");
+      r.fail(k.source(), section, "unknown section; a config has [experiment], [render], [measure], [trace], [findings], [axes], [[sweep]], [[exclude]]");
     }
   }
 
@@ -515,6 +529,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
     }
     const size_t sweepRuns = cfg.runs.size();
     for (size_t i = 0; i < sweepRuns; ++i) {
+      if (cfg.runs[i].axis("workload")) continue;  // a traced run (rays axis) draws no image to compare
       RunSpec ref = cfg.runs[i];
       for (const auto& override : overrides) {
         const auto& [name, value] = override;
@@ -560,12 +575,20 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   }
   for (const RunSpec& run : cfg.runs)
     for (const auto& [name, value] : run.axes) addLabel(name, value.label);
+  // [findings] baseline: each value must be one the sweeps measure on its axis.
+  for (const auto& [axis, label, node, key] : baselineNodes) {
+    const auto it = cfg.axisLabels.find(axis);
+    if (it == cfg.axisLabels.end() || std::find(it->second.begin(), it->second.end(), label) == it->second.end())
+      r.fail(node->source(), key, "'" + label + "' is not a value of the " + axis + " axis in this config" +
+             (it == cfg.axisLabels.end() ? std::string(" (no sweep sets it)") : " (values: " + joined(it->second) + ")"));
+    cfg.findingsBaseline[axis] = label;
+  }
   return cfg;
 }
 
 ExperimentConfig loadExperimentConfig(const fs::path& file, const KnownNames& names) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string() + ": cannot open the experiment config");
+  if (!in) throw FileError(file.string() + ": cannot open the experiment config");
   std::ostringstream text;
   text << in.rdbuf();
   return parseExperimentConfig(text.str(), file, names);

@@ -130,6 +130,9 @@ struct ExperimentConfig {
   std::vector<std::string> sweepNames;
   std::map<std::string, std::vector<std::string>> axisLabels;  // singular -> labels in config order
   std::vector<RunSpec> runs;      // sweep runs, then reference-only runs; runs[i].index == i
+  // [findings] baseline = { builder = "sah-binned", ... }: singular axis -> the label findings compare
+  // every other value of that axis with (experiments/findings.hpp); axes not named take their first value.
+  std::map<std::string, std::string> findingsBaseline;
 };
 
 // Throws InputError "FILE:LINE: KEY: what is wrong" for every problem found in the file.

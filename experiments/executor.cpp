@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "experiments/process.hpp"
+#include "experiments/provenance.hpp"
 #include "experiments/sweep_dir.hpp"
 
 namespace bvhlab {
@@ -45,6 +46,17 @@ std::string summaryLine(const std::string& text) {
     if (lower.find("error") != std::string::npos) lastError = line;
   }
   return lastError.empty() ? first : lastError;
+}
+
+// The machine's load over a group (load average and stolen CPU time, sampled around its process) on
+// every run it measured: the report warns when a busy machine widened the intervals.
+void addMachineLoad(json& runs, const MachineLoad& start, const MachineLoad& end) {
+  const json load = machineLoadDuring(start, end);
+  for (auto& [key, entry] : runs.items()) {
+    // A failed run has no result row to carry it; a deferred run ({"deferred": ...} alone) was not measured.
+    if (!entry.is_object() || entry.contains("error") || entry.contains("deferred")) continue;
+    for (const auto& [k, v] : load.items()) entry[k] = v;
+  }
 }
 
 }  // namespace
@@ -192,7 +204,9 @@ GroupExecutor subprocessGroupExecutor(fs::path binary) {
     ProcessOptions options;
     options.env = r.env;
     options.timeoutSeconds = r.timeoutSeconds * double(request.runs.size());
+    const MachineLoad loadBefore = machineLoadNow();
     const ProcessResult p = runProcess(argv, options);
+    const MachineLoad loadAfter = machineLoadNow();
     request.log = p.err;
     std::error_code ec;
     fs::remove(file, ec);
@@ -210,6 +224,7 @@ GroupExecutor subprocessGroupExecutor(fs::path binary) {
     if (!result.is_object() || !result.contains("runs") || !result["runs"].is_object())
       throw RunFailure("measure printed no result object" +
                        (p.out.empty() ? std::string(": stdout was empty") : ": " + p.out.substr(0, 200)));
+    addMachineLoad(result["runs"], loadBefore, loadAfter);
     return result["runs"];
   };
 }
@@ -219,7 +234,13 @@ GroupExecutor sequentialGroupExecutor(RunExecutor run) {
     json out = json::object();
     for (RunRequest& r : request.runs) {
       try {
+        const MachineLoad before = machineLoadNow();
         json result = run(r);
+        if (result.is_object()) {
+          json one = {{r.spec.key, result}};
+          addMachineLoad(one, before, machineLoadNow());
+          result = std::move(one[r.spec.key]);
+        }
         if (!result.is_object()) throw RunFailure("the executor returned no JSON object");
         out[r.spec.key] = std::move(result);
       } catch (const RunFailure& f) {

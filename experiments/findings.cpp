@@ -2,19 +2,22 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
 #include <string>
 #include <vector>
 
-#include "experiments/config.hpp"
+#include "experiments/findings_adjust.hpp"
+#include "experiments/findings_rows.hpp"
 #include "experiments/replicates.hpp"
 #include "render/frame_stats.hpp"
 
 namespace bvhlab {
 
 using nlohmann::json;
+using namespace findings_detail;
 
 const std::vector<std::string>& findingDesignAxes() {
   static const std::vector<std::string> axes = {"builder", "layout", "triangle_format", "kernel", "leaf_size"};
@@ -37,157 +40,28 @@ const char* const kPredictors[] = {"sah_cost", "epo", "node_visits_per_ray", "ra
 // hashes, are the same computation.
 const std::set<std::string> kTreeAxes = {"builder", "leaf_size"};
 // Axes nested in another: a kernel walks one layout, so layouts are compared with the kernel left free
-// (each layout at its fastest kernel), never with the kernel held equal (no two layouts share one).
+// (each layout at one of its kernels), never with the kernel held equal (no two layouts share one).
 const std::map<std::string, std::string> kNestedAxis = {{"layout", "kernel"}};
 // Misranked pairs listed per context (the largest ratios first): enough to see a pattern.
 constexpr size_t kMaxMisrankedPerContext = 10;
+constexpr const char* kAdjustmentMethod = "benjamini-hochberg";
 
-std::vector<std::string> comparedAxes() {
-  std::vector<std::string> out;
-  for (const AxisInfo& a : experimentAxes())
-    if (a.singular != "scene") out.emplace_back(a.singular);
-  return out;
+bool contains(const std::vector<std::string>& list, const std::string& x) {
+  return std::find(list.begin(), list.end(), x) != list.end();
 }
 
-std::string label(const json& row, const std::string& axis) {
-  auto it = row.find(axis);
-  if (it == row.end() || it->is_null()) return "";
-  if (it->is_string()) return it->get<std::string>();
-  if (it->is_boolean()) return it->get<bool>() ? "true" : "false";
-  if (it->is_number_integer()) return std::to_string(it->get<int64_t>());
-  return it->dump();
-}
-
-std::optional<double> number(const json& row, const std::string& key) {
-  auto it = row.find(key);
-  if (it == row.end() || !it->is_number()) return std::nullopt;
-  const double v = it->get<double>();
-  if (!std::isfinite(v)) return std::nullopt;
-  return v;
-}
-
-std::vector<double> frames(const json& row) {
-  std::vector<double> out;
-  if (auto it = row.find("frame_ms_all"); it != row.end() && it->is_array())
-    for (const json& v : *it)
-      if (v.is_number()) out.push_back(v.get<double>());
-  return out;
-}
-
-// A traced run's rounds as multiples of Embree's time in the same round (frame_ms_all[i] /
-// embree_ms_all[i]): Embree ran interleaved in the same process, so this cancels what the machine did
-// to the whole process (load, clock). Empty when the run has no such pairs.
-std::vector<double> embreeNormalised(const json& row) {
-  const std::vector<double> glsl = frames(row);
-  std::vector<double> embree, out;
-  if (auto it = row.find("embree_ms_all"); it != row.end() && it->is_array())
-    for (const json& v : *it)
-      if (v.is_number()) embree.push_back(v.get<double>());
-  if (embree.size() != glsl.size()) return {};
-  for (size_t i = 0; i < glsl.size(); ++i) {
-    if (!(embree[i] > 0.0)) return {};  // NaN or 0: no honest ratio
-    out.push_back(glsl[i] / embree[i]);
-  }
-  return out;
-}
-
-std::string session(const json& row) {
-  auto it = row.find("session");
-  return it != row.end() && it->is_string() ? it->get<std::string>() : "";
-}
-
-// "stack-ordered leaf_size=4": the values of `axes` that vary in the scene, for people.
-std::string describe(const json& row, const std::vector<std::string>& axes) {
-  std::string out;
-  for (const std::string& a : axes) {
-    const std::string v = label(row, a);
-    if (v.empty()) continue;
-    if (!out.empty()) out += ' ';
-    out += (a == "builder" || a == "kernel") ? v : a + "=" + v;
-  }
-  return out;
-}
-
-std::optional<double> correlationOf(const std::vector<const json*>& rows, const char* metric) {
-  std::vector<double> x, y;
-  for (const json* r : rows) {
-    const auto m = number(*r, metric);
-    const auto t = number(*r, "frame_ms");
-    if (!m || !t) return std::nullopt;  // a run without the measure: no honest correlation
-    x.push_back(*m);
-    y.push_back(*t);
-  }
-  return spearman(x, y);
-}
-
-// A run's frames per program copy (`frame_ms_copies`, copy 0 first); empty without copies or when a
-// list is malformed or of another length than the rest.
-std::vector<std::vector<double>> programCopies(const json& row) {
-  std::vector<std::vector<double>> out;
-  auto it = row.find("frame_ms_copies");
-  if (it == row.end() || !it->is_array() || it->size() < 2) return {};
-  for (const json& list : *it) {
-    if (!list.is_array()) return {};
-    std::vector<double>& ms = out.emplace_back();
-    for (const json& v : list) {
-      if (!v.is_number()) return {};
-      ms.push_back(v.get<double>());
-    }
-    if (ms.size() != out.front().size()) return {};
-  }
-  return out;
-}
-
-// a/b across program copies: per copy, the paired ratio of the two runs' frames drawn with that copy
-// (one code placement, shared by both runs when they share a program); the median of those ratios
-// with its order-statistic interval over the copies. nullopt unless both runs have the same number of
-// copies, at least kMinValuesForInterval, with paired frames each.
-std::optional<Interval> ratioAcrossCopies(const json& a, const json& b) {
-  const auto ca = programCopies(a), cb = programCopies(b);
-  if (ca.size() < kMinValuesForInterval || ca.size() != cb.size()) return std::nullopt;
-  std::vector<double> perCopy;
-  for (size_t j = 0; j < ca.size(); ++j) {
-    if (ca[j].size() != cb[j].size()) return std::nullopt;
-    const auto r = pairedRatio(ca[j], cb[j]);
-    if (!r) return std::nullopt;
-    perCopy.push_back(r->estimate);
-  }
-  return medianInterval(perCopy);
-}
-
-// A run's A/A control (`prefix` "aa_control": a second program; "aa_shared_control": the same
-// program, its own buffers; render/measure_command.cpp): recomputed from the two frame lists (so
-// findings always use the current interval method), else the ratio `measure` stored.
-std::optional<Interval> controlRatio(const json& row, const std::string& prefix = "aa_control") {
-  const std::vector<double> control = [&] {
-    std::vector<double> out;
-    if (auto it = row.find(prefix + "_frame_ms_all"); it != row.end() && it->is_array())
-      for (const json& v : *it)
-        if (v.is_number()) out.push_back(v.get<double>());
-    return out;
-  }();
-  // The control repeats the run's own program copy: with program copies, copy 0's frames.
-  const std::vector<std::vector<double>> copies = programCopies(row);
-  const std::vector<double> original = copies.empty() ? frames(row) : copies.front();
-  if (!control.empty() && control.size() == original.size()) return pairedRatio(original, control);
-  const auto ratio = number(row, prefix + "_ratio"), lo = number(row, prefix + "_ci_low"),
-             hi = number(row, prefix + "_ci_high");
-  if (!ratio || !lo || !hi) return std::nullopt;
-  return Interval{*ratio, *lo, *hi, kConfidence, original.size()};
-}
-
-// A run's measurements: each replicate's row (results.json `replicate_rows`), or the row itself.
-std::vector<const json*> replicatesOf(const json& row) {
-  std::vector<const json*> out;
-  if (auto it = row.find("replicate_rows"); it != row.end() && it->is_array())
-    for (const json& r : *it) out.push_back(&r);
-  if (out.empty()) out.push_back(&row);
-  return out;
-}
+// A comparison waiting for its verdict: the verdicts of tested comparisons are set once every test of
+// the family is known (the adjustment needs them all).
+struct Pending {
+  json c;
+  bool tested = false;  // has an interval and a band: its p-value enters the family
+  BandTest test;
+};
 
 class Finder {
  public:
-  Finder(const json& rows, const json& axisOrder) : axisOrder_(axisOrder) {
+  Finder(const json& rows, const json& axisOrder, const json& baselines)
+      : axisOrder_(axisOrder), baselines_(baselines.is_object() ? baselines : json::object()) {
     for (const json& r : rows)
       if (r.value("status", "") == "ok" && !r.value("reference_only", false) && number(r, "frame_ms"))
         ok_.push_back(&r);
@@ -195,17 +69,34 @@ class Finder {
     for (const json* row : ok_)
       for (const json* r : replicatesOf(*row))
         for (auto [prefix, bands] : {std::pair{"aa_control", &band_}, std::pair{"aa_shared_control", &sharedBand_}})
-          if (const auto aa = controlRatio(*r, prefix); aa && aa->low > 0.0)
-            (*bands)[session(*r)] = std::max(std::abs(std::log(aa->low)), std::abs(std::log(aa->high)));
+          if (const auto aa = control(*r, prefix); aa && aa->low > 0.0)
+            (*bands)[session(*r)] = std::max((*bands)[session(*r)], extentOf(*aa));
+    // The band between processes: each A/A control run measured again in another replicate (a new
+    // process, minutes later) against its replicate 0: an A/A comparison across processes, made the
+    // way runs from different sessions are compared (a block bootstrap of the two medians).
+    for (const json* row : ok_) {
+      const std::vector<const json*> reps = replicatesOf(*row);
+      if (reps.size() < 2 || !(reps[0]->contains("aa_control_ratio") || reps[0]->contains("aa_control_frame_ms_all")))
+        continue;
+      for (size_t r = 1; r < reps.size(); ++r)
+        for (int embree = 0; embree < 2; ++embree) {
+          const std::vector<double> x = embree ? embreeNormalised(*reps[r]) : frames(*reps[r]),
+                                    y = embree ? embreeNormalised(*reps[0]) : frames(*reps[0]);
+          const auto aa = unpairedRatioBlock(x, y, seedOf(label(*row, "key") + "/between/" + std::to_string(r)));
+          if (aa && aa->low > 0.0)
+            betweenBand_[embree] = std::max(betweenBand_[embree].value_or(0.0), extentOf(*aa));
+        }
+    }
   }
 
   json run() {
-    out_ = {{"format", 1},
+    out_ = {{"format", 2},
             {"comparisons", json::array()},
             {"noise", json::array()},
             {"predictors", json::array()},
             {"misranked", json::array()},
-            {"skipped", json::array()}};
+            {"skipped", json::array()},
+            {"baselines", json::object()}};
     std::vector<std::string> scenes;
     for (const json* r : ok_)
       if (std::find(scenes.begin(), scenes.end(), label(*r, "scene")) == scenes.end())
@@ -216,15 +107,57 @@ class Finder {
         if (label(*r, "scene") == scene) rows.push_back(r);
       sceneFindings(scene, rows);
     }
+    // The family: every comparison that has an interval and a band (same-tree pairs are never
+    // directional and are checked on their own, below).
+    std::vector<Pending*> family, sameTree;
+    std::set<std::string> samePairs;  // a pair met along an axis and again as builder-best counts once
+    for (Pending& p : pending_) {
+      if (p.c["verdict"] != "same tree") family.push_back(&p);
+      else if (samePairs.insert(p.c["a"].dump() + "/" + p.c["b"].dump()).second) sameTree.push_back(&p);
+    }
+    const size_t directional = decide(family, true);
+    const size_t tests = size_t(std::count_if(family.begin(), family.end(), [](Pending* p) { return p->tested; }));
+    out_["adjustment"] = {{"method", kAdjustmentMethod},
+                          {"alpha", kFindingsAlpha},
+                          {"tests", tests},
+                          {"directional", directional},
+                          // BH bounds the expected share of chance verdicts among the directional ones by
+                          // alpha; without an adjustment, alpha of all tests would be called by chance.
+                          {"expected_by_chance", kFindingsAlpha * double(directional)},
+                          {"expected_by_chance_unadjusted", kFindingsAlpha * double(tests)}};
+    // Pairs of identical computations (same tree, same shader): what the test would have called had
+    // the tree hash not decided. A measured false-positive rate of the verdict rule on this sweep.
+    for (Pending* p : sameTree) p->c["verdict"] = "pending";
+    const size_t wouldCall = decide(sameTree, false);
+    size_t sameTested = 0;
+    std::map<std::string, json> sameAdjusted;
+    for (Pending* p : sameTree) {
+      sameTested += p->tested;
+      p->c["verdict"] = "same tree";
+      sameAdjusted[p->c["a"].dump() + "/" + p->c["b"].dump()] = p->c["p_adjusted"];
+    }
+    for (Pending& p : pending_)  // the second listing of a pair: the first's adjusted p
+      if (p.c["verdict"] == "same tree") p.c["p_adjusted"] = sameAdjusted[p.c["a"].dump() + "/" + p.c["b"].dump()];
+    out_["same_tree_check"] = {{"pairs", sameTree.size()},
+                               {"tested", sameTested},
+                               {"directional", wouldCall},
+                               {"share", sameTested ? json(double(wouldCall) / double(sameTested)) : json()}};
+    for (Pending& p : pending_) out_["comparisons"].push_back(std::move(p.c));
     return out_;
   }
 
  private:
+  std::optional<Interval> control(const json& row, const std::string& prefix) {
+    const auto key = std::make_pair(&row, prefix);
+    auto it = controls_.find(key);
+    if (it == controls_.end()) it = controls_.emplace(key, controlRatio(row, prefix)).first;
+    return it->second;
+  }
+
   // The axes that take more than one value among `rows`.
-  std::vector<std::string> varying(const std::vector<const json*>& rows, const std::set<std::string>& skip = {}) {
+  std::vector<std::string> varying(const std::vector<const json*>& rows) {
     std::vector<std::string> out;
     for (const std::string& a : comparedAxes()) {
-      if (skip.count(a)) continue;
       std::set<std::string> values;
       for (const json* r : rows) values.insert(label(*r, a));
       if (values.size() > 1) out.push_back(a);
@@ -238,18 +171,6 @@ class Finder {
     return pa && pb && *pa == *pb && !session(a).empty() && session(a) == session(b);
   }
 
-  // The noise band of a comparison: from the shared-program control when both runs drew with one
-  // program and their session has one, else from the second-program control (which also holds what
-  // two programs' code placement does to a ratio).
-  double bandOf(const json& a, const json& b) {
-    if (sharedProgram(a, b))
-      if (auto it = sharedBand_.find(session(a)); it != sharedBand_.end()) return it->second;
-    double band = 0.0;
-    for (const json* r : {&a, &b})
-      if (auto it = band_.find(session(*r)); it != band_.end()) band = std::max(band, it->second);
-    return band;
-  }
-
   bool sameComputation(const json& a, const json& b) {
     const std::string ha = label(a, "tree_hash"), hb = label(b, "tree_hash");
     if (ha.empty() || ha != hb) return false;
@@ -258,17 +179,33 @@ class Finder {
     return true;
   }
 
-  // a/b as measured: its interval, what the interval is over, and the A/A band that applies.
+  // a/b as measured: its interval, the band that applies (if any) and the test against it.
   struct Measured {
     std::optional<Interval> ratio;
     double band = 0.0;
+    bool hasBand = false;
+    std::string bandSource;
+    BandTest test;
     bool paired = false, sharedProgram = false, viaEmbree = false;
     std::string over;
     size_t n = 0;                         // frames behind the ratio when it has no interval
     std::vector<double> replicateRatios;  // pooled over replicates: each replicate's estimate
   };
 
-  // Within one replicate (one row each): paired rounds in one session, program copies, or a bootstrap.
+  // The band of a comparison within one session: from the shared-program control when both runs
+  // drew with one program and the session has one, else from the second-program control (which also
+  // holds what two programs' code placement does to a ratio); none when the session has neither.
+  void bandWithin(const json& a, const json& b, Measured& m) {
+    if (sharedProgram(a, b))
+      if (auto it = sharedBand_.find(session(a)); it != sharedBand_.end()) {
+        m.band = it->second, m.hasBand = true, m.bandSource = "shared control";
+        return;
+      }
+    if (auto it = band_.find(session(a)); it != band_.end())
+      m.band = it->second, m.hasBand = true, m.bandSource = "program control";
+  }
+
+  // Within one replicate (one row each): paired rounds in one session, program copies, or two sessions.
   Measured measuredOnce(const json& a, const json& b) {
     Measured m;
     const std::vector<double> fa = frames(a), fb = frames(b);
@@ -277,18 +214,25 @@ class Finder {
     const std::vector<double> na = m.paired ? std::vector<double>() : embreeNormalised(a),
                               nb = m.paired ? std::vector<double>() : embreeNormalised(b);
     m.viaEmbree = !na.empty() && !nb.empty();
-    // With 6 or more program copies the interval spans code placements, which is what the A/A
-    // bands stand in for otherwise: no band on top.
-    const std::optional<Interval> acrossCopies = m.paired ? ratioAcrossCopies(a, b) : std::nullopt;
-    if (acrossCopies)
-      m.ratio = acrossCopies;
+    const uint64_t seed = seedOf(label(a, "key") + "/" + label(b, "key") + "/" + label(a, "replicate"));
+    const std::optional<AcrossCopies> copies = m.paired ? ratioAcrossCopies(a, b) : std::nullopt;
+    const std::optional<PairedMeasure> rounds = m.paired && !copies ? pairedMeasure(fa, fb, seed) : std::nullopt;
+    if (copies)
+      m.ratio = copies->ratio;
     else if (m.paired)
-      m.ratio = pairedRatio(fa, fb);
+      m.ratio = rounds ? std::optional<Interval>(rounds->ratio) : std::nullopt;
     else
-      m.ratio = unpairedRatio(m.viaEmbree ? na : fa, m.viaEmbree ? nb : fb,
-                              std::hash<std::string>{}(label(a, "key") + "/" + label(b, "key")));
-    m.band = acrossCopies ? 0.0 : bandOf(a, b);
-    m.over = acrossCopies ? "program copies" : m.paired ? "rounds" : "bootstrap";
+      m.ratio = unpairedRatioBlock(m.viaEmbree ? na : fa, m.viaEmbree ? nb : fb, seed);
+    if (m.paired) {
+      bandWithin(a, b, m);
+    } else if (const std::optional<double>& between = betweenBand_[m.viaEmbree ? 1 : 0]) {
+      m.band = *between, m.hasBand = true, m.bandSource = "between processes";
+    }
+    if (m.ratio && m.hasBand)
+      m.test = copies ? signBandTest(copies->logRatios, m.band)
+               : rounds ? pairedBandTest(*rounds, m.band)
+                        : normalBandTest(std::log(m.ratio->estimate), m.ratio->logSe, m.band);
+    m.over = copies ? "program copies" : m.paired ? "rounds" : "bootstrap";
     m.sharedProgram = sharedProgram(a, b);
     m.n = std::min(fa.size(), fb.size());
     return m;
@@ -306,8 +250,9 @@ class Finder {
       for (const json& y : *rb) {
         if (x.value("replicate", -1) != y.value("replicate", -2)) continue;
         const Measured m = measuredOnce(x, y);
-        each.push_back({m.ratio, m.band});
+        each.push_back({m.ratio, m.band, m.hasBand, m.test});
         if (m.ratio) pooled.replicateRatios.push_back(m.ratio->estimate);
+        if (pooled.bandSource.empty() || !m.hasBand) pooled.bandSource = m.bandSource;
         pooled.paired = pooled.paired && m.paired;
         pooled.sharedProgram = pooled.sharedProgram && m.sharedProgram;
         pooled.viaEmbree = pooled.viaEmbree || m.viaEmbree;
@@ -317,12 +262,15 @@ class Finder {
     if (!p) return measuredOnce(a, b);
     pooled.ratio = p->ratio;
     pooled.band = p->band;
+    pooled.hasBand = p->hasBand;
+    pooled.test = p->test;
     pooled.over = p->over;
+    if (p->over == "replicates") pooled.bandSource = "replicates";
     return pooled;
   }
 
-  json compare(const json& a, const json& b, const std::string& scene, const std::string& kind,
-               const std::string& axis, const std::string& context) {
+  Pending compare(const json& a, const json& b, const std::string& scene, const std::string& kind,
+                  const std::string& axis, const std::string& context, bool baseline) {
     json c = {{"scene", scene},
               {"kind", kind},
               {"axis", axis.empty() ? json() : json(axis)},
@@ -330,6 +278,9 @@ class Finder {
               {"b", b["key"]},
               {"a_label", axis.empty() ? json() : json(label(a, axis))},
               {"b_label", axis.empty() ? json() : json(label(b, axis))},
+              {"a_values", axisValues(a)},
+              {"b_values", axisValues(b)},
+              {"baseline", baseline},
               {"a_description", describe(a, contextAxes_)},
               {"b_description", describe(b, contextAxes_)},
               {"context", context},
@@ -339,64 +290,123 @@ class Finder {
     c["interval_over"] = m.over;
     c["shared_program"] = m.sharedProgram;
     c["normalised_by"] = m.viaEmbree ? json("embree") : json();
-    c["band"] = m.band;
+    c["band"] = m.hasBand ? json(m.band) : json();
+    c["band_source"] = m.hasBand ? json(m.bandSource) : json();
     c["n"] = m.ratio ? m.ratio->n : m.n;
     c["ratio"] = m.ratio ? m.ratio->estimate : *number(a, "frame_ms") / *number(b, "frame_ms");
     c["ci_low"] = m.ratio ? json(m.ratio->low) : json();
     c["ci_high"] = m.ratio ? json(m.ratio->high) : json();
+    c["block"] = m.ratio && m.ratio->block ? json(m.ratio->block) : json();
     if (!m.replicateRatios.empty()) c["replicate_ratios"] = m.replicateRatios;
-    const std::optional<Interval>& ratio = m.ratio;
-    const double band = m.band;
-    std::string verdict = "no detectable difference";
+    Pending p;
+    p.tested = m.ratio && m.hasBand;
+    p.test = m.test;
+    c["p_value"] = p.tested ? json(m.test.p()) : json();
+    c["p_adjusted"] = json();
     if (sameComputation(a, b))
-      verdict = "same tree";
-    else if (ratio && ratio->high < std::exp(-band))
-      verdict = "faster";
-    else if (ratio && ratio->low > std::exp(band))
-      verdict = "slower";
-    c["verdict"] = verdict;
+      c["verdict"] = "same tree";
+    else if (!m.ratio)
+      c["verdict"] = "no detectable difference";  // too few frames for an interval
+    else if (!m.hasBand)
+      c["verdict"] = "not called: no noise band";
+    else
+      c["verdict"] = "pending";
     json counts = json::object();
     for (const char* k : kCounts) {
       const auto x = number(a, k), y = number(b, k);
       counts[k] = json::array({x ? json(*x) : json(), y ? json(*y) : json()});
     }
     c["counts"] = counts;
-    return c;
+    p.c = std::move(c);
+    return p;
   }
 
-  void sceneFindings(const std::string& scene, const std::vector<const json*>& rows) {
-    contextAxes_ = varying(rows);
-    // Noise floor: every run that carries an A/A control.
+  // Adjusts the family's p-values (Benjamini-Hochberg) and sets the pending verdicts: a direction
+  // where the adjusted p is at most alpha, on the side the test rejected; returns how many.
+  static size_t decide(const std::vector<Pending*>& family, bool setVerdicts) {
+    std::vector<double> p;
+    std::vector<Pending*> tested;
+    for (Pending* x : family)
+      if (x->tested) {
+        p.push_back(x->test.p());
+        tested.push_back(x);
+      }
+    const std::vector<double> adjusted = adjustBenjaminiHochberg(p);
+    size_t directional = 0;
+    for (size_t i = 0; i < tested.size(); ++i) {
+      Pending& x = *tested[i];
+      x.c["p_adjusted"] = adjusted[i];
+      if (x.c["verdict"] != "pending") continue;
+      const bool called = adjusted[i] <= kFindingsAlpha;
+      directional += called;
+      if (setVerdicts)
+        x.c["verdict"] = !called ? "no detectable difference" : x.test.slowerSide() ? "slower" : "faster";
+    }
+    return directional;
+  }
+
+  // The baseline of an axis: the config's [findings] baseline, else its first value in config order
+  // (plan.json), else (no plan) the first value among the rows.
+  std::string baselineOf(const std::string& axis, const std::vector<const json*>& rows) {
+    if (auto it = baselines_.find(axis); it != baselines_.end() && it->is_string()) return it->get<std::string>();
+    const json values = axisOrder_.is_object() ? axisOrder_.value(axis, json::array()) : json::array();
+    if (values.is_array() && !values.empty())
+      return values[0].is_string() ? values[0].get<std::string>() : values[0].dump();
+    for (const json* r : rows)
+      if (std::string v = label(*r, axis); !v.empty()) return v;
+    return "";
+  }
+
+  // Config order of a value on an axis (the baseline first; unknown values after the known ones).
+  size_t orderOf(const std::string& axis, const std::string& value, const std::string& baseline) {
+    if (value == baseline) return 0;
+    const json values = axisOrder_.is_object() ? axisOrder_.value(axis, json::array()) : json::array();
+    for (size_t i = 0; values.is_array() && i < values.size(); ++i)
+      if ((values[i].is_string() ? values[i].get<std::string>() : values[i].dump()) == value) return i + 1;
+    return std::numeric_limits<size_t>::max();
+  }
+
+  void noiseEntries(const std::string& scene, const std::vector<const json*>& rows) {
     for (const json* row : rows)
       for (const json* r : replicatesOf(*row))
-        for (const char* control : {"aa_control", "aa_shared_control"})
-          if (const auto aa = controlRatio(*r, control)) {
+        for (const char* prefix : {"aa_control", "aa_shared_control"})
+          if (const auto aa = control(*r, prefix)) {
+            const bool fromFrames = aa->block > 0;  // recomputed from the frame lists (else measure's ratio)
             json entry = {{"scene", scene},
                           {"key", (*row)["key"]},
                           {"session", session(*r)},
-                          {"control", std::string(control) == "aa_control" ? "program" : "shared"},
+                          {"control", std::string(prefix) == "aa_control" ? "program" : "shared"},
                           {"description", describe(*row, contextAxes_)},
                           {"ratio", aa->estimate},
                           {"ci_low", aa->low},
                           {"ci_high", aa->high},
-                          {"n", aa->n}};
+                          {"n", aa->n},
+                          // Of the per-round log ratios control vs run: how much a round says about the next.
+                          {"lag1_autocorrelation", fromFrames ? json(aa->lag1) : json()},
+                          {"block", fromFrames ? json(aa->block) : json()}};
             if (r != row) entry["replicate"] = (*r).value("replicate", 0);
             out_["noise"].push_back(std::move(entry));
           }
+  }
 
+  void sceneFindings(const std::string& scene, const std::vector<const json*>& rows) {
+    contextAxes_ = varying(rows);
+    noiseEntries(scene, rows);
     const bool deep = std::any_of(rows.begin(), rows.end(), [](const json* r) {
       return number(*r, "effective_depth").value_or(2.0) > 1.0;  // unknown: assume it matters
     });
     for (const std::string& axis : contextAxes_) {
-      const bool design = std::find(findingDesignAxes().begin(), findingDesignAxes().end(), axis) != findingDesignAxes().end();
-      const bool knob = std::find(findingKnobAxes().begin(), findingKnobAxes().end(), axis) != findingKnobAxes().end();
+      const bool design = contains(findingDesignAxes(), axis), knob = contains(findingKnobAxes(), axis);
       if (!design && !knob) continue;
       if (axis == "depth" && !deep) {
         out_["skipped"].push_back("depth comparisons on " + scene +
                                   " skipped: its effective depth is 1 at every depth (nothing to reflect or refract)");
         continue;
       }
+      const std::string baseline = baselineOf(axis, rows);
+      out_["baselines"][axis] = baseline;
       const auto nested = kNestedAxis.find(axis);
+      const std::string nestedBaseline = nested == kNestedAxis.end() ? "" : baselineOf(nested->second, rows);
       std::vector<std::string> others;
       for (const std::string& a : contextAxes_)
         if (a != axis && (nested == kNestedAxis.end() || a != nested->second)) others.push_back(a);
@@ -407,11 +417,13 @@ class Finder {
         if (!contexts.count(ctx)) order.push_back(ctx);
         std::vector<const json*>& members = contexts[ctx];
         if (nested != kNestedAxis.end()) {
-          // One run per value of `axis`: its fastest over the nested axis.
+          // One run per value of `axis`: the one at the nested axis's first value in config order (its
+          // baseline when that walks this layout): a fixed choice, not the fastest.
+          const std::string& n = nested->second;
           auto same = std::find_if(members.begin(), members.end(),
                                    [&](const json* m) { return label(*m, axis) == label(*r, axis); });
           if (same != members.end()) {
-            if (*number(*r, "frame_ms") < *number(**same, "frame_ms")) *same = r;
+            if (orderOf(n, label(*r, n), nestedBaseline) < orderOf(n, label(**same, n), nestedBaseline)) *same = r;
             continue;
           }
         }
@@ -421,28 +433,38 @@ class Finder {
         const std::vector<const json*>& members = contexts[ctx];
         if (members.size() < 2) continue;
         const json* base = nullptr;
-        if (design) {
-          base = *std::min_element(members.begin(), members.end(), [](const json* x, const json* y) {
-            return *number(*x, "frame_ms") < *number(*y, "frame_ms");
-          });
-        } else {
-          const json values = axisOrder_.value(axis, json::array());
-          const std::string first = values.empty() ? std::string() : values[0].is_string() ? values[0].get<std::string>() : values[0].dump();
-          for (const json* r : members)
-            if (label(*r, axis) == first) base = r;
-          if (!base) continue;  // the baseline value is not in this context
-        }
         for (const json* r : members)
-          if (r != base) out_["comparisons"].push_back(compare(*r, *base, scene, "axis", axis, ctx));
+          if (label(*r, axis) == baseline) base = r;
+        if (!base) {
+          out_["skipped"].push_back(axis + " comparisons on " + scene + (ctx.empty() ? "" : " (" + ctx + ")") +
+                                    " skipped: the baseline " + axis + " " + baseline + " was not measured there");
+          continue;
+        }
+        // Reported, never the reference: the run with the fastest point estimate.
+        const json* fastest = *std::min_element(members.begin(), members.end(), [](const json* x, const json* y) {
+          return *number(*x, "frame_ms") < *number(*y, "frame_ms");
+        });
+        for (const json* r : members)
+          if (r != base) {
+            Pending p = compare(*r, *base, scene, "axis", axis, ctx, true);
+            p.c["fastest"] = {{"key", (*fastest)["key"]}, {"label", label(*fastest, axis)}};
+            pending_.push_back(std::move(p));
+          }
       }
     }
+    builderBest(scene, rows);
+    predictors(scene, rows);
+  }
 
-    // Each builder at its best (over kernels and leaf sizes) against the fastest run, with every knob
-    // (depth, aa, robust, ...) held fixed: a builder is not "best" because it ran at depth 1.
+  // Each builder at its best (over kernels and leaf sizes) against the baseline builder at its best,
+  // with every knob (depth, aa, robust, ...) held fixed: a builder is not "best" because it ran at
+  // depth 1. Both sides are selected the same way, so the selection favours neither.
+  void builderBest(const std::string& scene, const std::vector<const json*>& rows) {
+    if (!contains(contextAxes_, "builder")) return;
+    const std::string baseline = baselineOf("builder", rows);
     std::vector<std::string> knobs;
     for (const std::string& a : contextAxes_)
-      if (std::find(findingDesignAxes().begin(), findingDesignAxes().end(), a) == findingDesignAxes().end())
-        knobs.push_back(a);
+      if (!contains(findingDesignAxes(), a)) knobs.push_back(a);
     std::map<std::string, std::map<std::string, const json*>> bestOf;  // knob context -> builder -> run
     std::vector<std::string> knobOrder;
     for (const json* r : rows) {
@@ -453,20 +475,23 @@ class Finder {
     }
     for (const std::string& ctx : knobOrder) {
       const auto& builders = bestOf[ctx];
-      if (builders.size() < 2) continue;
-      const json* top = nullptr;
-      for (const auto& [b, r] : builders)
-        if (!top || *number(*r, "frame_ms") < *number(*top, "frame_ms")) top = r;
+      const auto base = builders.find(baseline);
+      if (builders.size() < 2 || base == builders.end()) continue;
       const std::string context = ctx.empty() ? "each at its best" : "each at its best, " + ctx;
+      const json* fastest = nullptr;
       for (const auto& [b, r] : builders)
-        if (r != top) out_["comparisons"].push_back(compare(*r, *top, scene, "builder-best", "builder", context));
+        if (!fastest || *number(*r, "frame_ms") < *number(*fastest, "frame_ms")) fastest = r;
+      for (const auto& [b, r] : builders)
+        if (r != base->second) {
+          Pending p = compare(*r, *base->second, scene, "builder-best", "builder", context, true);
+          p.c["fastest"] = {{"key", (*fastest)["key"]}, {"label", label(*fastest, "builder")}};
+          pending_.push_back(std::move(p));
+        }
     }
-
-    predictors(scene, rows);
   }
 
   // Within each context of fixed kernel and knobs (the trees vary): how well each clock-free measure
-  // ranks the runs by time, and the pairs SAH ranks wrongly.
+  // ranks the runs by time, and the pairs SAH ranks wrongly (tested as a family of their own).
   void predictors(const std::string& scene, const std::vector<const json*>& rows) {
     std::vector<std::string> fixed;
     for (const std::string& a : contextAxes_)
@@ -488,26 +513,36 @@ class Finder {
       }
       out_["predictors"].push_back({{"scene", scene}, {"context", ctx}, {"n", members.size()}, {"spearman", rho}});
 
-      std::vector<json> wrong;
+      std::vector<Pending> candidates;
+      std::vector<std::pair<double, double>> sah;
       for (const json* x : members)
         for (const json* y : members) {
           const auto sx = number(*x, "sah_cost"), sy = number(*y, "sah_cost");
           // Strictly cheaper by SAH, beyond float noise in the cost itself (1e-6 relative: the
           // cost is summed in double from float areas).
           if (!sx || !sy || !(*sx < *sy * (1.0 - 1e-6))) continue;
-          json c = compare(*x, *y, scene, "misranked", "", ctx);
-          if (c["verdict"] != "slower") continue;
-          wrong.push_back({{"scene", scene},
-                           {"context", ctx},
-                           {"a", c["a"]},
-                           {"b", c["b"]},
-                           {"a_label", c["a_description"]},
-                           {"b_label", c["b_description"]},
-                           {"sah", json::array({*sx, *sy})},
-                           {"ratio", c["ratio"]},
-                           {"ci_low", c["ci_low"]},
-                           {"ci_high", c["ci_high"]}});
+          candidates.push_back(compare(*x, *y, scene, "misranked", "", ctx, false));
+          sah.emplace_back(*sx, *sy);
         }
+      std::vector<Pending*> family;
+      for (Pending& p : candidates) family.push_back(&p);
+      decide(family, true);
+      std::vector<json> wrong;
+      for (size_t i = 0; i < candidates.size(); ++i) {
+        const json& c = candidates[i].c;
+        if (c["verdict"] != "slower") continue;
+        wrong.push_back({{"scene", scene},
+                         {"context", ctx},
+                         {"a", c["a"]},
+                         {"b", c["b"]},
+                         {"a_label", c["a_description"]},
+                         {"b_label", c["b_description"]},
+                         {"sah", json::array({sah[i].first, sah[i].second})},
+                         {"ratio", c["ratio"]},
+                         {"ci_low", c["ci_low"]},
+                         {"ci_high", c["ci_high"]},
+                         {"p_adjusted", c["p_adjusted"]}});
+      }
       std::sort(wrong.begin(), wrong.end(),
                 [](const json& p, const json& q) { return p["ratio"].get<double>() > q["ratio"].get<double>(); });
       if (wrong.size() > kMaxMisrankedPerContext) wrong.resize(kMaxMisrankedPerContext);
@@ -516,14 +551,20 @@ class Finder {
   }
 
   const json& axisOrder_;
+  const json baselines_;
   std::vector<const json*> ok_;
   std::map<std::string, double> band_, sharedBand_;  // per session: second-program / shared-program control
+  std::optional<double> betweenBand_[2];             // across processes: frames, Embree-normalised frames
+  std::map<std::pair<const json*, std::string>, std::optional<Interval>> controls_;
   std::vector<std::string> contextAxes_;
+  std::vector<Pending> pending_;
   json out_;
 };
 
 }  // namespace
 
-json computeFindings(const json& rows, const json& axisOrder) { return Finder(rows, axisOrder).run(); }
+json computeFindings(const json& rows, const json& axisOrder, const json& baselines) {
+  return Finder(rows, axisOrder, baselines).run();
+}
 
 }  // namespace bvhlab

@@ -35,6 +35,35 @@ MachineInfo currentMachine() {
   return m;
 }
 
+MachineLoad machineLoadNow() {
+  MachineLoad m;
+  std::ifstream loadavg("/proc/loadavg");
+  std::ifstream stat("/proc/stat");
+  std::string cpu;
+  if (!(loadavg >> m.loadAvg1m) || !(stat >> cpu) || cpu != "cpu") return m;
+  // user nice system idle iowait irq softirq steal guest guest_nice: steal is the 8th column. Guest
+  // time is already counted in user/nice, so the total sums the first eight columns only.
+  unsigned long long column = 0;
+  int n = 0;
+  for (; n < 8 && (stat >> column); ++n) {
+    m.totalJiffies += column;
+    if (n == 7) m.stealJiffies = column;
+  }
+  // Kernels before 2.6.11 have no steal column: 7 columns read, steal unknown -> 0 stolen.
+  m.known = n >= 7;
+  return m;
+}
+
+nlohmann::json machineLoadDuring(const MachineLoad& start, const MachineLoad& end) {
+  if (!start.known || !end.known) return nlohmann::json::object();
+  nlohmann::json out = {{"load_avg_1m_start", start.loadAvg1m}, {"load_avg_1m_end", end.loadAvg1m}};
+  const bool forward = end.totalJiffies > start.totalJiffies && end.stealJiffies >= start.stealJiffies;
+  out["steal_pct"] = forward ? nlohmann::json(100.0 * double(end.stealJiffies - start.stealJiffies) /
+                                              double(end.totalJiffies - start.totalJiffies))
+                             : nlohmann::json();
+  return out;
+}
+
 namespace {
 
 std::optional<fs::path> searchUp(fs::path dir) {

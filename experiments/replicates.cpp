@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <limits>
 
 namespace bvhlab {
@@ -59,21 +60,29 @@ void poolReplicateRows(json& row, const std::vector<json>& replicateRows) {
 }
 
 std::optional<PooledRatio> poolReplicateRatios(const std::vector<ReplicateRatio>& replicates) {
-  std::vector<double> estimates;
+  std::vector<double> estimates, logEstimates;
   PooledRatio out;
   out.ratio.low = kInfinity;
   out.ratio.high = -kInfinity;
+  out.test.pSlower = out.test.pFaster = 0.0;
   for (const ReplicateRatio& r : replicates) {
     if (!r.ratio) continue;  // too few frames in that replicate: it says nothing
     estimates.push_back(r.ratio->estimate);
+    logEstimates.push_back(std::log(r.ratio->estimate));
     out.ratio.low = std::min(out.ratio.low, r.ratio->low);
     out.ratio.high = std::max(out.ratio.high, r.ratio->high);
     out.band = std::max(out.band, r.band);
+    out.hasBand = out.hasBand && r.hasBand;
+    // Every replicate must reject on the same side: the largest one-sided p of each side.
+    out.test.pSlower = std::max(out.test.pSlower, r.test.pSlower);
+    out.test.pFaster = std::max(out.test.pFaster, r.test.pFaster);
   }
   if (estimates.size() < 2) return std::nullopt;
   if (const auto across = medianInterval(estimates)) {  // kMinValuesForInterval or more
     out.ratio = *across;
     out.band = 0.0;
+    out.hasBand = true;  // the replicates' spread is a band measured across processes
+    out.test = signBandTest(logEstimates, 0.0);
     out.over = "replicates";
     return out;
   }

@@ -1,5 +1,5 @@
 // Replicates: a sweep measured R times over ([experiment] replicates, `bvhlab run --replicates R`,
-// `bvhlab merge --replicates`; experiments/README.md, "Replicates").
+// `bvhlab merge --replicates`; docs/measurement.md, "Replicates").
 //
 // One group's rounds pair its runs' frames within one process, so a paired ratio's interval says how
 // sure that process is. What a process shares across all its rounds (where llvmpipe's JIT put the
@@ -9,13 +9,13 @@
 // after the whole previous pass: the same runs at another time. A comparison is then made in every
 // replicate (paired within it as before) and the replicates' ratios are pooled:
 //   - 6 or more replicates: the median of the per-replicate ratios with its order-statistic 95%
-//     interval over the replicates (interval_over "replicates"); no A/A band on top, since the
-//     replicates already span what the band stands in for;
+//     interval over the replicates (interval_over "replicates"); band 0: the replicates are separate
+//     processes, so their spread is a band measured across processes; the test is the sign test over
+//     the replicates' log ratios (the dual of that interval);
 //   - 2 to 5: the median ratio with the hull of the replicates' intervals, and the widest of their
 //     bands (interval_over "replicates (hull)"): a direction needs every replicate's interval beyond
-//     the noise floor.
-// Replicate 0 is what a sweep without replicates records (runs/KEY.json); replicate r >= 1 lives in
-// runs/KEY.rR.json (images/KEY.rR.png).
+//     the noise floor, so the one-sided p-values are the largest of the replicates' (an
+//     intersection-union test), and a replicate without a band leaves the pool without one.
 #pragma once
 #include <optional>
 #include <string>
@@ -44,11 +44,15 @@ void poolReplicateRows(nlohmann::json& row, const std::vector<nlohmann::json>& r
 struct ReplicateRatio {
   std::optional<Interval> ratio;
   double band = 0.0;
+  bool hasBand = true;  // false: that replicate's runs had no A/A band (band is then meaningless)
+  BandTest test = {};   // the replicate's test against its band
 };
 struct PooledRatio {
   Interval ratio;
   double band = 0.0;
   std::string over;  // "replicates" or "replicates (hull)"
+  bool hasBand = true;
+  BandTest test = {};
 };
 // The rule above; nullopt when fewer than two replicates have an interval.
 std::optional<PooledRatio> poolReplicateRatios(const std::vector<ReplicateRatio>& replicates);

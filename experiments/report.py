@@ -9,8 +9,9 @@ separate control rows (control_of set) are kept out of every plot and table but 
 and a run's own A/A columns (aa_control_*) are only read through findings.json's noise entries.
 
 Modules, next to this file: report_data (rows, findings.json, formatting), report_html (the page),
-report_plots, report_findings, report_tables, report_seed (seed figures, anti-aliasing),
-report_robust (robustness variants), report_rays (traced workloads), report_layouts (layouts: memory vs time).
+report_plots, report_findings, report_tables, report_summary (the first screen), report_seed (seed figures,
+anti-aliasing), report_robust (robustness variants), report_rays (traced workloads), report_layouts
+(layouts: memory vs time).
 
 Run with Debian's interpreter, which has python3-matplotlib:
     /usr/bin/python3 experiments/report.py DIR
@@ -26,12 +27,13 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from report_data import Data  # noqa: E402
 from report_findings import section_findings  # noqa: E402
 from report_html import CSS, Page, section_plot  # noqa: E402
-from report_plots import (Styles, builder_costs, deep_rows, line_plot, pareto_plot, scatter_visits_vs_sah,  # noqa: E402
+from report_plots import (Styles, builder_costs, pareto_plot, ratio_plot, scatter_visits_vs_sah,  # noqa: E402
                           time_vs_costs)
 from report_layouts import section_layouts  # noqa: E402
 from report_rays import section_rays  # noqa: E402
 from report_robust import section_robustness  # noqa: E402
 from report_seed import section_antialiasing, seed_sections  # noqa: E402
+from report_summary import CSS as SUMMARY_CSS, section_summary  # noqa: E402
 from report_tables import (pareto_table, section_all_rows, section_builder_table, section_failed,  # noqa: E402
                            section_images, section_provenance)
 
@@ -44,27 +46,26 @@ def build(root):
     styles = Styles(data)
 
     body = Page()
+    section_summary(body, data)  # the first screen: builders x ray types per scene, noise floor, machine load
     section_findings(body, data)
     if exp.get("seed_figures"):
         seed_sections(body, data)
-    section_plot(body, "plot-frame-vs-leaf", "Frame time vs leaf size",
-                 line_plot(data, styles, data.sweep, "leaf_size", "frame_ms", "frame time (ms)", "Frame time",
-                           logx=True),
-                 "Median frame time per run; bars = the run's own 95% interval, which also holds the machine's "
-                 "drift over the session (runs measured together are compared by paired ratios in the findings, "
-                 "which are much tighter). Colour and marker: builder; line style: kernel; series sharing a leaf "
-                 "size are drawn slightly apart so none hides another.")
-    deep, shallow_notes = deep_rows(data, data.sweep)
-    section_plot(body, "plot-frame-vs-depth", "Frame time vs recursion depth",
-                 line_plot(data, styles, deep, "depth", "frame_ms", "frame time (ms)", "Frame time")
-                 if deep else (None, "no scene with an effective depth above 1"),
-                 "Depth = path segments per pixel, primary ray included; bars = 95% intervals.",
-                 notes=shallow_notes)
-    section_plot(body, "plot-time-vs-costs", "Frame time vs the deterministic cost measures",
-                 time_vs_costs(data, styles, data.sweep),
-                 "Each point is a run (bars = 95% interval of its median frame time); per scene, the runs that "
-                 "differ only in builder, kernel, leaf size or bins. How well each measure ranks the runs is in "
-                 "the findings (Spearman).")
+    ratio_caption = ("Each point is findings.json's ratio of a run's frame time to the run with the axis's baseline "
+                     "value and every other axis equal (at 1 by definition), log scale; bars = the ratio's 95%% "
+                     "interval from paired rounds, which the machine's drift over the session does not widen. "
+                     "One line per setting of the other axes.")
+    section_plot(body, "plot-frame-vs-leaf", "Frame time vs leaf size, as a ratio to the baseline leaf size",
+                 ratio_plot(data, "leaf_size", "Time ratio vs leaf size"), ratio_caption)
+    section_plot(body, "plot-frame-vs-depth", "Frame time vs recursion depth, as a ratio to the baseline depth",
+                 ratio_plot(data, "depth", "Time ratio vs depth"),
+                 ratio_caption + " Depth = path segments per pixel, primary ray included; scenes whose effective "
+                 "depth is 1 are not compared (findings.json's skipped list).")
+    section_plot(body, "plot-time-vs-costs", "Frame time vs the deterministic cost measures, as ratios to the baseline",
+                 time_vs_costs(data, styles),
+                 "Each point is a builder against the baseline builder with every other axis equal: its time ratio "
+                 "(findings.json, bars = the paired 95% interval) against the same ratio of each cost measure, "
+                 "log-log; on the dotted diagonal the measure predicted the time. Colour = builder, marker = ray "
+                 "type or frames. How well each measure ranks the runs is in the findings (Spearman).")
     section_plot(body, "plot-visits-vs-sah", "Node visits per ray vs SAH cost",
                  scatter_visits_vs_sah(data, styles, data.sweep),
                  "Each point is a run (per scene, the runs that differ only in builder, kernel, leaf size or bins); "
@@ -92,7 +93,7 @@ def build(root):
     summ = results.get("summary", {})
     title = "bvhlab experiment: %s" % exp.get("name", "?")
     head = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>%s</title><style>%s</style></head><body>"
-            % (html.escape(title), CSS),
+            % (html.escape(title), CSS + SUMMARY_CSS),
             "<h1>%s</h1><p>%s</p>" % (html.escape(title), html.escape(exp.get("description", ""))),
             "<p>%s runs planned: %s ok, %s failed, %s pending.</p>" % tuple(
                 summ.get(k, "?") for k in ("planned", "ok", "failed", "pending")),

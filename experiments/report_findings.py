@@ -9,7 +9,7 @@ from report_data import (COUNTS, describe, fmt, fmt_band, fmt_ms, fmt_ratio, lab
                          verdict_tag)
 
 PREDICTORS = [("sah_cost", "SAH"), ("epo", "EPO"), ("node_visits_per_ray", "visits/ray"), ("ray_cost", "ray cost")]
-VERDICTS = ["slower", "faster", "no detectable difference", "same tree"]
+VERDICTS = ["slower", "faster", "no detectable difference", "same tree", "not called: no noise band"]
 
 
 def _scenes(data, entries):
@@ -34,7 +34,12 @@ def _verdict_words(c):
     if v == "no detectable difference":
         if num(c.get("ci_low")) is None:
             return verdict_tag(v) + " (too few frames for an interval)"
-        return verdict_tag(v) + " (the interval does not clear the %s noise band)" % fmt_band(c.get("band"))
+        return verdict_tag(v) + " (adjusted p %s: the interval does not clear the %s noise band by enough)" % (
+            fmt(c.get("p_adjusted"), 3), fmt_band(c.get("band")))
+    if v == "not called: no noise band":
+        return verdict_tag(v) + " (no A/A band measured for these runs' sessions or between their processes)"
+    if v in ("faster", "slower") and num(c.get("p_adjusted")) is not None:
+        return verdict_tag(v) + " (adjusted p %s)" % fmt(c.get("p_adjusted"), 3)
     return verdict_tag(v)
 
 
@@ -80,6 +85,28 @@ def _pair(a, b, digits=4):
 
 
 # ---------------------------------------------------------------- pieces
+def adjustment_note(page, f):
+    """How many comparisons were tested and how many directional verdicts chance alone would give."""
+    adj = f.get("adjustment")
+    if not isinstance(adj, dict):
+        return
+    tests, directional = int(adj.get("tests") or 0), int(adj.get("directional") or 0)
+    alpha = num(adj.get("alpha")) or 0.05
+    method = {"benjamini-hochberg": "Benjamini-Hochberg", "holm": "Holm"}.get(adj.get("method"), adj.get("method"))
+    page.p("%s tested against the noise band, %s called faster or slower (p-values adjusted by %s at %s). "
+           "Without an adjustment, chance alone would call about %s of the tests; with it, about %s of the "
+           "%s directional verdicts are expected to be chance (the expected share of false ones is at most %s)."
+           % (plural(tests, "comparison"), fmt(directional), html.escape(str(method)), fmt(alpha),
+              fmt(num(adj.get("expected_by_chance_unadjusted")) if adj.get("expected_by_chance_unadjusted") is not None
+                  else alpha * tests, 3),
+              fmt(adj.get("expected_by_chance"), 3), fmt(directional), fmt(alpha)))
+    check = f.get("same_tree_check")
+    if isinstance(check, dict) and int(check.get("tested") or 0) > 0:
+        page.p("Pairs of identical computations (<i>same tree</i>), tested as if they differed: %s of %s "
+               "would have been called (the verdict rule's false-positive rate on this sweep)."
+               % (fmt(check.get("directional")), fmt(check.get("tested"))))
+
+
 def noise_floor(page, data, f):
     """The A/A controls. An entry names either two runs (a = the control run, b = the run it repeats) or one
     run that carries its own A/A measurement (key; the row's aa_control_* columns)."""
@@ -88,8 +115,8 @@ def noise_floor(page, data, f):
     if not noise:  # a writer may list the controls among the comparisons instead
         noise = [c for c in f.get("comparisons") or [] if c.get("kind") == "aa-control"]
     if not noise:
-        page.note("No A/A control in this sweep: the noise band is 0, so any interval that excludes 1 is "
-                  "called faster or slower.")
+        page.note("No A/A control in this sweep: no noise band was measured, so comparisons within a session are "
+                  "not called faster or slower (<i>not called: no noise band</i>).")
         return
     page.p("Each group of runs measured together (one session) measures one configuration again, as if it were "
            "another (<i>A/A control</i>). The ratio of the two should be 1; its interval is what this machine's noise "
@@ -126,26 +153,29 @@ def noise_floor(page, data, f):
         page.p("The A/A intervals reach %s to %s around 1 (the band each group's verdicts use)."
                % (fmt_band(min(known)), fmt_band(max(known))))
     if len(known) < len(bands):
-        page.note("%s without an interval (too few frames): their groups use a band of 0."
+        page.note("%s without an interval (too few frames): their groups have no band from them."
                   % plural(len(bands) - len(known), "control"))
 
 
 def builder_verdicts(data, scene, entries):
-    """One sentence per builder: its best run against the scene's fastest."""
+    """One sentence per builder: its best run against the baseline builder at its best."""
     best = [c for c in entries if c.get("kind") == "builder-best"]
     if not best:
         return []
-    fastest = []
+    bases = []
     for c in best:
-        if c.get("b") not in [f.get("b") for f in fastest]:
-            fastest.append(c)
+        if c.get("b") not in [f.get("b") for f in bases]:
+            bases.append(c)
     who = ("scene", "builder")
     items = []
-    for c in fastest:
+    for c in bases:
         r = data.by_key.get(c.get("b"))
-        items.append("<b>%s</b>: fastest builder <b>%s</b> at its best (%s), %s ms." % (
+        fastest = (c.get("fastest") or {}).get("label")
+        items.append("<b>%s</b>: baseline builder <b>%s</b> at its best (%s), %s ms%s." % (
             html.escape(str(scene)), html.escape(str(c.get("b_label") or (label(r, "builder") if r else "?"))),
-            _run_text(data, c.get("b"), c.get("b_description"), who), fmt_ms(r or {})))
+            _run_text(data, c.get("b"), c.get("b_description"), who), fmt_ms(r or {}),
+            "; fastest point estimate: <b>%s</b> (reported, not the reference)" % html.escape(str(fastest))
+            if fastest else ""))
     for c in best:
         if c.get("a") == c.get("b"):
             continue
@@ -156,11 +186,13 @@ def builder_verdicts(data, scene, entries):
     return items
 
 
-# Axes whose runs are compared with the fastest of their context; the others (knobs) with the config's first value.
-FASTEST_AXES = ("builder", "layout", "triangle_format", "kernel", "leaf_size", "bins")
+def _baseline(f, data, axis):
+    """The baseline value findings.json names for an axis (format 2), else the config's first."""
+    b = (f.get("baselines") or {}).get(axis) if isinstance(f, dict) else None
+    return b if b is not None else data.baseline(axis)
 
 
-def verdict_summary(data, entries):
+def verdict_summary(data, entries, f=None):
     """Per axis: how many comparisons went which way, and against what."""
     out = []
     axes = []
@@ -173,10 +205,11 @@ def verdict_summary(data, entries):
         counts = {v: sum(1 for c in mine if c.get("verdict") == v) for v in VERDICTS}
         other = len(mine) - sum(counts.values())
         parts = ["%d %s" % (n, v) for v, n in counts.items() if n] + (["%d other" % other] if other else [])
-        against = ("each layout at its fastest kernel against the fastest layout of its context" if a == "layout" else
-                   "each run against the fastest run of its context" if a in FASTEST_AXES else
-                   "each value against %s" % html.escape("%s=%s" % (a, data.baseline(a)) if data.baseline(a) is not None
-                                                         else "the config's first value"))
+        base = _baseline(f, data, a)
+        against = ("each value against %s" % html.escape("%s=%s" % (a, base)) if base is not None
+                   else "each value against the config's first value")
+        if a == "layout":
+            against += " (each layout at its first kernel in config order)"
         out.append("<b>%s</b> (%s): %s — %s." % (html.escape(str(a)), against, plural(len(mine), "comparison"),
                                                  ", ".join(parts)))
     return out
@@ -237,7 +270,7 @@ def misranked(page, data, f):
         page.p("SAH ranks every pair of runs whose times differ measurably in the right order.")
         return
     page.p("SAH says <i>a</i> is the cheaper tree, yet <i>a</i> measured slower than <i>b</i> (interval above the "
-           "noise band).")
+           "noise band, the pairs of each context adjusted as one family).")
     cells = []
     for e in entries:
         sah = e.get("sah") if isinstance(e.get("sah"), list) and len(e.get("sah")) == 2 else [None, None]
@@ -263,12 +296,16 @@ def section_findings(page, data):
         if data.failed:
             page.items(["%s failed (listed below with their errors)." % plural(len(data.failed), "run")])
         return
-    page.p("Every ratio is <i>a</i>'s median frame time over <i>b</i>'s with its 95% interval, from frames "
-           "measured in the same rounds (paired) where the runs shared a session. <b>faster</b> / <b>slower</b> "
-           "only when the whole interval lies outside the noise band measured by the group's A/A control; "
-           "<i>same tree</i> when both runs walk an identical BVH with the same kernel; otherwise "
-           "<i>no detectable difference</i>. Everything here is read from <code>findings.json</code>.")
+    page.p("Every ratio is <i>a</i>'s median frame time over <i>b</i>'s (the baseline of its axis) with its 95% "
+           "interval, from frames measured in the same rounds (paired) where the runs shared a session; the "
+           "interval resamples the rounds in blocks, so it holds when consecutive rounds are correlated. "
+           "<b>faster</b> / <b>slower</b> only when the test against the noise band measured by the A/A controls "
+           "passes after the adjustment for the number of comparisons (the whole interval then lies outside the "
+           "band); <i>not called</i> when no band was measured for the runs; <i>same tree</i> when both runs walk "
+           "an identical BVH with the same kernel; otherwise <i>no detectable difference</i>. Everything here is "
+           "read from <code>findings.json</code> (its fields: docs/measurement.md).")
     noise_floor(page, data, f)
+    adjustment_note(page, f)
     comparisons = [c for c in f.get("comparisons") or [] if c.get("kind") != "aa-control"]
     replicates_note(page, comparisons)
     if not comparisons:
@@ -276,7 +313,7 @@ def section_findings(page, data):
     for i, scene in enumerate(_scenes(data, comparisons)):
         entries = [c for c in comparisons if c.get("scene") == scene]
         page.section("findings-scene-%d" % (i + 1), "%s" % scene, level=3)
-        page.items(builder_verdicts(data, scene, entries) + verdict_summary(data, entries))
+        page.items(builder_verdicts(data, scene, entries) + verdict_summary(data, entries, f))
         comparison_table(page, data, scene, entries, "findings-comparisons-%d" % (i + 1))
     predictors(page, data, f)
     misranked(page, data, f)

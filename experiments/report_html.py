@@ -2,6 +2,7 @@
 import base64
 import html
 import io
+import re
 
 from report_data import plt
 
@@ -31,7 +32,7 @@ class Page:
 
     def figure(self, fig, caption=""):
         self.add('<figure><img src="%s" alt="%s"><figcaption>%s</figcaption></figure>'
-                 % (figure_uri(fig), html.escape(caption), caption))
+                 % (figure_uri(fig), html.escape(alt_text(caption)), caption))
 
     def table(self, tid, header, rows, cls=""):
         out = ['<div class="scroll"><table id="%s" class="%s"><thead><tr>' % (tid, cls)]
@@ -41,6 +42,11 @@ class Page:
             out.append("<tr>" + "".join("<td>%s</td>" % c for c in r) + "</tr>")
         out.append("</tbody></table></div>")
         self.add("".join(out))
+
+
+def alt_text(caption_html):
+    """A caption's words without its markup, for an image's alt attribute."""
+    return html.unescape(re.sub(r"<[^>]+>", "", caption_html)).strip() or "plot"
 
 
 def figure_uri(fig, dpi=96):

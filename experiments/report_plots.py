@@ -74,91 +74,6 @@ def nudge(xs, i, n, logx):
     return [x + 0.35 * f * (min(steps) if steps else 1.0) for x in xs]
 
 
-def yerr(rows, ys):
-    """Error bars (below, above) from the rows' intervals; 0 where a row has none."""
-    lo, hi = [], []
-    for r, y in zip(rows, ys):
-        ci = frame_ci(r)
-        lo.append(max(0.0, y - ci[0]) if ci else 0.0)
-        hi.append(max(0.0, ci[1] - y) if ci else 0.0)
-    return [lo, hi] if any(lo) or any(hi) else None
-
-
-def line_plot(data, styles, rows, x, y, ylabel, title, logx=False):
-    """y vs x, one panel per scene, one line per combination of the other varying axes."""
-    rows = [r for r in rows if num(r.get(x)) is not None and num(r.get(y)) is not None]
-    if len(data.values(rows, x)) < 2:
-        return None, "fewer than two values of %s" % x
-    series_axes = data.varying(rows, exclude=(x, "scene"))
-    panels = []
-    for scene in data.values(rows, "scene"):
-        srows = [r for r in rows if label(r, "scene") == scene]
-        lines = group(srows, lambda r: tuple(label(r, a) for a in series_axes))
-        lines = {k: v for k, v in lines.items() if len({label(r, x) for r in v}) >= 2}
-        if lines:
-            panels.append((scene, lines))
-    if not panels:
-        return None, "no series with two or more values of %s" % x
-    # Axes that still vary among the drawn series (runs off the line, e.g. a depth sweep at one leaf size, are gone).
-    drawn = [r for _, lines in panels for members in lines.values() for r in members]
-    series_axes = data.varying(drawn, exclude=(x, "scene"))
-    extra_axes = [a for a in series_axes if a not in ("builder", "kernel")]
-    fig, axs = facet_axes(len(panels))
-    for ax, (scene, lines) in zip(axs, panels):
-        keys = sorted(lines, key=lambda k: [str(v) for v in k])
-        extras = sorted({tuple(label(lines[k][0], a) for a in extra_axes) for k in keys}, key=str)
-        handles = []
-        for i, k in enumerate(keys):
-            members = lines[k]
-            by_x = group(members, lambda r: num(r.get(x)))
-            xs = sorted(by_x)
-            # one run per x (several only when rows repeat a configuration: the median one)
-            picked = [sorted(by_x[v], key=lambda r: num(r[y]))[len(by_x[v]) // 2] for v in xs]
-            ys = [num(r[y]) for r in picked]
-            st = styles.of(members[0])
-            if extra_axes:  # the marker tells the other axes apart; colour and line stay builder / kernel
-                st["marker"] = MARKERS[extras.index(tuple(label(members[0], a) for a in extra_axes)) % len(MARKERS)]
-            err = yerr(picked, ys) if y == "frame_ms" else None
-            ax.errorbar(nudge(xs, i, len(keys), logx), ys, yerr=err, color=st["color"], marker=st["marker"],
-                        linestyle=st["linestyle"], markersize=4, linewidth=1.2, elinewidth=0.9, capsize=2,
-                        markerfacecolor="white" if st["linestyle"] != "-" else st["color"])
-            if extra_axes:
-                handles.append(matplotlib.lines.Line2D(
-                    [], [], color=st["color"], marker=st["marker"], linestyle=st["linestyle"], markersize=4,
-                    label=(" ".join(describe(members[0], series_axes).split()) or "runs")[:MAX_SERIES_LABEL]))
-        if logx:
-            log2_ticks(ax, {num(r.get(x)) for r in rows})
-        else:
-            ax.set_xticks(sorted({num(r.get(x)) for r in rows}))
-        ax.set_title("%s — %s" % (title, scene), fontsize=10)
-        ax.set_xlabel(x.replace("_", " "))
-        ax.set_ylabel(ylabel)
-        ax.set_ylim(bottom=0)  # ratios read true from a zero baseline
-        ax.grid(alpha=0.3)
-        if extra_axes:
-            ax.legend(handles=handles, fontsize=7 if len(handles) <= 12 else 6, loc="upper left",
-                      bbox_to_anchor=(1.01, 1.0), borderaxespad=0, ncol=1 if len(handles) <= 16 else 2)
-        else:
-            srows = [r for ms in lines.values() for r in ms]
-            styles.legend(ax, data.values(srows, "builder"), data.values(srows, "kernel"))
-    fig.tight_layout()
-    return fig, None
-
-
-def deep_rows(data, rows):
-    """The rows of scenes whose effective depth exceeds 1 (unknown counts as deep), and a note per other scene."""
-    kept, notes = [], []
-    for scene in data.values(rows, "scene"):
-        srows = [r for r in rows if label(r, "scene") == scene]
-        depths = [num(data.value(r, "effective_depth")) for r in srows]
-        if depths and all(d is not None and d <= 1 for d in depths):
-            notes.append("%s: not plotted, its effective depth is 1 (nothing in it reflects or refracts, so every "
-                         "depth traces the same rays)." % html.escape(scene))
-        else:
-            kept += srows
-    return kept, notes
-
-
 def tree_rows(data, rows):
     """Per scene, the runs that differ only in builder, kernel, leaf size or bins (see shared_setting): a depth or
     anti-aliasing sweep would otherwise put one tree at several costs and times."""
@@ -209,42 +124,72 @@ PREDICTOR_AXES = [("sah_cost", "SAH cost"), ("epo", "EPO"), ("node_visits_per_ra
                   ("ray_cost", "ray cost (Ct·visits + Ci·tests)")]
 
 
-def time_vs_costs(data, styles, rows):
-    """Measured frame time against each deterministic cost measure, one row of panels per scene."""
-    rows = tree_rows(data, rows)
-    metrics = [(m, t) for m, t in PREDICTOR_AXES if len({num(r.get(m)) for r in rows} - {None}) >= 2]
+def _cost_ratio(c, metric):
+    """a / b of one deterministic count of a comparison (findings.json's counts), or None."""
+    pair = (c.get("counts") or {}).get(metric)
+    if not isinstance(pair, list) or len(pair) != 2:
+        return None
+    a, b = num(pair[0]), num(pair[1])
+    return a / b if a is not None and b is not None and a > 0 and b > 0 else None
+
+
+def time_vs_costs(data, styles):
+    """Each builder's time ratio to the baseline builder (findings.json, with its paired 95% interval) against
+    the same ratio of each deterministic cost measure, log-log, one row of panels per scene: where a point
+    sits on the diagonal, the measure predicted the time. Colour = builder, marker = ray type (or frames)."""
+    findings = data.findings or {}
+    base = str((findings.get("baselines") or {}).get("builder") or data.baseline("builder"))
+    comps = [c for c in findings.get("comparisons") or []
+             if c.get("kind") == "axis" and c.get("axis") == "builder" and c.get("baseline") is True
+             and num(c.get("ratio")) is not None and num(c.get("ratio")) > 0
+             and str((c.get("a_values") or {}).get("builder")) != base]  # not a twin of the baseline run
+    metrics = [(m, t) for m, t in PREDICTOR_AXES
+               if len({_cost_ratio(c, m) for c in comps} - {None}) >= 2]
     if not metrics:
-        return None, "no cost measure takes two different values in this sweep (one tree and kernel per scene)"
-    scenes = [s for s in data.values(rows, "scene") if sum(1 for r in rows if label(r, "scene") == s) >= 2]
-    if not scenes:
-        return None, "fewer than two runs per scene"
+        return None, ("findings.json has no builder compared with the baseline builder on a cost measure "
+                      "that differs between them")
+    scenes = [s for s in data.values(data.rows, "scene") if any(c.get("scene") == s for c in comps)]
     fig, axs = plt.subplots(len(scenes), len(metrics), figsize=(3.4 * len(metrics) + 1.6, 3.2 * len(scenes)),
                             squeeze=False)
+    columns = []
+    for c in comps:
+        v = c.get("a_values") or {}
+        col = v.get("rays") or v.get("workload") or "frames"
+        c["_column"] = str(col)
+        if c["_column"] not in columns:
+            columns.append(c["_column"])
+    cmark = dict(zip(columns, "osD^v<>pH*"))
     for panel, scene in zip(axs, scenes):
-        srows = [r for r in rows if label(r, "scene") == scene]
-        kernels = data.values(srows, "kernel")
-        kmark = dict(zip(kernels, "o^sDv<>pH*"))
+        mine = [c for c in comps if c.get("scene") == scene]
         for ax, (m, title) in zip(panel, metrics):
-            for r in srows:
-                xv, yv = num(r.get(m)), num(r.get("frame_ms"))
-                if xv is None:
+            for c in mine:
+                x, y = _cost_ratio(c, m), num(c["ratio"])
+                if x is None:
                     continue
-                st = styles.of(r)
-                ci = frame_ci(r)
-                ax.errorbar([xv], [yv], yerr=[[yv - ci[0]], [ci[1] - yv]] if ci else None, color=st["color"],
-                            marker=kmark.get(label(r, "kernel"), "o") if len(kernels) > 1 else st["marker"],
+                lo, hi = num(c.get("ci_low")), num(c.get("ci_high"))
+                err = [[y - lo], [hi - y]] if lo is not None and hi is not None and lo <= y <= hi else None
+                b = str((c.get("a_values") or {}).get("builder") or c.get("a_label"))
+                ax.errorbar([x], [y], yerr=err, color=styles.colour.get(b, "0.3"), marker=cmark[c["_column"]],
                             markersize=4, linestyle="none", elinewidth=0.8, capsize=1.5, alpha=0.85)
-            ax.set_xlabel(title, fontsize=8)
-            ax.set_ylabel("frame time (ms)", fontsize=8)
+            log_ratio_axis(ax, "x")
+            log_ratio_axis(ax, "y")
+            (lo_x, hi_x), (lo_y, hi_y) = ax.get_xlim(), ax.get_ylim()
+            span = (max(lo_x, lo_y), min(hi_x, hi_y))
+            ax.plot(span, span, color="0.6", linewidth=0.8, linestyle=":")  # time ratio = cost ratio
+            ax.set_xlabel("%s / baseline builder's" % title, fontsize=8)
+            ax.set_ylabel("time / baseline builder's", fontsize=8)
             ax.set_title(scene, fontsize=9)
             ax.tick_params(labelsize=7)
             ax.grid(alpha=0.3)
-        handles = [matplotlib.lines.Line2D([], [], color=styles.colour.get(b, "0.3"),
-                                           marker="o" if len(kernels) > 1 else styles.marker.get(b, "o"),
-                                           linestyle="none", label=b) for b in data.values(srows, "builder")]
-        handles += [matplotlib.lines.Line2D([], [], color="0.35", marker=kmark[k], linestyle="none", label=k)
-                    for k in kernels] if len(kernels) > 1 else []
+        builders = [b for b in data.values(data.rows, "builder")
+                    if any(str((c.get("a_values") or {}).get("builder")) == b for c in mine)]
+        handles = [matplotlib.lines.Line2D([], [], color=styles.colour.get(b, "0.3"), marker="o", linestyle="none",
+                                           label=b) for b in builders]
+        handles += [matplotlib.lines.Line2D([], [], color="0.35", marker=cmark[k], linestyle="none", label=k)
+                    for k in columns] if len(columns) > 1 else []
         panel[-1].legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
+    for c in comps:
+        c.pop("_column", None)
     fig.tight_layout()
     return fig, None
 
@@ -405,3 +350,84 @@ def heatmap_scale(max_visits=None):
     ax.set_xlabel("node visits per pixel (all of the pixel's rays)%s" % ("" if max_visits else
                   ", relative to each image's 99th percentile"), fontsize=7)
     return fig
+
+
+# ---------------------------------------------------------------- ratios to a baseline (findings.json)
+# Tick steps of a ratio axis, finest first: the first that puts at most RATIO_TICKS ticks in view wins.
+RATIO_STEPS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.25, 0.5, 1.0, 2.0, 5.0)
+RATIO_TICKS = 8
+
+
+def log_ratio_axis(ax, which="y"):
+    """A log axis of time (or cost) ratios: a line at 1 (the baseline), evenly stepped ticks around 1 written as
+    ratios (call after plotting: the ticks cover the data's range)."""
+    axis = ax.yaxis if which == "y" else ax.xaxis
+    (ax.axhline if which == "y" else ax.axvline)(1.0, color="0.3", linewidth=1)
+    (ax.set_yscale if which == "y" else ax.set_xscale)("log")
+    lo, hi = ax.get_ylim() if which == "y" else ax.get_xlim()
+    lo, hi = min(lo, 1.0), max(hi, 1.0)
+    for step in RATIO_STEPS:
+        first, last = int(math.floor((lo - 1.0) / step)), int(math.ceil((hi - 1.0) / step))
+        ticks = [1.0 + i * step for i in range(first, last + 1)]
+        ticks = [t for t in ticks if lo <= t <= hi and t > 0]
+        if len(ticks) <= RATIO_TICKS:
+            break
+    axis.set_major_locator(matplotlib.ticker.FixedLocator(ticks))
+    axis.set_minor_locator(matplotlib.ticker.NullLocator())
+    axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _pos: "%.3g×" % v))
+    (ax.set_ylim if which == "y" else ax.set_xlim)(lo, hi)
+
+
+def ratio_plot(data, axis, title):
+    """findings.json's comparisons along `axis` against its fixed baseline value: each ratio with its paired 95%
+    interval on a log axis (the interval of the ratio, not of either run's time, so the machine's drift over
+    the session does not hide the effect). One panel per scene, one series per setting of the other axes."""
+    findings = data.findings or {}
+    comps = [c for c in findings.get("comparisons") or []
+             if c.get("kind") == "axis" and c.get("axis") == axis and c.get("baseline") is True
+             and isinstance(c.get("a_values"), dict) and num(c["a_values"].get(axis)) is not None
+             and num(c.get("ratio")) is not None and num(c.get("ratio")) > 0]
+    base = num((findings.get("baselines") or {}).get(axis))
+    # A run at the baseline value itself (a twin of the baseline run, e.g. one config setting reached by two
+    # sweeps) is not a point on the curve: the baseline is drawn at 1.
+    comps = [c for c in comps if base is None or num(c["a_values"][axis]) != base]
+    if not comps:
+        return None, "findings.json has no comparison along %s against its baseline value" % axis.replace("_", " ")
+    scenes = [s for s in data.values(data.rows, "scene") if any(c.get("scene") == s for c in comps)]
+    fig, axs = facet_axes(len(scenes))
+    for ax, scene in zip(axs, scenes):
+        mine = [c for c in comps if c.get("scene") == scene]
+        series = group(mine, lambda c: tuple(sorted((k, str(v)) for k, v in c["a_values"].items() if k != axis)))
+        # Label a series by the axes that differ between series only.
+        keys = sorted(series, key=str)
+        differ = [k for k in {k for key in keys for k, _ in key}
+                  if len({dict(key).get(k) for key in keys}) > 1]
+        xs_all = set()
+        for i, key in enumerate(keys):
+            cs = sorted(series[key], key=lambda c: num(c["a_values"][axis]))
+            xs = [num(c["a_values"][axis]) for c in cs]
+            ys = [num(c["ratio"]) for c in cs]
+            lo = [max(0.0, y - num(c.get("ci_low"))) if num(c.get("ci_low")) is not None else 0.0
+                  for c, y in zip(cs, ys)]
+            hi = [max(0.0, num(c.get("ci_high")) - y) if num(c.get("ci_high")) is not None else 0.0
+                  for c, y in zip(cs, ys)]
+            if base is not None:  # the baseline itself: 1 by definition
+                xs, ys, lo, hi = [base] + xs, [1.0] + ys, [0.0] + lo, [0.0] + hi
+            xs_all.update(xs)
+            name = " ".join("%s=%s" % (k, v) for k, v in key if k in sorted(differ)) or "runs"
+            ax.errorbar(nudge(xs, i, len(keys), axis == "leaf_size"), ys, yerr=[lo, hi],
+                        marker=MARKERS[i % len(MARKERS)], linestyle=LINESTYLES[i % len(LINESTYLES)], markersize=4,
+                        linewidth=1.0, elinewidth=0.9, capsize=2, label=name[:MAX_SERIES_LABEL])
+        if axis == "leaf_size":
+            log2_ticks(ax, xs_all)
+        else:
+            ax.set_xticks(sorted(xs_all))
+        log_ratio_axis(ax)
+        ax.set_title("%s — %s" % (title, scene), fontsize=10)
+        ax.set_xlabel(axis.replace("_", " "))
+        ax.set_ylabel("time / baseline's (log)")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7 if len(keys) <= 12 else 6, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                  borderaxespad=0, ncol=1 if len(keys) <= 16 else 2)
+    fig.tight_layout()
+    return fig, None

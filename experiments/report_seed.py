@@ -82,7 +82,8 @@ def seed_sections(page, data):
         if deep is not shallow:
             images.append((deep, "depth %s (for comparison)" % label(deep, "depth")))
         page.add('<div class="pair">' + "".join(
-            '<div><img class="render" src="%s"><br>%s, %s ms</div>' % (data.image_uri(r["image"]), c, fmt_ms(r))
+            '<div><img class="render" src="%s" alt="%s"><br>%s, %s ms</div>'
+            % (data.image_uri(r["image"]), html.escape("render at " + c), c, fmt_ms(r))
             for r, c in images) + "</div>")
         a, b = data.load_image(shallow["image"]), data.load_image(deep["image"])
         if a is not None and b is not None and a.shape == b.shape and deep is not shallow:

@@ -43,8 +43,12 @@ def section_images(page, data):
                 fmt(r.get("node_visits_p95")), fmt(r.get("triangle_tests_per_ray")),
                 "<br>yellow = ≥ %s visits per pixel" % fmt(scale) if scale else "")
             blocks.append('<div><b>%s</b><br>%s<br>%s<br>%s</div>' % (
-                html.escape(b or "–"), '<img class="render" src="%s">' % img if img else "no image",
-                '<img class="render" src="%s">' % heat if heat else "no heatmap", cap))
+                html.escape(b or "–"),
+                '<img class="render" src="%s" alt="%s">' % (img, html.escape("render: " + (b or "the run"))) if img
+                else "no image",
+                '<img class="render" src="%s" alt="%s">'
+                % (heat, html.escape("node visits heatmap: " + (b or "the run")))
+                if heat else "no heatmap", cap))
         page.add('<div class="pair" id="images-%s">%s</div>' % (html.escape(scene), "".join(blocks)))
 
 

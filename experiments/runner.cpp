@@ -16,6 +16,7 @@
 #include "experiments/process.hpp"
 #include "experiments/provenance.hpp"
 #include "experiments/sweep_dir.hpp"
+#include "render/exit_status.hpp"
 
 namespace bvhlab {
 
@@ -528,12 +529,8 @@ int runCommand(const RunOptions& options) {
       }
     }
     return 0;
-  } catch (const InputError& e) {
-    std::cerr << "bvhlab run: error: " << e.what() << "\n";
-    return 2;
   } catch (const std::exception& e) {
-    std::cerr << "bvhlab run: error: " << e.what() << "\n";
-    return 1;
+    return reportError(e);  // 2 for bad input, 1 for a file that cannot be read or a failure
   }
 }
 
@@ -548,12 +545,8 @@ int mergeCommand(const std::vector<fs::path>& dirs, const fs::path& out, bool as
       std::cerr << "bvhlab merge: warning: no report: " << e.what() << "\n";
     }
     return 0;
-  } catch (const InputError& e) {
-    std::cerr << "bvhlab merge: error: " << e.what() << "\n";
-    return 2;
   } catch (const std::exception& e) {
-    std::cerr << "bvhlab merge: error: " << e.what() << "\n";
-    return 1;
+    return reportError(e);  // 2 for bad input, 1 for a file that cannot be read or a failure
   }
 }
 
@@ -562,12 +555,8 @@ int reportCommand(const fs::path& dir) {
     writeResults(SweepDir{dir});  // picks up runs finished since the last regeneration
     std::cout << writeReport(dir).string() << "\n";
     return 0;
-  } catch (const InputError& e) {
-    std::cerr << "bvhlab report: error: " << e.what() << "\n";
-    return 2;
   } catch (const std::exception& e) {
-    std::cerr << "bvhlab report: error: " << e.what() << "\n";
-    return 1;
+    return reportError(e);  // 2 for bad input, 1 for a file that cannot be read or a failure
   }
 }
 

@@ -56,7 +56,8 @@ nlohmann::json mergeSweeps(const std::vector<std::filesystem::path>& dirs, const
 // the script's complaint when it fails (e.g. matplotlib missing).
 std::filesystem::path writeReport(const std::filesystem::path& dir);
 
-// CLI wrappers: print errors on stderr, return the process exit status (0 ok, 1 failure, 2 bad input).
+// CLI wrappers: print errors on stderr, return the process exit status (render/exit_status.hpp: 0 ok,
+// 1 failure or a file that cannot be read, 2 bad input).
 // A sweep whose runs were all attempted returns 0 even if some runs failed: failures are data,
 // recorded with their error and listed in the report.
 int runCommand(const RunOptions& options);

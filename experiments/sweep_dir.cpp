@@ -60,7 +60,8 @@ json makePlan(const ExperimentConfig& config) {
                         {"seed_figures", config.seedFigures},
                         {"reference", config.reference.is_null() ? json::object() : config.reference},
                         {"sweeps", config.sweepNames},
-                        {"axes", config.axisLabels}};
+                        {"axes", config.axisLabels},
+                        {"findings", {{"baseline", config.findingsBaseline}}}};
   plan["config"] = {{"file", fs::absolute(config.file).lexically_normal().string()},
                     {"hash", config.hash},
                     {"text", config.text}};
@@ -74,7 +75,7 @@ namespace {
 
 json readJson(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string() + ": cannot open");
+  if (!in) throw FileError(file.string() + ": cannot open");
   json value;
   try {
     value = json::parse(in);
@@ -89,7 +90,7 @@ json readJson(const fs::path& file) {
 
 json readPlan(const SweepDir& dir) {
   if (!fs::exists(dir.plan()))
-    throw InputError(dir.plan().string() + ": missing (is " + dir.root.string() + " the output of `bvhlab run`?)");
+    throw FileError(dir.plan().string() + ": missing (is " + dir.root.string() + " the output of `bvhlab run`?)");
   json plan = readJson(dir.plan());
   checkPlan(plan, dir.plan().string());
   return plan;
@@ -369,7 +370,11 @@ json writeResults(const SweepDir& dir, const json& plan, const std::map<std::str
   writeFileAtomic(dir.root / "results.csv", csv.str(), false);
   // The comparisons the report draws, with their intervals and verdicts (experiments/findings.hpp).
   writeFileAtomic(dir.root / "findings.json",
-                  computeFindings(rows, plan["experiment"].value("axes", json::object())).dump(1) + "\n", false);
+                  computeFindings(rows, plan["experiment"].value("axes", json::object()),
+                                  plan["experiment"].value("findings", json::object()).value("baseline", json::object()))
+                          .dump(1) +
+                      "\n",
+                  false);
   return summary;
 }
 

@@ -115,7 +115,7 @@ void saveCameraPath(const std::filesystem::path& path, const CameraPath& poses) 
   for (const CameraPathPose& p : poses)
     out << "t " << exact(p.seconds) << " eye " << vec3Text(p.camera.eye) << " target " << vec3Text(p.camera.target)
         << " up " << vec3Text(p.camera.up) << " fov " << exact(p.camera.fovDeg) << '\n';
-  if (!out) throw InputError(path.string() + ": cannot write the camera path");
+  if (!out) throw FileError(path.string() + ": cannot write the camera path");
 }
 
 CameraPath parseCameraPath(const std::string& text, const std::string& file) {
@@ -140,7 +140,7 @@ CameraPath parseCameraPath(const std::string& text, const std::string& file) {
 
 CameraPath loadCameraPath(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": cannot open the camera path");
+  if (!in) throw FileError(path.string() + ": cannot open the camera path");
   std::stringstream text;
   text << in.rdbuf();
   return parseCameraPath(text.str(), path.string());
@@ -235,7 +235,7 @@ ViewerScript parseViewerScript(const std::string& text, const std::string& file)
 
 ViewerScript loadViewerScript(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": cannot open the viewer script");
+  if (!in) throw FileError(path.string() + ": cannot open the viewer script");
   std::stringstream text;
   text << in.rdbuf();
   return parseViewerScript(text.str(), path.string());

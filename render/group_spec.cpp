@@ -99,7 +99,7 @@ GroupSpec parseGroupSpec(const json& spec, const std::string& source) {
 
 GroupSpec readGroupSpec(const std::string& file) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file + ": cannot open the group file");
+  if (!in) throw FileError(file + ": cannot open the group file");
   json spec;
   try {
     spec = json::parse(in);

@@ -38,7 +38,8 @@ struct GroupSpec {
 // or holds a value of the wrong type or out of range. Unknown keys are ignored.
 GroupSpec parseGroupSpec(const nlohmann::json& spec, const std::string& source);
 
-// Reads FILE as JSON and parses it: InputError naming the file when it cannot be opened or is not JSON.
+// Reads FILE as JSON and parses it: FileError naming the file when it cannot be opened (a runtime
+// failure, render/exit_status.hpp), InputError when it is not JSON.
 GroupSpec readGroupSpec(const std::string& file);
 
 }  // namespace bvhlab

@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "render/exit_status.hpp"
 #include "render/render_job.hpp"
 #include "shaders/tracer.hpp"
 
@@ -66,7 +67,7 @@ int runRender(const RenderCommand& cmd) {
   if (!cmd.visitsOutput.empty()) say << "bvhlab: wrote " << cmd.visitsOutput << " (node visits per pixel)\n";
   if (const uint64_t overflows = stackOverflowPixels(stats); overflows > 0) {
     std::cerr << "bvhlab: error: traversal stack overflowed in " << overflows << " pixels\n";
-    return 3;
+    return kExitFailure;  // a runtime failure: the image is wrong
   }
   return 0;
 }

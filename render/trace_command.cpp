@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "render/exit_status.hpp"
 #include "render/frame_stats.hpp"
 #include "render/gl_context.hpp"
 #include "render/ray_tracer_gl.hpp"
@@ -150,7 +151,7 @@ int runTrace(const TraceCommand& c) {
   }
   if (overflows > 0) {
     std::cerr << "bvhlab: error: traversal stack overflowed on " << overflows << " rays\n";
-    return 3;
+    return kExitFailure;  // a runtime failure: the counts are wrong
   }
   return 0;
 }

@@ -15,6 +15,7 @@
 
 #include "datasets/mesh_io.hpp"
 #include "datasets/scene.hpp"
+#include "require.hpp"
 
 namespace bvhlab::datasets_test {
 
@@ -73,7 +74,7 @@ inline bool cachePresent() {
 
 #define REQUIRE_CACHE()                                                                     \
   if (!cachePresent())                                                                      \
-  GTEST_SKIP() << "dataset cache incomplete (" << kCache.string() << "): run `bash datasets/fetch.sh`"
+  BVHLAB_SKIP_OR_FAIL("dataset cache incomplete (" << kCache.string() << "): run `bash datasets/fetch.sh`")
 
 inline int runShell(const std::string& cmd) {
   const int status = std::system((cmd + " >/dev/null 2>&1").c_str());

@@ -16,6 +16,7 @@
 
 #include "datasets/scene_io.hpp"
 #include "render/gl_context.hpp"
+#include "require.hpp"
 #include "render/gpu_renderer.hpp"
 #include "shaders/tracer.hpp"
 #include "traversal/kernels.hpp"
@@ -39,9 +40,10 @@ inline std::vector<std::filesystem::path> shippedScenes() {
 
 // Scenes that need fetched data are skipped with a message when the cache is missing.
 inline bool datasetsPresent() { return std::filesystem::exists(sourceDir() / "datasets/cache/meshes/bunny00.off"); }
+// BVHLAB_REQUIRE_ALL=1 (CI) makes the skip a failure (tests/require.hpp).
 #define BVHLAB_REQUIRE_DATASETS()                                                                \
   if (!bvhlab::test::datasetsPresent())                                                          \
-  GTEST_SKIP() << "datasets missing: run `bash datasets/fetch.sh` (or `bash setup.sh test`)"
+  BVHLAB_SKIP_OR_FAIL("datasets missing: run `bash datasets/fetch.sh` (or `bash setup.sh test`)")
 
 // Default tracer options for a prepared scene: its max depth, a BVH stack sized to its tree.
 inline ShaderOptions tracerOptions(const PreparedScene& p) {

@@ -15,6 +15,7 @@
 #include "builders/test_inputs.hpp"
 #include "builder_test_util.hpp"
 #include "datasets/scene.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -318,7 +319,7 @@ TEST_P(EveryBuilder, MillionTrianglesOnAPlane) {
 TEST_P(EveryBuilder, Bunny) {
   const PrimitiveSet bunny = testing::loadTriangles(testing::bunnyPath());
   if (bunny.size() == 0)
-    GTEST_SKIP() << testing::bunnyPath() << " is missing: run `bash datasets/fetch.sh`";
+    BVHLAB_SKIP_OR_FAIL(testing::bunnyPath() << " is missing: run `bash datasets/fetch.sh`");
   BuildStats stats;
   buildChecked(GetParam(), bunny, {}, &stats);
   EXPECT_GT(stats.sahCost, 0.0);
@@ -438,7 +439,7 @@ TEST(Median, CompleteTreeWithFullLeaves) {
 TEST(Quality, SahBuildersMatchEmbreeMediumOnTheBunny) {
   const PrimitiveSet bunny = testing::loadTriangles(testing::bunnyPath());
   if (bunny.size() == 0)
-    GTEST_SKIP() << testing::bunnyPath() << " is missing: run `bash datasets/fetch.sh`";
+    BVHLAB_SKIP_OR_FAIL(testing::bunnyPath() << " is missing: run `bash datasets/fetch.sh`");
   BuildStats embree, median, stats;
   buildBvh("embree", bunny.input(), {}, &embree);
   buildBvh("median", bunny.input(), {}, &median);

@@ -103,6 +103,31 @@ aa = ["none", "smaa", "ssaa16"]
   for (const RunSpec& r : cfg.runs) EXPECT_EQ(r.referenceKey, cfg.runs[2].key);
 }
 
+// A traced run (rays axis) draws no image: it gets no reference, so a reference with a render-only axis
+// (depth) beside a rays sweep is not turned into a trace run that `bvhlab trace` rejects.
+TEST_F(Experiments, TracedRunsGetNoReference) {
+  writeText(root / "m.off", "OFF\n0 0 0\n");
+  const ExperimentConfig cfg = parse(R"(
+[experiment]
+reference = { depth = 8, frames = 1 }
+[axes]
+scenes = "m.off"
+[[sweep]]
+name = "frames"
+depths = 1
+[[sweep]]
+name = "rays"
+rays = "primary"
+)");
+  ASSERT_EQ(cfg.runs.size(), 3u) << "the frame run, its depth-8 reference, the traced run";
+  for (const RunSpec& r : cfg.runs) {
+    if (r.axis("workload")) {
+      EXPECT_TRUE(r.referenceKey.empty()) << r.describe();
+      EXPECT_FALSE(r.referenceOnly);
+    }
+  }
+}
+
 TEST_F(Experiments, ValidationErrorsNameTheFileLineAndKey) {
   writeText(root / "m.off", "OFF\n0 0 0\n");
   struct Case {
@@ -185,7 +210,7 @@ leaf_sizes = [1, 4]
 TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
   const fs::path dir = fs::path(BVHLAB_SOURCE_DIR) / "experiments" / "configs";
   std::map<std::string, size_t> expectedRuns = {
-      {"quick.toml", 56},      {"seed-figures.toml", 18}, {"builders.toml", 1990}, {"accuracy-vs-time.toml", 30},
+      {"quick.toml", 72},      {"seed-figures.toml", 18}, {"builders.toml", 1990}, {"accuracy-vs-time.toml", 30},
       {"antialiasing.toml", 16}, {"flythrough.toml", 15}, {"large.toml", 2}, {"bench.toml", 400},
       {"morton-grid.toml", 20}, {"ploc-top-down.toml", 12}, {"storage.toml", 15},
       {"sbvh-knobs.toml", 15},  // 3 scenes x (sah-binned + 4 sbvh settings)

@@ -184,7 +184,8 @@ class Experiments : public ::testing::Test {
 inline json comparableRows(const fs::path& dir) {
   json rows = readJsonFile(dir / "results.json")["rows"];
   for (json& row : rows)
-    for (const char* volatileField : {"started_at", "wall_s"}) row.erase(volatileField);
+    for (const char* volatileField : {"started_at", "wall_s", "load_avg_1m_start", "load_avg_1m_end", "steal_pct"})
+      row.erase(volatileField);
   return rows;
 }
 

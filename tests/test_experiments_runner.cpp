@@ -79,7 +79,7 @@ TEST_F(Experiments, FailedRunsAreRecordedTheSweepGoesOnAndTheyAreRetriedNextTime
   o.executor = [&](RunRequest& r) -> json {
     if (broken && r.spec.axis("kernel")->label == "stackless") {
       r.log = "0:1(2): error: shader does not compile\n";
-      throw RunFailure("renderer exit code 4: bvhlab: shader error");
+      throw RunFailure("renderer exit code 1: bvhlab: error: fragment shader failed to compile");
     }
     return fake(r);
   };
@@ -91,7 +91,7 @@ TEST_F(Experiments, FailedRunsAreRecordedTheSweepGoesOnAndTheyAreRetriedNextTime
   for (const json& row : rows) {
     if (row["kernel"] == "stackless") {
       EXPECT_EQ(row["status"], "failed");
-      EXPECT_NE(row["error"].get<std::string>().find("shader error"), std::string::npos);
+      EXPECT_NE(row["error"].get<std::string>().find("shader failed to compile"), std::string::npos);
       const json record = readJsonFile(root / "out" / "runs" / (row["key"].get<std::string>() + ".json"));
       EXPECT_NE(record["log"].get<std::string>().find("does not compile"), std::string::npos);
     } else {
@@ -239,7 +239,8 @@ TEST_F(Experiments, SubprocessExecutorRecordsOutputCrashesAndTimeouts) {
   EXPECT_LT(byKernel["hang"]["wall_s"].get<double>(), 10.0);
   EXPECT_NE(error("exit4").find("exit code 4"), std::string::npos) << error("exit4");
   EXPECT_NE(error("exit4").find("kernel does not compile"), std::string::npos) << error("exit4");
-  EXPECT_NE(error("badflag").find("exit code 109: The following arguments were not expected"), std::string::npos)
+  EXPECT_NE(error("badflag").find("exit code 2: bvhlab: error: render: The following argument was not expected"),
+            std::string::npos)
       << error("badflag");
   for (const char* k : {"crash", "bad-json", "hang", "exit4", "badflag"}) EXPECT_TRUE(byKernel[k]["image"].is_null()) << k;
 }

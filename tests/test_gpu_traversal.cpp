@@ -1,5 +1,8 @@
 // Every builder x every kernel through the real GLSL: per-pixel primary hit ids equal the C++
-// mirror's, and the in-shader node-visit / triangle-test counts match the mirror's (mean within 0.5%).
+// mirror's, and so do the in-shader counters of every pixel (node visits, triangle tests, mesh rays, box
+// tests), in the primid view and in the shaded view with its secondary rays. Measured on the bunny at
+// 96x54: 0 pixels differ in any of the 30 combinations (the earlier check compared only the frame's
+// totals, within 0.5 %), so a single ray walked differently by the GLSL fails.
 #include "layout/layouts.hpp"
 #include "render_fixture.hpp"
 
@@ -44,27 +47,28 @@ TEST_P(GpuTraversal, HitIdsAndCountsEqualTheMirror) {
     Rendered gpu = renderGpu(p, o, f);
     ReferenceImage cpu = renderReference(p.scene, p.data, p.packed, o, f);
     ASSERT_EQ(gpu.stats.size(), cpu.stats.size());
-    size_t idMismatch = 0, hits = 0;
     ASSERT_EQ(gpu.boxTests.size(), cpu.boxTests.size());
-    double gpuVisits = 0, cpuVisits = 0, gpuTests = 0, cpuTests = 0, gpuBoxes = 0, cpuBoxes = 0;
+    size_t idMismatch = 0, hits = 0, countsDiffer = 0, overflow = 0;
     for (size_t i = 0; i < gpu.stats.size(); ++i) {
-      gpuBoxes += gpu.boxTests[i];
-      cpuBoxes += cpu.boxTests[i];
       idMismatch += gpu.stats[i].w != cpu.stats[i].w;
       hits += gpu.stats[i].w != 0;
-      gpuVisits += gpu.stats[i].x;
-      cpuVisits += cpu.stats[i].x;
-      gpuTests += gpu.stats[i].y;
-      cpuTests += cpu.stats[i].y;
-      EXPECT_EQ(gpu.stats[i].z >> 31, 0u) << "stack overflow at pixel " << i;
+      const bool differs = gpu.stats[i].x != cpu.stats[i].x || gpu.stats[i].y != cpu.stats[i].y ||
+                           gpu.stats[i].z != cpu.stats[i].z || gpu.boxTests[i] != cpu.boxTests[i];
+      countsDiffer += differs;
+      overflow += gpu.stats[i].z >> 31;
+      if (differs && countsDiffer <= 3)
+        ADD_FAILURE() << viewName(view) << " pixel " << i << ": GLSL visits/tests/rays/boxes " << gpu.stats[i].x << "/"
+                      << gpu.stats[i].y << "/" << gpu.stats[i].z << "/" << gpu.boxTests[i] << ", mirror "
+                      << cpu.stats[i].x << "/" << cpu.stats[i].y << "/" << cpu.stats[i].z << "/" << cpu.boxTests[i];
     }
+    std::printf("[ measured ] %s: %zu of %zu pixels' counters differ from the mirror's\n", viewName(view), countsDiffer,
+                gpu.stats.size());
+    EXPECT_EQ(overflow, 0u) << "stack overflow";
     if (view == View::PrimId) {
       EXPECT_GT(hits, gpu.stats.size() / 10) << "the bunny should fill part of the view";
       EXPECT_EQ(idMismatch, 0u);
     }
-    EXPECT_NEAR(gpuVisits / cpuVisits, 1.0, 0.005) << viewName(view);
-    EXPECT_NEAR(gpuTests / cpuTests, 1.0, 0.005) << viewName(view);
-    EXPECT_NEAR(gpuBoxes / cpuBoxes, 1.0, 0.005) << viewName(view);
+    EXPECT_EQ(countsDiffer, 0u) << viewName(view);
   }
 }
 

@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "datasets/hard_scenes.hpp"
+#include "datasets/hard_scenes_detail.hpp"
 #include "datasets/image_io.hpp"
 #include "datasets/scene_io.hpp"
 #include "render_fixture.hpp"
@@ -162,9 +163,28 @@ TEST(HardScenes, FamilyMembersAreTransformedCopiesOfTheirReference) {
 
 // ---- NaN / Inf ------------------------------------------------------------------------------------
 
-constexpr double kMirrorMean = 0.5, kMirrorWithin3 = 0.99;
+// GLSL vs the C++ mirror, per scene and variant (llvmpipe, each scene at its own size, 96x64 or so).
+// Measured (134 scene/variant pairs outside tir_slab): the two images differ in at most 3 of 6144 pixels,
+// by one step (mean <= 0.00016 steps): a last-bit difference in a shading value rounding the other way.
+// The bounds are about 10x that. tir_slab (fast / ulp offset: mean 0.156 / 0.045 steps, 10 / 4 pixels
+// differ, 8 / 3 of them by more than 3, max 242): after several total internal reflections a few rays
+// meet the slab's edges, where which face is hit is a tie that GLSL and C++ break differently (float
+// evaluation order); its bounds are ~3x its mean and 10x its count of differing pixels. A radiance scaled
+// by 1.002 in main.glsl (means 0.016-0.22 steps, 297-3039 pixels differ) fails every scene here and
+// passed the former bounds (mean 0.5, 99 % within 3).
+constexpr double kMirrorMean = 0.002;  // steps; measured <= 0.00016
+constexpr size_t kMirrorPixels = 30;   // pixels differing at all; measured <= 3
+constexpr int kMirrorMax = 3;          // steps, every pixel; measured 1
+constexpr double kTirSlabMean = 0.5;   // steps; measured 0.156
+constexpr size_t kTirSlabPixels = 100; // measured 10
 
-// Also: the GLSL image equals the C++ mirror's within the project's tolerance (asserted, see below).
+size_t differingPixels(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+  size_t n = 0;
+  for (size_t i = 0; i + 3 < a.size(); i += 4) n += a[i] != b[i] || a[i + 1] != b[i + 1] || a[i + 2] != b[i + 2];
+  return n;
+}
+
+// Also: the GLSL image equals the C++ mirror's within the bounds above (asserted).
 TEST(HardScenes, NoNonFinitePixelInAnySceneOrVariant) {
   for (const hard::HardScene& h : hard::makeHardScenes()) {
     const SceneImages& s = imagesOf(h.name);
@@ -173,17 +193,18 @@ TEST(HardScenes, NoNonFinitePixelInAnySceneOrVariant) {
       EXPECT_EQ(countNonFinite(v.gpu.stats), 0u) << h.name << " --robust " << v.variant << " (GLSL)";
       EXPECT_EQ(countNonFinite(v.mirror.stats), 0u) << h.name << " --robust " << v.variant << " (C++ mirror)";
       const ImageDiff d = compareRgba(v.gpu.rgba, v.mirror.rgba);
-      std::printf("[ mirror   ] %-20s %-12s GLSL vs mirror: mean %.3f, within 3: %.4f, max %d\n", h.name.c_str(),
-                  v.variant.c_str(), d.meanAbs, d.within3, d.maxDiff);
-      // The project's GLSL-vs-mirror tolerance (tests/test_render.cpp, test_robust_gpu.cpp): mean |diff| at
-      // most kMirrorMean steps and at least kMirrorWithin3 of the pixels within 3 steps. Measured on these
-      // scenes (llvmpipe, 96x64): every scene mean <= 0.001 and max diff <= 1, except tir_slab (mean 0.156 /
-      // 0.045, 99.87 % / 99.95 % within 3, max 242): after several total internal reflections a few rays
-      // (8 of 6144 pixels) meet the slab's edges, where which face is hit is a tie that GLSL and C++ break
-      // differently (float evaluation order). A mirror that is wrong anywhere visible exceeds both bounds:
-      // rendering the mirror with max_depth 1 (no secondary rays) gives means of several steps.
-      EXPECT_LE(d.meanAbs, kMirrorMean) << h.name << " --robust " << v.variant << " (GLSL vs mirror)";
-      EXPECT_GE(d.within3, kMirrorWithin3) << h.name << " --robust " << v.variant << " (GLSL vs mirror)";
+      const size_t differing = differingPixels(v.gpu.rgba, v.mirror.rgba);
+      std::printf("[ mirror   ] %-20s %-12s GLSL vs mirror: mean %.5f, within 3: %.4f, max %d, %zu of %zu pixels differ\n",
+                  h.name.c_str(), v.variant.c_str(), d.meanAbs, d.within3, d.maxDiff, differing, v.gpu.rgba.size() / 4);
+      const std::string what = h.name + " --robust " + v.variant + " (GLSL vs mirror)";
+      if (h.name == "tir_slab") {
+        EXPECT_LE(d.meanAbs, kTirSlabMean) << what;
+        EXPECT_LE(differing, kTirSlabPixels) << what;
+        continue;
+      }
+      EXPECT_LE(d.meanAbs, kMirrorMean) << what;
+      EXPECT_LE(differing, kMirrorPixels) << what;
+      EXPECT_LE(d.maxDiff, kMirrorMax) << what;
     }
   }
 }
@@ -368,9 +389,12 @@ TEST(HardScenes, FarAndScaledCopiesAgainstTheirReference) {
     const SceneImages& ref = imagesOf(h.reference);
     std::string row;
     std::vector<std::string> changed;
+    double worstMean[2] = {0.0, 0.0}, worstBad[2] = {0.0, 0.0};  // [ULP offset?]
     for (size_t i = 0; i < member.variants.size(); ++i) {
       const VariantImages& v = member.variants[i];
       const FamilyDiff d = familyDiff(v.gpu.rgba, ref.variants[i].gpu.rgba);
+      worstMean[v.ulpOffset] = std::max(worstMean[v.ulpOffset], d.mean);
+      worstBad[v.ulpOffset] = std::max(worstBad[v.ulpOffset], d.bad);
       char cell[64];
       std::snprintf(cell, sizeof cell, "%.2f/%.1f%%%s", d.mean, 100.0 * d.bad, d.matches() ? "*" : " ");
       char padded[80];
@@ -385,6 +409,15 @@ TEST(HardScenes, FarAndScaledCopiesAgainstTheirReference) {
     // The recorded fact (hard_scenes.cpp's kFamilyMeasurements, the README's table): a change here is a
     // change in robustness, to be written into that table (and so the README) with the new numbers.
     for (const std::string& c : changed) ADD_FAILURE() << h.name << " --robust " << c;
+    // The figures the generator writes into datasets/hard/README.md ("measured: epsilon M / B %, ULP M / B %",
+    // hard_scenes_families.cpp's kFamilyMeasurements) are this table's: the largest mean and share over the
+    // variants with each offset, formatted as there. A figure that no longer holds fails here.
+    char computed[96];
+    std::snprintf(computed, sizeof computed, "epsilon %.2f / %.1f %%, ULP %.2f / %.1f %%", worstMean[0],
+                  100.0 * worstBad[0], worstMean[1], 100.0 * worstBad[1]);
+    EXPECT_EQ(std::string(computed), hard::detail::familyMeasurement(h.name).numbers)
+        << h.name << ": write the measured figures into datasets/hard_scenes_families.cpp and regenerate "
+        << "datasets/hard/ (BVHLAB_WRITE_HARD_SCENES=1, see HardScenes.CommittedFilesEqualTheGenerator)";
   }
 }
 

@@ -29,6 +29,7 @@
 #include "shaders/assemble.hpp"
 #include "traversal/intersectors.hpp"
 #include "traversal/kernels.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -202,7 +203,7 @@ TEST(LayoutKernels, Bvh2cbHardCasesLeakNothingInWatertightMode) {
 // on a builder's tree and on a tree whose root is a leaf; v1's stack-ordered alongside as a control.
 TEST(LayoutKernelsGlsl, EqualTheMirrorPerRay) {
   auto ctx = contextOrNull();
-  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
   const TestMesh& m = testMeshes()[1];
   const TriangleSoup few = firstTriangles(m.soup, 7);
   struct Case {
@@ -250,10 +251,10 @@ TEST(LayoutCli, ListsRefusesAndReports) {
   EXPECT_NE(r.out.find("bvh2-cb"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("bvh2cb-stack-ordered (default)"), std::string::npos) << r.out;
   r = run("render /no/such/mesh.off --layout bvh2-cb --kernel stackless");
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);  // a usage error
   EXPECT_NE(r.err.find("kernels for layout bvh2-cb: bvh2cb-stack-ordered"), std::string::npos) << r.err;
   r = run("trace /no/such/mesh.off --layout nope");
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("valid layouts: v1 bvh2-cb"), std::string::npos) << r.err;
 
   const std::filesystem::path mesh = clitest::writeTemp("tetra.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"

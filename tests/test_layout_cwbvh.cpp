@@ -22,6 +22,7 @@
 #include "shaders/assemble.hpp"
 #include "traversal/kernels.hpp"
 #include "traversal/layout_cwbvh.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -337,7 +338,7 @@ TEST(CwbvhKernels, HardCasesLeakNothingInWatertightMode) {
 // the hard inputs, indexed triangles, 2D-texture storage and a single-leaf tree.
 TEST(CwbvhKernelsGlsl, EqualTheMirrorPerRay) {
   auto ctx = contextOrNull();
-  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
   const TestMesh& m = testMeshes()[1];
   const TriangleSoup few = firstTriangles(m.soup, 7);
   struct Case {

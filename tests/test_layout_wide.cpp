@@ -19,6 +19,7 @@
 #include "layout_test_util.hpp"
 #include "shaders/assemble.hpp"
 #include "traversal/kernels.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -288,7 +289,7 @@ TEST(WideKernels, HardCasesLeakNothingInWatertightMode) {
 // a single-leaf tree; every other kernel's box counter is checked against its mirror alongside.
 TEST(WideKernelsGlsl, EqualTheMirrorPerRay) {
   auto ctx = contextOrNull();
-  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
   const TestMesh& m = testMeshes()[1];
   const TriangleSoup few = firstTriangles(m.soup, 7);
   struct Case {

@@ -183,13 +183,15 @@ TEST_F(Measurement, RunsOfOneSceneAndSettingsAreOneGroupAndTheirFramesPair) {
 
 TEST_F(Measurement, FakeClockWithKnownEffectsGivesTheRightVerdicts) {
   FakeClock clock;
-  RunOptions o = options(kBuilders, root / "out");
+  // The baseline builder named in the config (else it would be median, the first value).
+  RunOptions o = options(std::string(kBuilders) + "[findings]\nbaseline = { builder = \"sah-binned\" }\n", root / "out");
   o.groupExecutor = [&](GroupRequest& g) { return clock(g); };
   runSweep(o);
   const json f = readJsonFile(root / "out" / "findings.json");
-  ASSERT_EQ(f["format"], 1);
+  ASSERT_EQ(f["format"], 2);
+  EXPECT_EQ(f["baselines"]["builder"], "sah-binned");
 
-  // The median-split tree is 1.3x: slower than the fastest builder, with paired frames.
+  // The median-split tree is 1.3x: slower than the baseline builder, with paired frames.
   const json* medianVsBest = nullptr;
   for (const json& c : f["comparisons"])
     if (c["kind"] == "builder-best" && c["a_label"] == "median") medianVsBest = &c;
@@ -209,7 +211,7 @@ TEST_F(Measurement, FakeClockWithKnownEffectsGivesTheRightVerdicts) {
       EXPECT_EQ(c["verdict"], "no detectable difference") << c.dump();
     }
   EXPECT_EQ(equalPairs, 1);
-  // Median vs the fastest at leaf 4 and at leaf 16: slower both times.
+  // Median vs the baseline at leaf 4 and at leaf 16: slower both times.
   for (const json& c : f["comparisons"])
     if (c["kind"] == "axis" && c["axis"] == "builder" && c["a_label"] == "median") {
       EXPECT_EQ(c["verdict"], "slower");

@@ -47,6 +47,7 @@ GroupExecutor copiesExecutor(int copies, double effect, std::vector<double> plac
     json result = json::object();
     std::vector<json> lists(g.runs.size(), json::array());
     std::vector<std::vector<double>> perRound(g.runs.size(), std::vector<double>(rounds));
+    std::vector<double> control;  // the first run's A/A control: its copy 0 again, over its own buffers
     for (int j = 0; j < copies; ++j) {
       std::vector<std::vector<double>> ms(g.runs.size());
       for (int r = 0; r < rounds; ++r) {
@@ -55,6 +56,7 @@ GroupExecutor copiesExecutor(int copies, double effect, std::vector<double> plac
           const bool second = g.runs[i].spec.axis("builder")->label == "embree";
           ms[i].push_back(10.0 * (second ? effect * std::exp(placement[size_t(j)]) : 1.0) * machine * std::exp(jitter(rng)));
         }
+        if (j == 0) control.push_back(10.0 * machine * std::exp(jitter(rng)));
       }
       for (size_t i = 0; i < g.runs.size(); ++i) {
         lists[i].push_back(ms[i]);
@@ -66,6 +68,7 @@ GroupExecutor copiesExecutor(int copies, double effect, std::vector<double> plac
       json r = {{"frame_ms", medianOf(perRound[i])}, {"frame_ms_all", perRound[i]}, {"frames", rounds},
                 {"session", g.session}, {"tree_hash", s.axis("builder")->label}, {"program", 0}};
       if (copies > 1) r["frame_ms_copies"] = lists[i], r["program_copies"] = copies;
+      if (i == 0) r["aa_shared_control_frame_ms_all"] = control;
       result[s.key] = r;
     }
     return result;
@@ -192,7 +195,10 @@ TEST_F(MeasurementPrograms, SixProgramCopiesGiveAnIntervalAcrossCopies) {
     const char* verdict;
   };
   for (const Case& k : {Case{6, 1.01, "program copies", "no detectable difference"}, Case{6, 1.06, "program copies", "slower"},
-                        Case{5, 1.01, "rounds", "slower"}, Case{1, 1.01, "rounds", "slower"}}) {
+                        Case{5, 1.01, "rounds", "slower"},
+                        // One copy: its placement (-2%) puts embree at 1.01 x 0.98 of sah-binned, and
+                        // the rounds of that one program resolve it as a difference.
+                        Case{1, 1.01, "rounds", "faster"}}) {
     SCOPED_TRACE(std::to_string(k.copies) + " copies, effect " + std::to_string(k.effect));
     const fs::path out = root / ("c" + std::to_string(k.copies) + "-" + std::to_string(int(k.effect * 100)));
     RunOptions o = groupOptions(kTwoBuilders, out);
@@ -203,7 +209,10 @@ TEST_F(MeasurementPrograms, SixProgramCopiesGiveAnIntervalAcrossCopies) {
     EXPECT_EQ(c["interval_over"], k.over) << c.dump();
     EXPECT_EQ(c["verdict"], k.verdict) << c.dump();
     if (k.copies == 6) {
-      EXPECT_EQ(c["band"], 0.0);  // the copies already span what the controls' bands stand in for
+      // The session's shared-program control still sets the band: copies span code placements within
+      // one process, not what differs between processes.
+      EXPECT_EQ(c["band_source"], "shared control") << c.dump();
+      EXPECT_GT(c["band"].get<double>(), 0.0);
       EXPECT_EQ(c["n"], 6);
       // [min, max] of the six per-copy ratios: the placements' whole spread.
       EXPECT_NEAR(c["ci_low"].get<double>(), k.effect * std::exp(-0.02), 0.003);

@@ -45,6 +45,7 @@
 #include "gl_compute.hpp"
 #include "render/gl_context.hpp"
 #include "shaders/primitives.hpp"
+#include "require.hpp"
 
 namespace {
 
@@ -952,7 +953,7 @@ std::string primitiveSources() {
 
 TEST(Glsl, PrimitivesCompileWithGlslang) {
   if (std::system("glslangValidator --version > /dev/null 2>&1") != 0)
-    GTEST_SKIP() << "glslangValidator is not on PATH (Debian: glslang-tools); GLSL not validated";
+    BVHLAB_SKIP_OR_FAIL("glslangValidator is not on PATH (Debian: glslang-tools); GLSL not validated");
   namespace fs = std::filesystem;
   std::string source = "#version 450 core\n" + primitiveSources();
   source += R"(
@@ -1087,7 +1088,7 @@ TEST(Glsl, GpuResultsPassThePropertyTest) {
     const char* backend = std::getenv("BVHLAB_GL_BACKEND");
     context = bvhlab::createContext(backend && *backend ? bvhlab::parseBackend(backend) : bvhlab::Backend::OSMesa);
   } catch (const std::exception& e) {
-    GTEST_SKIP() << "no OpenGL 4.5 context (" << e.what() << "): GLSL not run";
+    BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context (" << e.what() << "): GLSL not run");
   }
   std::vector<Shape> shapes;
   std::vector<Case> cases;

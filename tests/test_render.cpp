@@ -1,6 +1,8 @@
 // The GLSL tracer: specialisation is invisible in the image, unused modules are absent from the
-// source, the GLSL image matches the C++ mirror, and shader errors name module and line.
+// source, the GLSL image matches the C++ mirror, cwbvh's image is v1's, and shader errors name module
+// and line.
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -82,9 +84,22 @@ TEST_P(SceneTest, SpecialisedSourceLacksUnusedModules) {
   EXPECT_GE(uber.source.size(), s.source.size());
 }
 
-// GLSL vs the C++ mirror. Tolerance: mean |diff| < 0.5/255 and >= 99% of pixels within 3/255.
-// Pixels may differ where float results differ in the last bits (transcendentals, FMA contraction)
-// and flip a decision: a silhouette pixel, a shadow boundary, a texture seam.
+// GLSL vs the C++ mirror, at 128x72 (llvmpipe, Mesa 22.3.6). Pixels may differ where float results differ
+// in the last bits (transcendentals, FMA contraction) and round a shading value the other way. Measured:
+// every shipped scene but worldmap differs in at most 77 of 9216 pixels, each by one step, mean <= 0.0029
+// steps (report 0.00279, report-nomesh 0.00286, textures 0.00033, most 0.00007 or 0). Bounds ~10x:
+// mean <= kMirrorMean and every pixel within kMirrorMax steps. The report scene also keeps the README's
+// figure, mean <= 0.003 steps (0.003/255). A radiance scaled by 1.002 in main.glsl measures 0.10 (report)
+// to 0.18 (sphere) steps: it fails these bounds and passed the former ones (mean 0.5, 99 % within 3).
+// worldmap (measured mean 0.088, 1134 pixels differ, 36 by more than 3, max 13): the map is sampled by
+// GL's bilinear filter in GLSL and by the mirror's own bilinear() in C++, at a direction from each side's
+// atan/asin; where these round differently on the high-contrast HDR map a pixel moves by several steps
+// (the cause was not narrowed further). Its bounds are ~2x what is measured.
+constexpr double kMirrorMean = 0.03;  // steps; measured <= 0.00286
+constexpr int kMirrorMax = 3;         // steps; measured 1
+constexpr double kReportMean = 0.003;  // the README's "<= 0.003/255"; measured 0.00279
+constexpr double kWorldMapMean = 0.2, kWorldMapWithin3 = 0.99;  // measured 0.088, 0.9961
+constexpr int kWorldMapMax = 32;                                  // measured 13
 TEST_P(SceneTest, GlslImageMatchesCppMirror) {
   if (needsData(GetParam())) BVHLAB_REQUIRE_DATASETS();
   auto p = prepare(GetParam());
@@ -93,8 +108,23 @@ TEST_P(SceneTest, GlslImageMatchesCppMirror) {
   Rendered gpu = renderGpu(*p, o, f);
   ReferenceImage cpu = renderReference(p->scene, p->data, p->packed, o, f);
   ImageDiff d = compareRgba(gpu.rgba, cpu.rgba);
-  EXPECT_LT(d.meanAbs, 0.5) << GetParam();
-  EXPECT_GE(d.within3, 0.99) << GetParam() << " max diff " << d.maxDiff;
+  size_t differing = 0;
+  for (size_t i = 0; i < gpu.rgba.size(); i += 4)
+    differing += gpu.rgba[i] != cpu.rgba[i] || gpu.rgba[i + 1] != cpu.rgba[i + 1] || gpu.rgba[i + 2] != cpu.rgba[i + 2];
+  std::printf("[ measured ] %-14s GLSL vs mirror: mean %.5f steps, within 3 %.5f, max %d, %zu of %d pixels differ\n",
+              GetParam().stem().c_str(), d.meanAbs, d.within3, d.maxDiff, differing, kW * kH);
+  const std::string name = GetParam().stem().string();
+  if (name == "worldmap") {
+    EXPECT_LE(d.meanAbs, kWorldMapMean) << GetParam();
+    EXPECT_GE(d.within3, kWorldMapWithin3) << GetParam();
+    EXPECT_LE(d.maxDiff, kWorldMapMax) << GetParam();
+    return;
+  }
+  EXPECT_LE(d.meanAbs, kMirrorMean) << GetParam();
+  EXPECT_LE(d.maxDiff, kMirrorMax) << GetParam();
+  if (name == "report") {
+    EXPECT_LE(d.meanAbs, kReportMean) << "the README quotes mean |diff| <= 0.003/255 on the report scene";
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Shipped, SceneTest, ::testing::ValuesIn(shippedScenes()), sceneName);
@@ -153,7 +183,58 @@ TEST(Render, ReportBranchingDiffersFromFullOnlyWhereGlassIs) {
   std::printf("[ measured ] report vs full branching: %d of %d glass pixels differ, %d in the 1-pixel ring, "
               "%d elsewhere\n", glassDiffering, glassPixels, ringDiffering, outsideDiffering);
   ReferenceImage cpu = renderReference(p->scene, p->data, p->packed, ro, f);
-  EXPECT_LT(compareRgba(report.rgba, cpu.rgba).meanAbs, 0.5);
+  const ImageDiff m = compareRgba(report.rgba, cpu.rgba);
+  std::printf("[ measured ] report branching, GLSL vs mirror: mean %.5f steps, max %d\n", m.meanAbs, m.maxDiff);
+  EXPECT_LE(m.meanAbs, 0.0005);  // measured 0.00004 (one step in one channel of 9216 pixels)
+  EXPECT_LE(m.maxDiff, kMirrorMax);
+}
+
+// cwbvh (8-wide compressed nodes, 8-bit conservative child boxes) packs the same builder's tree, so the
+// same triangles sit in its leaves as in v1's: every ray finds the same closest hit, and the images are
+// byte-identical (the claim of docs/layouts.md#cwbvh). Checked on the report scene (analytic objects,
+// reflection and refraction rays through the bunny) and on the bare bunny (`bvhlab render FILE`'s framing).
+// Should a tie at equal distance ever resolve differently, the failure names the differing pixels.
+TEST(Render, CwbvhImageIsByteIdenticalToV1s) {
+  BVHLAB_REQUIRE_DATASETS();
+  const KernelInfo& cwKernel = findKernel("cwbvh", "");
+  for (const std::string which : {"report", "bunny"}) {
+    SCOPED_TRACE(which);
+    auto load = [&] {
+      return which == "report" ? loadScene(sourceDir() / "datasets/scenes/report.toml")
+                               : loadMeshScene(sourceDir() / "datasets/cache/meshes/bunny00.off");
+    };
+    const std::unique_ptr<PreparedScene> v1 = prepareScene(load(), "sah-binned", BuildOptions{}, "v1");
+    const std::unique_ptr<PreparedScene> cw = prepareScene(load(), "sah-binned", BuildOptions{}, "cwbvh");
+    ASSERT_EQ(cw->soup.size(), v1->soup.size());
+    ASSERT_GT(cw->soup.size(), 70000u) << "the bunny's triangles must be in the scene";
+    const FrameOptions f = smallFrame(v1->scene, 160, 90);
+    size_t meshPixels = 0;
+    for (View view : {View::PrimId, View::Shaded}) {
+      ShaderOptions o = optionsFor(*v1);
+      o.view = view;
+      o.countStats = view == View::PrimId;  // the primary hit ids: compared, and how much of the frame is mesh
+      const Rendered a = renderGpu(*v1, o, f);
+      o.layout = "cwbvh";
+      o.kernel = cwKernel.name;
+      o.bvhStackSize = stackSizeFor(cw->packed);
+      const Rendered b = renderGpu(*cw, o, f);
+      ASSERT_EQ(a.rgba.size(), b.rgba.size());
+      size_t differing = 0;
+      for (size_t i = 0; i < a.rgba.size() / 4; ++i) {
+        bool differs = std::memcmp(&a.rgba[4 * i], &b.rgba[4 * i], 4) != 0;
+        if (o.countStats) {
+          differs |= statsPrimaryIdPlusOne(a.stats[i]) != statsPrimaryIdPlusOne(b.stats[i]);
+          meshPixels += statsPrimaryIdPlusOne(a.stats[i]) > v1->data.objects.size();  // ids past the analytic objects
+        }
+        if (differs && ++differing <= 3)
+          ADD_FAILURE() << viewName(view) << " pixel (" << i % 160 << "," << i / 160 << ") differs between v1 and cwbvh";
+      }
+      std::printf("[ measured ] %s, %s view, 160x90: %zu of %zu pixels differ between v1 and cwbvh\n", which.c_str(),
+                  viewName(view), differing, a.rgba.size() / 4);
+      EXPECT_EQ(differing, 0u) << viewName(view);
+    }
+    EXPECT_GT(meshPixels, size_t(160 * 90 / 50)) << "the bunny must be in view for the comparison to mean much";
+  }
 }
 
 TEST(Render, SsaaMatchesMirrorAndConvergesTowardsTheReference) {
@@ -167,8 +248,10 @@ TEST(Render, SsaaMatchesMirrorAndConvergesTowardsTheReference) {
   o.ssaaGrid = 4;
   Rendered ssaa16 = renderGpu(*p, o, f);
   ImageDiff mirror = compareRgba(ssaa4.rgba, cpu4.rgba);
-  EXPECT_LT(mirror.meanAbs, 0.5);
-  EXPECT_GE(mirror.within3, 0.99);
+  std::printf("[ measured ] ssaa 2x2, GLSL vs mirror: mean %.5f steps, within 3 %.5f, max %d\n", mirror.meanAbs,
+              mirror.within3, mirror.maxDiff);
+  EXPECT_LE(mirror.meanAbs, 0.003);  // measured 0.00025
+  EXPECT_LE(mirror.maxDiff, kMirrorMax);
   double errNone = compareRgba(none.rgba, ssaa16.rgba).meanAbs;
   double err4 = compareRgba(ssaa4.rgba, ssaa16.rgba).meanAbs;
   EXPECT_LT(err4, 0.7 * errNone) << "none " << errNone << " vs ssaa4 " << err4;

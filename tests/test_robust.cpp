@@ -28,6 +28,7 @@
 #include "traversal/ray_box_robust.hpp"
 #include "traversal/ray_triangle.hpp"
 #include "traversal/ray_triangle_watertight.hpp"
+#include "require.hpp"
 
 namespace {
 
@@ -561,7 +562,7 @@ TEST(RobustGlsl, EveryVariantAssemblesItsModulesAndCompilesWithGlslang) {
     }
   }
   std::filesystem::remove_all(dir);
-  if (!haveGlslang) GTEST_SKIP() << "glslangValidator not found (Debian package glslang-tools): assembly checked only";
+  if (!haveGlslang) BVHLAB_SKIP_OR_FAIL("glslangValidator not found (Debian package glslang-tools): assembly checked only");
 }
 
 }  // namespace

@@ -125,9 +125,11 @@ TEST(RobustGpu, EveryVariantMatchesItsMirrorWithSecondaryRays) {
     const Rendered gpu = renderGpu(*p, o, f);
     const ReferenceImage cpu = renderReference(p->scene, p->data, p->packed, o, f);
     const ImageDiff d = compareRgba(gpu.rgba, cpu.rgba);
-    // The project's GLSL-vs-mirror tolerance (tests/test_render.cpp).
-    EXPECT_LT(d.meanAbs, 0.5) << robustnessName(r);
-    EXPECT_GE(d.within3, 0.99) << robustnessName(r) << " max diff " << d.maxDiff;
+    // Measured (llvmpipe, 160x90): the GLSL image equals the mirror's in every variant (mean 0, max 0).
+    // Bounds as test_hard_scenes' for its unit-scale scenes: a rounding difference here and there passes,
+    // a mirror or kernel that is wrong anywhere visible does not.
+    EXPECT_LE(d.meanAbs, 0.002) << robustnessName(r);
+    EXPECT_LE(d.maxDiff, 3) << robustnessName(r);
     if (r == Robustness::Fast) fastImage = gpu.rgba;
     std::cout << "[ mirror   ] " << robustnessName(r) << ": mean |GLSL - mirror| " << d.meanAbs << ", within 3: "
               << d.within3 << "; mean |variant - fast| " << compareRgba(gpu.rgba, fastImage).meanAbs << "\n";

@@ -14,6 +14,7 @@
 
 #include "builders/builder.hpp"
 #include "builders/test_inputs.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -233,7 +234,7 @@ TEST(SahBinned, SameTreeAsTheTextbookBuildOnTheBunnyAndForAnyThreadCount) {
 // renderer's scene loader frames the mesh differently and measures 33.76), within 1.01x Embree MEDIUM.
 TEST(SahBinned, KeepsItsSahOnTheBunny) {
   const PrimitiveSet bunny = testing::loadTriangles(testing::bunnyPath());
-  if (bunny.size() == 0) GTEST_SKIP() << testing::bunnyPath() << " is missing: run `bash datasets/fetch.sh`";
+  if (bunny.size() == 0) BVHLAB_SKIP_OR_FAIL(testing::bunnyPath() << " is missing: run `bash datasets/fetch.sh`");
   BuildStats binned, embree;
   buildBvh("sah-binned", bunny.input(), {}, &binned);
   buildBvh("embree", bunny.input(), {}, &embree);

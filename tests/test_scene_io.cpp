@@ -17,6 +17,7 @@
 #include "datasets/mesh_io.hpp"
 #include "datasets/procedural.hpp"
 #include "datasets/scene_io.hpp"
+#include "require.hpp"
 
 using namespace bvhlab;
 namespace fs = std::filesystem;
@@ -119,12 +120,12 @@ TEST(ShippedScenes, EveryOneLoadsAndIsWellFormed) {
     }
   }
   EXPECT_GE(count, 15u);
-  if (skipped) GTEST_SKIP() << skipped << " scene(s) need the dataset cache: run `bash datasets/fetch.sh`";
+  if (skipped) BVHLAB_SKIP_OR_FAIL(skipped << " scene(s) need the dataset cache: run `bash datasets/fetch.sh`");
 }
 
 TEST(ShippedScenes, ReportSceneHasEveryIngredientOfTheReport) {
   if (!fs::exists(kSource / "datasets/cache/meshes/bunny00.off"))
-    GTEST_SKIP() << "needs the dataset cache: run `bash datasets/fetch.sh`";
+    BVHLAB_SKIP_OR_FAIL("needs the dataset cache: run `bash datasets/fetch.sh`");
   const Scene s = loadScene(kSource / "datasets/scenes/report.toml");
   std::set<ObjectKind> kinds;
   for (const Object& o : s.objects) kinds.insert(o.kind);
@@ -441,7 +442,7 @@ TEST(MeshScenes, CameraFramesTheMeshAndTheGroundTouchesIt) {
 
 TEST(SceneDocs, TheCompleteExampleLoads) {
   if (!fs::exists(kSource / "datasets/cache/meshes/bunny00.off"))
-    GTEST_SKIP() << "needs the dataset cache: run `bash datasets/fetch.sh`";
+    BVHLAB_SKIP_OR_FAIL("needs the dataset cache: run `bash datasets/fetch.sh`");
   const std::string doc = readFile(kSource / "docs/scene-format.md");
   const size_t begin = doc.find("```toml\n");
   ASSERT_NE(begin, std::string::npos);

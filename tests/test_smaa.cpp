@@ -439,7 +439,7 @@ double meanAbsLumaError(const std::vector<uint8_t>& a, const std::vector<uint8_t
   return sum / double(a.size() / 4);
 }
 
-TEST(SmaaAccuracy, ErrorAgainst16xSupersamplingIsClearlyBelowNoAntiAliasing) {
+TEST(SmaaAccuracy, ErrorAgainst16xSupersamplingIsTheMeasuredShareOfNoAntiAliasing) {
   context();
   const int w = 192, h = 128;
   const std::vector<uint8_t> aliased = renderTestScene(w, h, 1);
@@ -453,9 +453,12 @@ TEST(SmaaAccuracy, ErrorAgainst16xSupersamplingIsClearlyBelowNoAntiAliasing) {
     std::printf("SMAA %-6s mean abs luma error vs 16x: %.5f (no AA %.5f, ratio %.3f)\n", smaaPresetName(preset), err,
                 noAa, err / noAa);
     RecordProperty(std::string("ratio_") + smaaPresetName(preset), std::to_string(err / noAa));
-    // The target is err <= 0.5 x no-AA; measured 0.57 (high/ultra, with diagonal patterns) to 0.76
-    // (low/medium) on this image. Enforced here: clearly below no AA.
-    EXPECT_LE(err, 0.8 * noAa) << smaaPresetName(preset);
+    // Measured on this image (llvmpipe, Mesa 22.3.6), error / no-AA error: low 0.755, medium 0.757, high
+    // 0.573, ultra 0.573. A target of 0.5x is NOT met by any preset. Asserted: each preset's measured
+    // ratio with ~0.012 of headroom (the passes are deterministic on one driver). The headroom is small
+    // on purpose: high without its diagonal patterns (maxDiagSearchSteps 0) measures 0.597 and must fail.
+    const bool high = preset == SmaaPreset::High || preset == SmaaPreset::Ultra;
+    EXPECT_LE(err, (high ? 0.585 : 0.77) * noAa) << smaaPresetName(preset);
     if (const char* dir = std::getenv("BVHLAB_SMAA_DUMP")) {
       saveImageRgba8(std::filesystem::path(dir) / (std::string("smaa_") + smaaPresetName(preset) + ".png"), w, h, out);
       saveImageRgba8(std::filesystem::path(dir) / "noaa.png", w, h, aliased);

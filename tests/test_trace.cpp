@@ -25,6 +25,7 @@
 #include "render/workloads.hpp"
 #include "traversal/embree_tracer.hpp"
 #include "traversal/kernels.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -226,7 +227,7 @@ std::unique_ptr<GlContext> contextOrSkip() {
 // closest and any hit, on a random triangle soup (overlapping triangles: deep, messy trees).
 TEST(TraceGlsl, EqualsTheMirrorPerRay) {
   auto ctx = contextOrSkip();
-  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
   auto p = prepared(makeTriangleSoup(3000, 5, 0.01f, 0.1f));
   EmbreeTracer embree(p->soup, 2);
   for (Workload w : {Workload::Primary, Workload::Diffuse, Workload::Shadow}) {
@@ -280,7 +281,7 @@ TEST(TraceGlsl, EqualsTheMirrorPerRay) {
 // Embree and the watertight GLSL kernels agree on every ray (closest-hit ties on shared edges aside).
 TEST(TraceGlsl, AgreesWithEmbree) {
   auto ctx = contextOrSkip();
-  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
   std::vector<std::pair<std::string, std::unique_ptr<PreparedScene>>> scenes;
   scenes.emplace_back("sphere", prepared(makeUvSphere(64, 32)));
   scenes.emplace_back("cube", prepared(makeCube(6), "median"));
@@ -322,14 +323,14 @@ class BenchSceneTrace : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(BenchSceneTrace, GlslAgreesWithEmbree) {
   auto ctx = contextOrSkip();
-  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
   const fs::path file = fs::path(BVHLAB_SOURCE_DIR) / "datasets/scenes/bench" / GetParam();
   Scene scene;
   try {
     scene = loadScene(file);
   } catch (const InputError& e) {
-    // Fetched data missing: datasets/fetch.sh (CI fetches it; test_bench_scenes fails then).
-    GTEST_SKIP() << e.what();
+    // Fetched data missing: datasets/fetch.sh (CI fetches it and sets BVHLAB_REQUIRE_ALL=1: a failure there).
+    BVHLAB_SKIP_OR_FAIL(e.what());
   }
   auto p = prepareScene(std::move(scene), "sah-binned", BuildOptions{});
   EmbreeTracer embree(p->soup, 2);
@@ -366,7 +367,7 @@ INSTANTIATE_TEST_SUITE_P(Bench, BenchSceneTrace, ::testing::ValuesIn(benchScenes
 TEST(TraceCli, JsonHasTheIssueKeys) {
   const fs::path bunny = fs::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes/bunny00.off";
   const std::string input = fs::exists(bunny) ? bunny.string() : clitest::scene("mesh.toml").string();
-  if (!fs::exists(input)) GTEST_SKIP() << "no mesh input";
+  if (!fs::exists(input)) BVHLAB_SKIP_OR_FAIL("no mesh input");
   clitest::Result r = clitest::run("trace " + input + " --rays diffuse --json --count 3000 --frames 6 --warmup 1");
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
@@ -421,7 +422,7 @@ TEST(TraceTiming, DispatchesPerSampleCoverTheSampleLength) {
 // same answers (no mismatch against Embree) and the same counts.
 TEST(TraceCli, MinSampleMsRepeatsShortDispatches) {
   const std::string input = clitest::scene("mesh.toml").string();
-  if (!fs::exists(input)) GTEST_SKIP() << "no mesh input";
+  if (!fs::exists(input)) BVHLAB_SKIP_OR_FAIL("no mesh input");
   const std::string base = "trace " + input + " --rays primary --json --count 2000 --frames 6 --warmup 1";
   clitest::Result r = clitest::run(base);
   ASSERT_EQ(r.code, 0) << r.err;
@@ -449,7 +450,7 @@ TEST(TraceCli, MinSampleMsRepeatsShortDispatches) {
 // (the order-statistic interval of six values). Out-of-range counts are refused.
 TEST(TraceCli, ProgramCopiesGiveTheRatioAnIntervalAcrossCopies) {
   const std::string input = clitest::scene("mesh.toml").string();
-  if (!fs::exists(input)) GTEST_SKIP() << "no mesh input";
+  if (!fs::exists(input)) BVHLAB_SKIP_OR_FAIL("no mesh input");
   clitest::Result r = clitest::run("trace " + input + " --rays primary --json --count 2000 --frames 6 --warmup 1 --program-copies 6");
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);

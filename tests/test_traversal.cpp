@@ -33,6 +33,7 @@
 #include "traversal/ray_triangle.hpp"
 
 #include "traversal_test_util.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -94,7 +95,7 @@ TEST(Traversal, FlatGridWithTiesAndAxisAlignedRays) {
 
 TEST(Traversal, Bunny) {
   const std::filesystem::path path = std::filesystem::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes/bunny00.off";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not found: run datasets/fetch.sh to test on the bunny";
+  if (!std::filesystem::exists(path)) BVHLAB_SKIP_OR_FAIL(path << " not found: run datasets/fetch.sh to test on the bunny");
   const TriangleSoup soup = soupOf({loadMesh(path)});
   checkScene("bunny", soup, mixedRays(soup, 150, 7), false);
 }
@@ -260,7 +261,7 @@ TEST(TraversalLayout, AttributesInterpolateLikeTheGlsl) {
 // main, must compile with the reference front end.
 TEST(TraversalGlsl, EveryKernelCompilesWithGlslang) {
   if (std::system("command -v glslangValidator > /dev/null 2>&1") != 0)
-    GTEST_SKIP() << "glslangValidator not found (Debian package glslang-tools)";
+    BVHLAB_SKIP_OR_FAIL("glslangValidator not found (Debian package glslang-tools)");
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("bvhlab_test_traversal_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);

@@ -29,6 +29,7 @@
 #include "traversal/ray_box.hpp"
 #include "traversal/ray_triangle.hpp"
 #include "traversal_test_util.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -175,7 +176,7 @@ TEST(TraversalGlsl, GpuAgreesWithTheMirror) {
     const char* backend = std::getenv("BVHLAB_GL_BACKEND");
     context = createContext(backend && *backend ? parseBackend(backend) : Backend::OSMesa);
   } catch (const std::exception& e) {
-    GTEST_SKIP() << "no OpenGL 4.5 context (" << e.what() << "): GLSL not run";
+    BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context (" << e.what() << "): GLSL not run");
   }
   struct SceneRays {
     std::string name;

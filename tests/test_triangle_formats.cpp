@@ -26,6 +26,7 @@
 #include "shaders/assemble.hpp"
 #include "traversal/intersectors.hpp"
 #include "traversal/kernels.hpp"
+#include "require.hpp"
 
 namespace bvhlab {
 namespace {
@@ -321,7 +322,7 @@ TEST(TriangleFormatKernels, EveryFormatLayoutAndKernelFindTheBruteForceHits) {
 // counters per ray, closest and any hit: the same triangle, t within llvmpipe's fused multiply-adds.
 TEST(TriangleFormatKernelsGlsl, EqualTheMirrorPerRay) {
   auto ctx = contextOrNull();
-  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
   const TestMesh& m = meshes().back();
   const std::vector<BatchRay> rays = testRays(m.soup, 800, 13);
   const Bvh bvh = build("sah-binned", m.soup);
@@ -370,7 +371,7 @@ TEST(TriangleFormatKernelsGlsl, EqualTheMirrorPerRay) {
 // multiply-adds; 1e-6 is far below the oct bound and far above that), flat corners included.
 TEST(TriangleFormatKernelsGlsl, AccessorsEqualTheMirror) {
   auto ctx = contextOrNull();
-  if (!ctx) GTEST_SKIP() << "no OpenGL 4.5 context";
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
   const char* kMain = R"(
 layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer In { vec4 unused[]; };
@@ -449,13 +450,13 @@ TEST(TriangleFormatCli, ListsRefusesAndReports) {
   ASSERT_EQ(r.code, 0) << r.err;
   for (const TriangleFormatInfo& f : triangleFormats()) EXPECT_NE(r.out.find(f.name), std::string::npos) << r.out;
   r = run("render /no/such/mesh.off --triangles precomputed");
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);  // a usage error
   EXPECT_NE(r.err.find("--robust fast, box, ulp or box+ulp"), std::string::npos) << r.err;
   r = run("trace /no/such/mesh.off --triangles strips");
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("valid formats: raw precomputed indexed"), std::string::npos) << r.err;
   r = run("build --mesh /no/such/mesh.off --triangles strips");
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("valid formats"), std::string::npos) << r.err;
 
   // A tetrahedron: 4 triangles, 4 welded vertices (flat corners: the OFF has no normals).

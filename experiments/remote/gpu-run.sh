@@ -2,10 +2,11 @@
 # One prepared GPU session, in the order that matters if time runs out: (1) the EGL path on the GPU
 # (the report scene rendered shaded and as a node-visit heatmap, with GL_RENDERER in the JSON), (2)
 # builders-gpu.toml, (3) layouts-gpu.toml with 8 s of rounds per group, (4) kernels-gpu.toml, (5) the report
-# scene's 1080p frames over the 9 builders with and without shared programs (docs/gpu.md, section 6:
-# a 9-run frame group read 1.7x a 3-run one). Each step has a time cap; a
+# scene's 1080p frames over the 9 builders with and without shared programs (docs/gpu.md, "Frame
+# groups"). Each step has a time cap; a
 # sweep stopped by its cap keeps its finished runs (resume with the same command). Results go to OUTDIR
-# as a few files (PNG, JSON, one .tgz per sweep); `bvhlab report DIR` makes the HTML where you unpack.
+# as a few files (PNG, JSON, one .tgz per sweep with its results.csv, results.json, findings.json and runs/);
+# `bvhlab report DIR` makes the HTML where you unpack.
 # Run from the repository root:
 #   bash experiments/remote/gpu-run.sh BUNDLE OUTDIR [BUILDERS_S [LAYOUTS_S [KERNELS_S [SHARING_S]]]]
 # BUNDLE: a folder or .tar.xz from experiments/remote/bundle.py (or "installed": ./build/bvhlab as it is).
@@ -43,6 +44,11 @@ sweep() {  # name config seconds
   tail -3 "/tmp/gpu-run/$1.log"
   mkdir -p "/tmp/gpu-run/$1" && cp "/tmp/gpu-run/$1.log" "/tmp/gpu-run/$1/run.log"
   tar -C /tmp/gpu-run -czf "$out/$1.tgz" --exclude=images "$1"
+  # results.json holds every run's per-round times and findings.json the paired intervals: keep both
+  # beside results.csv (docs/gpu.md, "The committed results"), or the intervals cannot be re-derived.
+  for f in results.csv results.json findings.json; do
+    tar -tzf "$out/$1.tgz" "$1/$f" > /dev/null 2>&1 || echo "gpu-run: warning: $1.tgz has no $f"
+  done
 }
 sweep builders-gpu experiments/configs/builders-gpu.toml "$builders_s"
 sed 's/^max_seconds = [0-9]*/max_seconds = 8/' experiments/configs/layouts-gpu.toml > /tmp/gpu-run/layouts-gpu.toml

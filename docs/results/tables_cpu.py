@@ -1,0 +1,227 @@
+"""The tables of the CPU runs on the development machine (docs/results/builders-quality, build-time,
+robustness, sbvh-knobs), for docs/results/generate.py."""
+
+import math
+import os
+
+from tables_io import (DataError, num, pick, read_csv, read_json, read_json_lines, result_path, rel, source,
+                       commands, provenance, table, sig, f3, with_ci, band_cell)
+
+# ---- CPU runs on the development machine -------------------------------------------------------
+
+BQ = "builders-quality"
+
+
+def cpu_build_quality():
+    path, rows = read_json_lines(BQ, "build.jsonl")
+    src = source(BQ)
+    meshes = []
+    for r in rows:
+        if r.get("input") not in meshes:
+            meshes.append(r.get("input"))
+    builders = []
+    for r in rows:
+        if r.get("builder") not in builders:
+            builders.append(r.get("builder"))
+    out = []
+    for m in meshes:
+        ref = [r for r in rows if r.get("input") == m and r.get("builder") == "sah-binned"]
+        if len(ref) != 1:
+            raise DataError(f"{rel(path)}: no single sah-binned row for {m}")
+        ref = ref[0]
+        name = os.path.splitext(os.path.basename(m))[0]
+        for b in builders:
+            r = [x for x in rows if x.get("input") == m and x.get("builder") == b]
+            if len(r) != 1:
+                raise DataError(f"{rel(path)}: {len(r)} rows for {m} / {b}, expected 1")
+            r = r[0]
+            sah = num(r, "sah_cost", path)
+            out.append([name, f"`{b}`", f"{sah:.2f}", f3(sah / num(ref, "sah_cost", path)),
+                        f"{num(r, 'epo', path):.2f}",
+                        f3(num(r, "references", path) / num(r, "primitives", path)),
+                        str(int(num(r, "depth", path)))])
+    header = ["mesh", "builder", "SAH cost", "x sah-binned", "EPO", "references per triangle", "depth"]
+    lines = table(header, out)
+    lines += ["", "Leaf size 4, traversal and intersection costs 1 (Ct = Ci = 1). SAH cost and end-point overlap "
+                  "(EPO) are exact functions of the tree; no time is shown because one build per builder gives "
+                  "no interval."]
+    return lines + provenance([(path, rows)], src, commands(BQ, src))
+
+
+def cpu_layout_bytes():
+    path, rows = read_json_lines(BQ, "layout-bytes.jsonl")
+    src = source(BQ)
+    formats = ["raw", "precomputed", "indexed"]
+    out = []
+    for lay in ["v1", "bvh2-cb", "bvh4", "bvh8", "cwbvh"]:
+        row = [f"`{lay}`"]
+        for tri in formats:
+            r = [x for x in rows if x.get("layout") == lay and x.get("triangle_format") == tri]
+            if len(r) != 1:
+                raise DataError(f"{rel(path)}: {len(r)} rows for layout {lay} / {tri}, expected 1")
+            row.append(f"{num(r[0], 'bytes_per_triangle', path):.2f}")
+        out.append(row)
+    meshes = sorted({os.path.basename(str(r.get("input"))) for r in rows})
+    builders = sorted({str(r.get("builder")) for r in rows})
+    leaves = sorted({str(r.get("leaf_size")) for r in rows})
+    header = ["layout"] + [f"`{t}`, bytes per triangle" for t in formats]
+    lines = table(header, out)
+    lines += ["", f"All streams (nodes, triangles, attributes, vertices) over the input triangles; "
+                  f"{', '.join(meshes)}, {', '.join(builders)} tree, leaf size {', '.join(leaves)}."]
+    return lines + provenance([(path, rows)], src, commands(BQ, src))
+
+
+BT = "build-time"
+
+
+def cpu_build_time():
+    bpath, bench = read_json(BT, "bench.json")
+    tpath = result_path(BT, "paired.tsv")
+    src = source(BT)
+    try:
+        with open(tpath) as f:
+            paired = [line.rstrip("\n").split("\t") for line in f if line.strip()]
+    except OSError as e:
+        raise DataError(f"{rel(tpath)}: {e.strerror}") from None
+    ratios = {}
+    for n, p in enumerate(paired, 1):
+        if len(p) != 6:
+            raise DataError(f"{rel(tpath)}: line {n}: expected 6 tab-separated fields, got {len(p)}")
+        try:
+            ratios[(p[0], p[1].split(" ")[0])] = tuple(float(x) for x in p[3:6])
+        except ValueError:
+            raise DataError(f"{rel(tpath)}: line {n}: the ratio and its interval are not numbers") from None
+    reps = {}
+    for b in bench.get("benchmarks", []):
+        if b.get("run_type") != "iteration":
+            continue
+        builder, mesh = b["name"].split("/")[:2]
+        reps.setdefault((mesh, builder), []).append(b)
+    if not reps:
+        raise DataError(f"{rel(bpath)}: no benchmark repetitions")
+    out = []
+    for (mesh, builder), rs in sorted(reps.items(), key=lambda kv: (kv[0][0], kv[0][1] != "sah-binned", kv[0][1])):
+        times = sorted(num(r, "real_time", bpath) for r in rs)
+        med = times[len(times) // 2]
+        unit = rs[0].get("time_unit", "?")
+        if builder == "sah-binned":
+            cell = "1 (reference)"
+        elif (mesh, builder) in ratios:
+            cell = with_ci(*ratios[(mesh, builder)], fmt=lambda x: sig(x, 3))
+        else:
+            cell = "-"
+        out.append([mesh, f"`{builder}`", f"{sig(med)} {unit} [{sig(times[0])}, {sig(times[-1])}]", cell,
+                    f"{num(rs[0], 'sah', bpath):.2f}"])
+    load = bench.get("context", {}).get("load_avg")
+    ctx = bench.get("context", {})
+    header = ["mesh", "builder", f"build time, median [min, max] of {len(times)} repetitions", "x sah-binned, paired [95%]",
+              "SAH cost"]
+    lines = table(header, out)
+    lines += ["", f"One build thread (`embree` and `embree-low` use Embree's own thread pool whatever the setting). "
+                  f"Repetition r of every builder runs in round r of a random interleaving; the paired ratio is the "
+                  f"median of the per-round ratios with its order-statistic interval. Load average when it started: "
+                  f"{', '.join(f'{x:.1f}' for x in load or [])} on {ctx.get('num_cpus', '?')} CPUs."]
+    rows = [{"hostname": ctx.get("host_name", "?"), "cpu": f"{ctx.get('mhz_per_cpu', '?')} MHz",
+             "cores": ctx.get("num_cpus", "?")}]
+    return lines + provenance([(bpath, rows), (tpath, [])], src, commands(BT, src))
+
+
+RB = "robustness"
+
+
+def cpu_hard_cases():
+    path, d = read_json(RB, "hard-cases.json")
+    src = source(RB)
+    suite = d.get("suite") or {}
+    out = []
+    for v in d.get("variants") or []:
+        t = v.get("total") or {}
+        g = v.get("gpu") or {}
+        out.append([f"`{v.get('robust')}`", f"{v.get('triangle_test')} / {v.get('box_test')} / {v.get('origin_offset')}",
+                    f"{int(num(t, 'leaks', path)):,}", f"{int(num(g, 'leaks', path)):,}" if g else "-",
+                    f"{int(num(t, 'oracle_hit_disagree', path)):,}", f"{int(num(t, 'oracle_first_disagree', path)):,}",
+                    f"{int(num(t, 'oracle_first_clear_disagree', path)):,}",
+                    f"{int(num(t, 'nan_box_entries', path)) + int(num(t, 'nonfinite_hits', path)):,}",
+                    f"{int(num(t, 'secondary_self_hits', path)):,}", f"{int(num(t, 'secondary_lost', path)):,}"])
+    if not out:
+        raise DataError(f"{rel(path)}: key 'variants' is empty")
+    ms, gr = int(num(suite, "must_hit", path)), d.get("gpu_rays")
+    header = ["variant", "triangle / box / offset", f"leaks (of {ms:,} must-hit rays)",
+              f"GLSL leaks (of {gr:,} pixels)" if gr else "GLSL leaks",
+              f"hit/miss != oracle (of {int(num(suite, 'oracle_decisive', path)):,})",
+              f"first hit != oracle (of {int(num(suite, 'oracle_first_decisive', path)):,})",
+              f"of those clear of edges (of {int(num(suite, 'oracle_first_clear', path)):,})",
+              "NaN entries + non-finite hits", "secondary self-hits", "secondary rays lost inside closed meshes"]
+    lines = table(header, out)
+    lines += ["", f"{int(num(suite, 'cases', path))} cases, {int(num(suite, 'rays', path)):,} rays traced by the C++ "
+                  f"mirror through a {d.get('builder')} tree in the {d.get('layout')} layout ({d.get('kernel')}); the "
+                  f"exact oracle decides {int(num(suite, 'oracle_rays', path)):,} unit-scale rays, of which "
+                  f"{int(num(suite, 'oracle_ties', path)):,} are exact ties and not scored. These are counts; they do not "
+                  f"depend on the machine's load."]
+    return lines + provenance([(path, [d])], src, commands(RB, src))
+
+
+def cpu_robust_cost():
+    fpath, findings = read_json(RB, "findings.json")
+    cpath, rows = read_csv(RB, "results.csv")
+    src = source(RB)
+    rpath, _ = read_json(RB, "results.json")
+    out = []
+    for c in findings.get("comparisons") or []:
+        if c.get("kind") != "axis" or c.get("axis") != "robust":
+            continue
+        lo, hi = c.get("ci_low"), c.get("ci_high")
+        ratio = num(c, "ratio", fpath)
+        cell = with_ci(ratio, num(c, "ci_low", fpath), num(c, "ci_high", fpath), f3) \
+            if lo is not None and hi is not None else f3(ratio)
+        out.append([str(c.get("scene")), f"`{c.get('a_label')}`", f"`{c.get('b_label')}`", cell,
+                    str(c.get("verdict")), band_cell(c)])
+    if not out:
+        raise DataError(f"{rel(fpath)}: no comparison along the robust axis")
+    r0 = rows[0]
+    header = ["scene", "a", "b (reference)", "frame time a/b [95%]", "verdict", "noise band"]
+    lines = table(header, out)
+    lines += ["", f"{r0.get('width')}x{r0.get('height')} frames, {r0.get('builder')}, {r0.get('kernel')}, leaf "
+                  f"{r0.get('leaf_size')}; every variant of a scene interleaved in one process. Every ratio, interval, "
+                  f"band and verdict is findings.json's (docs/measurement.md); `bvhlab findings "
+                  f"docs/results/{RB} --check` re-derives them from the per-round times in results.json."]
+    return lines + provenance([(cpath, rows), (fpath, []), (rpath, [])], src, commands(RB, src))
+
+
+KNOBS = "sbvh-knobs"
+
+
+def cpu_sbvh_knobs():
+    fpath, findings = read_json(KNOBS, "findings.json")
+    cpath, rows = read_csv(KNOBS, "results.csv")
+    src = source(KNOBS)
+    comps = findings.get("comparisons")
+    if not isinstance(comps, list):
+        raise DataError(f"{rel(fpath)}: key 'comparisons' is not a list")
+    rpath, _ = read_json(KNOBS, "results.json")
+    out = []
+    for c in comps:
+        if c.get("kind") != "axis" or c.get("axis") != "builder":
+            continue
+        a = pick(rows, cpath, key=c.get("a"))
+        b = pick(rows, cpath, key=c.get("b"))
+        lo, hi = c.get("ci_low"), c.get("ci_high")
+        ratio = num(c, "ratio", fpath)
+        cell = with_ci(ratio, num(c, "ci_low", fpath), num(c, "ci_high", fpath), f3) \
+            if lo is not None and hi is not None else f3(ratio)
+        out.append([str(c.get("scene", "?")), f"`{c.get('a_label')}`", f"`{c.get('b_label')}`", cell,
+                    str(c.get("verdict", "?")), band_cell(c),
+                    f3(num(a, "sah_cost", cpath) / num(b, "sah_cost", cpath)),
+                    f3(num(a, "ray_cost", cpath) / num(b, "ray_cost", cpath))])
+    if not out:
+        raise DataError(f"{rel(fpath)}: no comparison along the builder axis")
+    r0 = rows[0]
+    header = ["scene", "a", "b (reference)", "frame time a/b [95%]", "verdict", "noise band", "SAH a/b",
+              "ray cost a/b"]
+    lines = table(header, out)
+    lines += ["", f"{r0.get('width')}x{r0.get('height')} frames, depth {r0.get('depth')}, {r0.get('kernel')} "
+                  f"kernel, leaf {r0.get('leaf_size')}; frames of one scene interleaved in one process. Every "
+                  f"ratio, interval, band and reference is findings.json's (docs/measurement.md explains them); "
+                  f"generate.py re-derives each ratio and interval from the per-round times in results.json. "
+                  f"SAH and ray cost are exact counts from results.csv."]
+    return lines + provenance([(cpath, rows), (fpath, []), (rpath, [])], src, commands(KNOBS, src))
