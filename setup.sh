@@ -4,7 +4,8 @@
 #   bash setup.sh test   install, fetch datasets, build, run every test (CTest)
 #   bash setup.sh deps   install Debian packages only
 #   bash setup.sh build  configure + build only
-#   bash setup.sh sanitize        ASan + UBSan build (clang, build-sanitize/), run the CPU tests (ctest -L '^cpu$')
+#   bash setup.sh sanitize        ASan + UBSan build (clang, build-sanitize/), run the CPU tests and the GLSL-vs-mirror
+#                                 and trace tests on llvmpipe (ctest -L '^(cpu|gl-asan)$')
 #   bash setup.sh fuzz [SECONDS]  libFuzzer targets for every file parser and importer, SECONDS each
 #                                 (default 60), off the same build; exits 1 on a finding and prints its
 #                                 reproducer (tests/fuzz/run.sh)
@@ -80,12 +81,14 @@ case "${1:-}" in
       echo "image: out/report.png"
     fi ;;
   sanitize)
-    deps "${CHECK_PACKAGES[@]}"; bash datasets/fetch.sh; sanitize_build cpu_tests
+    deps "${CHECK_PACKAGES[@]}"; bash datasets/fetch.sh; sanitize_build cpu_tests gl_asan_tests
     sanitizer_env
-    # Only the tests labelled "cpu" (tests/CMakeLists.txt): no GL (llvmpipe under ASan is not ours to
-    # check) and not the "cpu-slow" scale tests (run those with: ctest --test-dir build-sanitize -L cpu).
+    # The tests labelled "cpu" (tests/CMakeLists.txt) and, of the GL tests, those labelled "gl-asan":
+    # the GLSL kernels against their C++ mirrors and the trace path on llvmpipe (our code instrumented,
+    # Mesa not). Cost measured on the 2-core machine: tests/fuzz/README.md. Not the other GL tests, and
+    # not the "cpu-slow" scale tests (run those with: ctest --test-dir build-sanitize -L cpu).
     # One CTest test per executable here (tests/CMakeLists.txt says why); a failure names its gtest case.
-    ctest --test-dir build-sanitize -L '^cpu$' --output-on-failure -j "$(nproc)" ;;
+    ctest --test-dir build-sanitize -L '^(cpu|gl-asan)$' --output-on-failure -j "$(nproc)" ;;
   fuzz)
     deps "${CHECK_PACKAGES[@]}"; bash datasets/fetch.sh; sanitize_build fuzz_targets
     if [ -x /usr/lib/llvm-14/bin/llvm-symbolizer ]; then export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-14/bin/llvm-symbolizer; fi

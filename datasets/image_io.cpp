@@ -121,28 +121,46 @@ Image loadImage(const fs::path& path) {
   auto in = openInput(path);
   const OIIO::ImageSpec spec = in->spec();
   const int w = spec.width, h = spec.height, nch = std::min(spec.nchannels, 4);
-  std::vector<float> raw(size_t(w) * h * nch);
-  if (!in->read_image(0, 0, 0, nch, OIIO::TypeDesc::FLOAT, raw.data()))
-    fail(path, "cannot decode image (" + oneLine(in->geterror()) + ")");
-  in->close();
-
   const bool srgb = isSrgbEncoded(spec);
   const bool hasAlpha = nch == 2 || nch == 4;
   Image img;
   img.width = w;
   img.height = h;
   img.name = path.string();
-  img.texels.resize(size_t(w) * h);
-  for (int y = 0; y < h; ++y) {
-    const float* row = raw.data() + size_t(h - 1 - y) * w * nch;  // file row h-1-y is our row y
-    for (int x = 0; x < w; ++x) {
-      const float* p = row + size_t(x) * nch;
-      glm::vec3 rgb = nch >= 3 ? glm::vec3(p[0], p[1], p[2]) : glm::vec3(p[0]);
-      if (srgb) rgb = glm::vec3(srgbToLinear(rgb.r), srgbToLinear(rgb.g), srgbToLinear(rgb.b));
-      const float a = hasAlpha ? p[nch - 1] : 1.0f;
-      img.texels[size_t(y) * w + x] = glm::vec4(rgb, a);
-    }
+
+  // Decoded in bands of rows, and the texels grow with the rows decoded: memory follows what the
+  // file holds, not what its header claims. (Decoding the whole image at once first allocated and
+  // zeroed w x h x channels floats: a 40-byte HDR file claiming 16000 x 16000 pixels took 3 GB and
+  // 18 s before its decoder failed; tests/fuzz/regressions/hdr/.) A band is about 4 MiB of floats,
+  // or one row (tiled files: one row of tiles).
+  const size_t rowFloats = size_t(w) * nch;
+  const int tileRows = spec.tile_width > 0 && spec.tile_height > 0 ? spec.tile_height : 1;
+  const int bandRows = std::max(1, int(std::min<size_t>((size_t(1) << 20) / rowFloats, size_t(h)) / tileRows)) * tileRows;
+  std::vector<float> band;
+  for (int top = 0; top < h; top += bandRows) {
+    const int rows = std::min(bandRows, h - top);
+    band.resize(rowFloats * size_t(rows));
+    const int y0 = spec.y + top, y1 = y0 + rows;
+    const bool ok = spec.tile_width > 0
+                        ? in->read_tiles(0, 0, spec.x, spec.x + w, y0, y1, spec.z, spec.z + 1, 0, nch,
+                                         OIIO::TypeDesc::FLOAT, band.data())
+                        : in->read_scanlines(0, 0, y0, y1, spec.z, 0, nch, OIIO::TypeDesc::FLOAT, band.data());
+    if (!ok) fail(path, "cannot decode image (" + oneLine(in->geterror()) + ")");
+    img.texels.resize(size_t(w) * size_t(top + rows));  // file rows top..top+rows-1, top-down for now
+    for (int y = 0; y < rows; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float* p = band.data() + size_t(y) * rowFloats + size_t(x) * nch;
+        glm::vec3 rgb = nch >= 3 ? glm::vec3(p[0], p[1], p[2]) : glm::vec3(p[0]);
+        if (srgb) rgb = glm::vec3(srgbToLinear(rgb.r), srgbToLinear(rgb.g), srgbToLinear(rgb.b));
+        const float a = hasAlpha ? p[nch - 1] : 1.0f;
+        img.texels[size_t(top + y) * w + x] = glm::vec4(rgb, a);
+      }
   }
+  in->close();
+  // File row h-1-y is our row y.
+  for (int y = 0; y < h / 2; ++y)
+    std::swap_ranges(img.texels.begin() + ptrdiff_t(size_t(y) * w), img.texels.begin() + ptrdiff_t(size_t(y + 1) * w),
+                     img.texels.begin() + ptrdiff_t(size_t(h - 1 - y) * w));
   for (const glm::vec4& t : img.texels)
     if (!std::isfinite(t.r) || !std::isfinite(t.g) || !std::isfinite(t.b) || !std::isfinite(t.a))
       fail(path, "image contains NaN or infinite values");

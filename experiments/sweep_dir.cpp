@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "datasets/scene.hpp"  // InputError
+#include "experiments/sweep_checks.hpp"
 #include "experiments/findings.hpp"
 
 namespace bvhlab {
@@ -75,11 +76,14 @@ namespace {
 json readJson(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw FileError(file.string() + ": cannot open");
+  json value;
   try {
-    return json::parse(in);
+    value = json::parse(in);
   } catch (const json::parse_error& e) {
     throw InputError(file.string() + ": not valid JSON (" + e.what() + ")");
   }
+  checkNesting(value, file.string());  // before anything copies or prints it (recursively)
+  return value;
 }
 
 }  // namespace
@@ -88,8 +92,7 @@ json readPlan(const SweepDir& dir) {
   if (!fs::exists(dir.plan()))
     throw FileError(dir.plan().string() + ": missing (is " + dir.root.string() + " the output of `bvhlab run`?)");
   json plan = readJson(dir.plan());
-  if (!plan.is_object() || plan.value("format", 0) != 1 || !plan.contains("runs"))
-    throw InputError(dir.plan().string() + ": not a bvhlab sweep plan (format 1)");
+  checkPlan(plan, dir.plan().string());
   return plan;
 }
 
@@ -107,8 +110,7 @@ void forEachRecord(const SweepDir& dir, F f) {
     if (!replicate) continue;  // not a record of ours
     try {
       json record = readJson(p);
-      if (!record.is_object() || !record.contains("key") || !record.contains("status"))
-        throw InputError(p.string() + ": not a run record");
+      checkRecord(record, p.string());
       const std::string key = record["key"].get<std::string>();  // before the move below
       f(key, *replicate, std::move(record));
     } catch (const std::exception& ex) {

@@ -74,16 +74,6 @@ std::vector<double> medianPerRound(const std::vector<const std::vector<double>*>
   return out;
 }
 
-int intField(const json& spec, const char* name, int fallback, int lo, int hi) {
-  if (!spec.contains(name)) return fallback;
-  if (!spec[name].is_number_integer()) throw std::invalid_argument(std::string("group file: ") + name + ": not an integer");
-  const int64_t v = spec[name].get<int64_t>();
-  if (v < lo || v > hi)
-    throw std::invalid_argument(std::string("group file: ") + name + ": " + std::to_string(v) + " outside " +
-                                std::to_string(lo) + ".." + std::to_string(hi));
-  return int(v);
-}
-
 // Half-width of the run's 95% interval of the median, in % of the median; +inf when there is none.
 double intervalPct(const std::vector<double>& ms) {
   const auto ci = medianInterval(ms);
@@ -99,41 +89,25 @@ std::string elapsed(std::chrono::steady_clock::time_point since) {
 
 }  // namespace
 
-json measureGroup(const json& spec) {
-  if (!spec.is_object() || !spec.contains("runs") || !spec["runs"].is_array() || spec["runs"].empty())
-    throw std::invalid_argument("group file: needs a non-empty \"runs\" list");
-  const int minFrames = intField(spec, "min_frames", 10, 1, 100000);
-  const int maxFrames = intField(spec, "max_frames", minFrames, minFrames, 100000);
-  const double targetPct = spec.value("target_ci_pct", 2.0);
-  if (!(targetPct > 0.0 && targetPct <= 100.0)) throw std::invalid_argument("group file: target_ci_pct outside (0, 100]");
-  // A time budget for the rounds: a group of few or fast runs gets more rounds than a big one.
-  const double maxSeconds = spec.value("max_seconds", 0.0);
-  if (!(maxSeconds >= 0.0)) throw std::invalid_argument("group file: max_seconds must be >= 0");
-  const bool wantControl = spec.value("aa_control", true) && maxFrames >= int(kMinValuesForInterval);
-  // One program per distinct shader text (render/program_cache.hpp); false: every run compiles its own.
-  const bool sharePrograms = spec.value("share_programs", true);
-  // Each run drawn by this many separately compiled copies of its program (each copy shared by the
-  // runs of one shader text): the findings' intervals then span code placements (6 or more copies).
-  const int programCopies = intField(spec, "program_copies", 1, 1, 64);
-  const std::string session = spec.value("session", std::string("unnamed"));
-  const std::string command = spec.value("command", std::string("render"));
-  if (command == "trace")
-    return traceGroup(spec, GroupSettings{minFrames, maxFrames, targetPct, maxSeconds, wantControl, programCopies, session});
-  if (command != "render") throw std::invalid_argument("group file: command: \"" + command + "\" (render | trace)");
+json measureGroup(const GroupSpec& spec) {
+  const GroupSettings& g = spec.settings;
+  if (spec.command == "trace") return traceGroup(spec);
+  const int minFrames = g.minFrames, maxFrames = g.maxFrames, programCopies = g.programCopies;
+  const double targetPct = g.targetPct, maxSeconds = g.maxSeconds;
+  const bool wantControl = g.wantControl, sharePrograms = spec.sharePrograms;
+  const std::string& session = g.session;
   const auto start = std::chrono::steady_clock::now();
 
   // ---- set up and build every run (CPU): one scene load per input, one tree per tree key --------
   std::vector<std::unique_ptr<Entry>> entries;
   std::map<std::string, Scene> scenes;
   std::map<std::string, std::shared_ptr<const PreparedScene>> trees;
-  for (const json& run : spec["runs"]) {
+  for (const GroupRunSpec& run : spec.runs) {
     auto e = std::make_unique<Entry>();
-    e->key = run.value("key", std::string());
-    if (e->key.empty()) throw std::invalid_argument("group file: a run without a \"key\"");
+    e->key = run.key;
     try {
-      std::vector<std::string> args;
-      for (const json& a : run.at("args")) args.push_back(a.get<std::string>());
-      e->cmd = parseRenderArgs(args);
+      if (!run.error.empty()) throw InputError(run.error);
+      e->cmd = parseRenderArgs(run.args);
       if (e->cmd.cpu) throw std::invalid_argument("--cpu runs are not timed by measure (render them alone)");
       auto scene = scenes.find(e->cmd.input);
       if (scene == scenes.end()) scene = scenes.emplace(e->cmd.input, loadInput(e->cmd.input)).first;
@@ -362,15 +336,7 @@ json measureGroup(const json& spec) {
 }
 
 int runMeasure(const MeasureCommand& cmd) {
-  std::ifstream in(cmd.spec);
-  if (!in) throw FileError(cmd.spec + ": cannot open the group file");
-  json spec;
-  try {
-    spec = json::parse(in);
-  } catch (const json::parse_error& e) {
-    throw std::invalid_argument(cmd.spec + ": not valid JSON (" + e.what() + ")");
-  }
-  std::cout << measureGroup(spec).dump() << std::endl;
+  std::cout << measureGroup(readGroupSpec(cmd.spec)).dump() << std::endl;
   return 0;
 }
 

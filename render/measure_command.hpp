@@ -24,24 +24,18 @@
 
 #include <nlohmann/json.hpp>
 
+#include "render/group_spec.hpp"
+
 namespace bvhlab {
 
 struct MeasureCommand {
   std::string spec;  // the group file
 };
 
-// The group file's settings common to rendered and traced groups (checked by measureGroup).
-struct GroupSettings {
-  int minFrames = 10, maxFrames = 10;
-  double targetPct = 2.0, maxSeconds = 0.0;
-  bool wantControl = true;  // aa_control, and enough rounds for its interval
-  int programCopies = 1;
-  std::string session = "unnamed";
-};
-
-// The measurement itself (the CLI prints what it returns). Throws std::invalid_argument for a bad
-// group file; a run that cannot be set up, built, compiled or drawn gets an "error" entry instead.
-nlohmann::json measureGroup(const nlohmann::json& spec);
+// The measurement itself (the CLI prints what it returns) of a group file read by readGroupSpec
+// (render/group_spec.hpp, which refuses a bad one); a run that cannot be set up, built, compiled or
+// drawn gets an "error" entry instead.
+nlohmann::json measureGroup(const GroupSpec& spec);
 
 int runMeasure(const MeasureCommand& cmd);
 

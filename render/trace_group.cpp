@@ -90,7 +90,8 @@ double intervalPct(const std::vector<double>& ms) {
 
 }  // namespace
 
-json traceGroup(const json& spec, const GroupSettings& g) {
+json traceGroup(const GroupSpec& spec) {
+  const GroupSettings& g = spec.settings;
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&start] {
     return std::to_string(int(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() + 0.5)) + " s";
@@ -105,14 +106,12 @@ json traceGroup(const json& spec, const GroupSettings& g) {
   const double fraction = groupMemoryFraction();
   const double budget = fraction * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
   uint64_t uploads = 0;  // GL bytes the runs set up so far will upload (tree and rays)
-  for (const json& item : spec["runs"]) {
+  for (const GroupRunSpec& item : spec.runs) {
     auto r = std::make_unique<Run>();
-    r->key = item.value("key", std::string());
-    if (r->key.empty()) throw std::invalid_argument("group file: a run without a \"key\"");
+    r->key = item.key;
     try {
-      std::vector<std::string> args;
-      for (const json& a : item.at("args")) args.push_back(a.get<std::string>());
-      r->cmd = parseTraceArgs(args);
+      if (!item.error.empty()) throw InputError(item.error);
+      r->cmd = parseTraceArgs(item.args);
       auto scene = scenes.find(r->cmd.render.input);
       if (scene == scenes.end()) scene = scenes.emplace(r->cmd.render.input, loadInput(r->cmd.render.input)).first;
       r->setup.emplace(setupTrace(r->cmd, &scene->second, &trees));

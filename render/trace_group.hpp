@@ -20,9 +20,9 @@
 
 namespace bvhlab {
 
-// `spec` is the group file (render/measure_command.hpp) with its common settings already read into
-// `settings`; each run's "args" are `bvhlab trace`'s arguments. A run that cannot be set up, built,
+// `spec` is the group file (render/measure_command.hpp) as readGroupSpec read it; each run's "args"
+// are `bvhlab trace`'s arguments. A run that cannot be set up, built,
 // compiled or traced gets an "error" entry, as in `measure`.
-nlohmann::json traceGroup(const nlohmann::json& spec, const GroupSettings& settings);
+nlohmann::json traceGroup(const GroupSpec& spec);
 
 }  // namespace bvhlab

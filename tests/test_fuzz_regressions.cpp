@@ -17,6 +17,7 @@
 
 #include <gtest/gtest.h>
 
+#include "datasets/image_io.hpp"
 #include "datasets/mesh_io.hpp"
 #include "fuzz/parsers.hpp"
 
@@ -86,6 +87,29 @@ TEST_P(FuzzRegressions, EveryFileParsesOrIsAnInputError) {
                 pending.size(), list.c_str());
   RecordProperty("replayed", replayed);
 }
+
+// The seeds of the image and JSON targets are valid inputs: each must parse to a well-formed result
+// (an InputError here means the harness never gets past the reader's first check, and the fuzzer
+// would mutate from a dead end). Every target has at least one.
+class FuzzSeeds : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(FuzzSeeds, EverySeedParses) {
+  const std::string parser = GetParam();
+  ScratchDir dir;
+  std::error_code ec;
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(fs::path(BVHLAB_SOURCE_DIR) / "tests/fuzz/seeds" / parser, ec))
+    if (e.is_regular_file()) files.push_back(e.path());
+  ASSERT_FALSE(files.empty()) << "no seeds for " << parser;
+  for (const fs::path& file : files) {
+    SCOPED_TRACE(file.string());
+    EXPECT_NO_THROW(fuzz::parseAs(parser, readBytes(file), dir.path));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(ImageAndJsonTargets, FuzzSeeds,
+                         ::testing::Values("png", "jpeg", "exr", "hdr", "group", "merge"),
+                         [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
 
 // Every folder is a known parser, so a misspelt folder cannot silently replay nothing.
 TEST(FuzzRegressionsLayout, FoldersNameKnownParsers) {
@@ -217,6 +241,54 @@ TEST(ImporterGuards, GlbContainerAndGltfJsonAreCheckedBeforeAssimp) {
   e = writeGltf("strings.gltf", R"({"asset": {"version": "2.0", "generator": ")" + std::string(300, '[') + "\"}}" +
                                     std::string(1, '\0') + "garbage");
   EXPECT_EQ(e.find("JSON"), std::string::npos) << e;
+}
+
+// Peak resident memory of this process so far (VmHWM, /proc/self/status), in bytes; 0 if unknown.
+namespace {
+uint64_t peakResidentBytes() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stoull(line.substr(6)) * 1024;  // "VmHWM:  1234 kB"
+  return 0;
+}
+}  // namespace
+
+// A 40-byte Radiance HDR file whose header claims 16000 x 16000 pixels: loadImage once decoded the
+// whole image into one buffer sized from the header (3 GB allocated and zeroed, 18 s, before the
+// decoder found no data). Decoded in bands now, it fails at the first band. The bound: the band is
+// 4 MiB of floats and the decoder's row buffers less; the old path added 3 GB to the peak.
+TEST(ImageGuards, AHeaderClaimingHugeSizeCostsWhatTheFileHolds) {
+  const fs::path file = kRegressions / "hdr/header-claims-16000x16000-decoded-whole-took-3gb.hdr";
+  const uint64_t before = peakResidentBytes();
+  ASSERT_GT(before, 0u) << "no VmHWM in /proc/self/status";
+  std::string error = "(loaded)";
+  try {
+    loadImage(file);
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  EXPECT_NE(error.find(file.string() + ": cannot decode image"), std::string::npos) << error;
+  EXPECT_LT(peakResidentBytes(), before + (uint64_t(256) << 20)) << "peak resident memory grew past 256 MiB";
+}
+
+// A run record nested 200,000 arrays deep (400 KB, written here rather than kept as a file):
+// nlohmann::json parses it without recursion but copies and prints it recursively, and `merge`
+// crashed with a stack overflow (SIGSEGV). Now the record is refused when read (nested deeper than
+// kMaxJsonDepth) and, like any unreadable record, ignored with a warning: its run counts as pending.
+TEST(SweepGuards, ADeeplyNestedRunRecordIsIgnoredNotACrash) {
+  ScratchDir dir;
+  const std::string seed = readBytes(fs::path(BVHLAB_SOURCE_DIR) / "tests/fuzz/seeds/merge/tiny-sweep-3-runs.txt");
+  const size_t status = seed.find("\"status\": \"ok\"");
+  ASSERT_NE(status, std::string::npos);
+  const int depth = 200000;
+  const std::string deep = seed.substr(0, status) + "\"deep\": " + std::string(depth, '[') + std::string(depth, ']') +
+                           ", " + seed.substr(status);
+  fuzz::writeSweepDir(deep, dir.path / "in");
+  const nlohmann::json summary = mergeSweeps({dir.path / "in"}, dir.path / "out", false);
+  EXPECT_EQ(summary.at("planned"), 3);
+  EXPECT_EQ(summary.at("ok"), 2);
+  EXPECT_EQ(summary.at("pending"), 1);
 }
 
 TEST(ImporterGuards, AZipArchiveIsNotReadAsAModel) {

@@ -32,6 +32,8 @@ seed_globs() {
     config) echo "experiments/configs/*.toml tests/fixtures/experiments/*.toml" ;;
     camera_path) echo "experiments/configs/paths/*.txt" ;;
     viewer_script) echo "experiments/configs/paths/*.script" ;;
+    png|jpeg|exr|hdr)  # textures and worlds (seeds/PARSER: tiny files written by OpenImageIO; big maps skipped)
+      echo "datasets/cache/*/*.$1 datasets/scenes/*.$1 datasets/scenes/*/*.$1 tests/fixtures/*/*.$1" ;;
   esac
 }
 

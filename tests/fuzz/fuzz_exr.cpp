@@ -1,0 +1,4 @@
+// libFuzzer target for exr images (loadImage, OpenImageIO; tests/fuzz/parsers.hpp); run by `bash setup.sh fuzz`.
+#include "fuzz_common.hpp"
+
+BVHLAB_FUZZ_TARGET("exr")
