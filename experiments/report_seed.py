@@ -160,13 +160,13 @@ def section_antialiasing(page, data):
         return
     page.section("antialiasing", "Anti-aliasing: accuracy vs time")
     page.p("Error = mean absolute difference over 8-bit RGB against the reference run (its image is "
-           "supersampled 16× when the config says so). Targets from issue 5: SMAA error ≤ 0.5× the error "
+           "supersampled 16× when the config says so). Targets: SMAA error ≤ 0.5× the error "
            "without AA, SMAA frame time ≤ 0.25× SSAA 4×'s. The post-process column is the time of the three SMAA "
            "passes alone, included in the frame time. The frame-time ratio cannot fall below time(none) / "
            "time(SSAA 4×), because the SMAA frame still traces every pixel once; the added-time column "
            "compares what each mode adds to the frame without AA, (t − t_none) / (t_SSAA4 − t_none), which "
            "is the anti-aliasing's own cost. A mode ending in + cones or + cones-aniso also filters textures by "
-           "ray cones (docs/texture-lod.md); targets from issue 40: with SMAA, error ≤ 0.5× the error without AA "
+           "ray cones (docs/texture-lod.md); its targets: with SMAA, error ≤ 0.5× the error without AA "
            "and texture LOD, frame time ≤ 1.1× the same mode's without texture LOD (the interval shown is the "
            "conservative one from the two runs' own intervals).")
     by_key = {r.get("key"): r for r in data.ok}
