@@ -409,7 +409,8 @@ TEST(ViewCommand, ScriptedRobustnessSwitchMatchesHeadless) {
     expectSameImage(dir / (std::string(file) + ".png"), dir / (std::string(file) + "_render.png"));
   }
   Result bad = shell(view(*prefix, "--robust nope --frames 1"));
-  EXPECT_EQ(bad.rc, 1);
+  EXPECT_EQ(bad.rc, 2) << "a refused option value is a usage error";
+  EXPECT_NE(bad.err.find("bvhlab: error: "), std::string::npos) << bad.err;
   EXPECT_NE(bad.err.find(names[0]), std::string::npos) << "lists the valid variants: " << bad.err;
 }
 
