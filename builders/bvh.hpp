@@ -68,7 +68,7 @@ struct BuildOptions {
   // ploc: 0 (default) clusters to the end, as the paper does. F > 0: once the clusters are down to
   // n / F, those are split top-down by binned SAH (sah-binned over the cluster boxes, one cluster per
   // leaf) instead: PLOC for the bottom of the tree, SAH for its top, where PLOC loses most of its SAH
-  // (docs/builders.md, "PLOC with an SAH top"). 0..kMaxPlocTopDown.
+  // (docs/builders.md, "The knobs"). 0..kMaxPlocTopDown.
   uint32_t plocTopDown = 0;
   // ploc, lbvh: bits of each primitive's size (the square root of its box diagonal over the scene's)
   // among the upper bits of its Morton code (Vinkler, Bittner & Havran 2017; builders/morton.hpp),

@@ -7,7 +7,7 @@
 // its long axes first, as a top-down builder's first splits would. Axes scales each axis over its own
 // extent: on a flat or long scene (a terrain 1000 x 160 x 1000, a building 60 x 9 x 30) that makes
 // every cell as flat as the scene, so the codes alternate between cutting the short axis into slivers
-// and the long ones, and clusters come out long and thin. Measured (docs/builders.md, "Morton grid"):
+// and the long ones, and clusters come out long and thin. Measured (experiments/configs/morton-grid.toml):
 // with the cube, lbvh's SAH drops 20-24% on the interior and terrain bench scenes, 11-13% on the ship
 // and stadium, and ploc's 6% on both; on the scans (extents within 1.3x of each other) it moves
 // within +-1.6%.

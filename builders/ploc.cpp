@@ -13,7 +13,7 @@
 //     With BuildOptions::plocTopDown = F > 0 the passes stop once n / F clusters are left, and
 //     those are split top-down instead: sah-binned over the cluster boxes (box centres as centroids),
 //     leaves of one cluster, the same thread count. PLOC for the bottom of the tree, binned SAH for
-//     its top, where PLOC loses most of its SAH (docs/builders.md, "PLOC with an SAH top").
+//     its top, where PLOC loses most of its SAH (docs/builders.md, "The knobs").
 //  3. The single-primitive-leaf tree is collapsed by SAH (builders/collapse.hpp, shared with lbvh).
 // Ties in the merged area are broken by a key of the pair alone (distance in the order, then the
 // lower position's parity, then the lower position), so the smallest pair in the window is always

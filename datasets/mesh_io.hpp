@@ -24,7 +24,7 @@
 namespace bvhlab {
 
 // A material a mesh file defines (the assimp formats; OBJ/OFF/PLY/STL define none), already mapped to
-// the scene's material model (docs/scene-format.md, "Models with materials"). The base-colour texture
+// the scene's material model (docs/scene-format.md, "Models: glTF, COLLADA, FBX, 3DS, AC3D"). The base-colour texture
 // is not loaded by the mesh reader (a TOML mesh object ignores the file's materials): it is named by
 // a file path or carried as an embedded image file's bytes, and loadMeshScene loads it.
 struct MeshMaterial {

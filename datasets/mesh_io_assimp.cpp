@@ -67,7 +67,7 @@ glm::vec3 colour(const aiColor4D& c) {
   return glm::vec3(clamp01(c.r, 0.8f), clamp01(c.g, 0.8f), clamp01(c.b, 0.8f));
 }
 
-// The nearest scene material (docs/scene-format.md, "Models with materials").
+// The nearest scene material (docs/scene-format.md, "Models: glTF, COLLADA, FBX, 3DS, AC3D").
 MeshMaterial mapMaterial(const aiScene& scene, const aiMaterial& m, const fs::path& folder, size_t index) {
   MeshMaterial out;
   Material& mat = out.material;

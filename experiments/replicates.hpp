@@ -1,5 +1,5 @@
 // Replicates: a sweep measured R times over ([experiment] replicates, `bvhlab run --replicates R`,
-// `bvhlab merge --replicates`; docs/measurement.md, "Replicates").
+// `bvhlab merge --replicates`; docs/measurement.md, "Noise bands").
 //
 // One group's rounds pair its runs' frames within one process, so a paired ratio's interval says how
 // sure that process is. What a process shares across all its rounds (where llvmpipe's JIT put the

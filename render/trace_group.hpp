@@ -3,7 +3,7 @@
 // frames: each round traces every run's batch once with its kernel, and every distinct batch once with
 // Embree, in a fresh shuffled order. So round i of run A pairs with round i of run B, and two layouts,
 // kernels or builders are compared directly (the findings' paired ratio), not through their ratios to
-// an Embree that moved between processes (docs/layouts.md, "The two cores are not always two cores").
+// an Embree that moved between processes (layouts-one-core.toml; the runs are in the git history of docs/layouts.md).
 //
 // Runs whose batches are bit for bit the same (same input, workload, count, seed, camera; same Embree
 // mode and threads) share one Embree yardstick: each run's ratio_to_embree pairs its rounds with its

@@ -28,7 +28,7 @@
 // loop body for all lanes under a mask (it branches only on loop back-edges), so the "if-if" shape,
 // which had the triangle loop in every iteration, paid one masked triangle test per inner step:
 // 0.77x the time on the bunny's primary rays and 0.80x on its diffuse ones with this shape
-// (docs/layouts.md, "Loop shape"). The walk, and so every counter, is the same in both shapes.
+// (the runs are in the git history of docs/layouts.md). The walk, and so every counter, is the same in both shapes.
 
 bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));

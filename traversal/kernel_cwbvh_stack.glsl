@@ -24,7 +24,7 @@
 // PackedBvh&) (traversal/kernels.hpp) returns max(1, (W - 1)(D - 1)).
 //
 // Loop shape: "if-if", as kernel_wide_stack.glsl and for its reason (while-while: 1.22x the time
-// on the bunny's diffuse rays, docs/layouts.md "Loop shape").
+// on the bunny's diffuse rays, in the git history of docs/layouts.md).
 //
 // Order and NaN: the box tests never return a NaN entry for a finite ray (ray_box*.glsl), and a
 // decoded box is finite for a finite scene. Should a NaN appear anyway, `enter < nearEnter` and the

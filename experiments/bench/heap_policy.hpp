@@ -4,7 +4,7 @@
 // this machine (a VM) a 4 KiB page fault costs about 11 us, so whether those arrays arrive as fresh pages
 // or as pages the heap already holds moves a build's time by far more than the differences between
 // builders: the armadillo's ploc build (2 threads) took 22 ms in one process and 6 ms in another,
-// same binary, same tree (docs/builders.md, "The heap decides"). With glibc's default policy
+// same binary, same tree (the runs are in the git history of docs/builders.md). With glibc's default policy
 // (adaptive) which one a build gets depends on the process's history: a freed block larger than
 // the current mmap threshold raises that threshold (up to 32 MiB) and the trim threshold with it,
 // so after some frees big blocks come from the heap and stay touched, and after others they are
