@@ -148,6 +148,9 @@ int runTrace(const TraceCommand& c) {
                 y.embree().threads(), j["ratio_to_embree"].get<double>(), j["node_visits_per_ray"].get<double>(),
                 j["triangle_tests_per_ray"].get<double>(), (unsigned long long)j["hit_mismatches"].get<uint64_t>(),
                 (unsigned long long)j["hit_ties"].get<uint64_t>());
+    std::printf("bytes fetched per ray (C++ mirror, %zu rays): %.0f node + %.0f triangle + %.0f stack\n",
+                j["bytes_rays"].get<size_t>(), j["node_bytes_per_ray"].get<double>(),
+                j["triangle_bytes_per_ray"].get<double>(), j["stack_bytes_per_ray"].get<double>());
   }
   if (overflows > 0) {
     std::cerr << "bvhlab: error: traversal stack overflowed on " << overflows << " rays\n";

@@ -8,6 +8,7 @@
 
 #include "render/frame_stats.hpp"
 #include "render/gl_context.hpp"
+#include "traversal/kernels.hpp"
 
 namespace bvhlab {
 
@@ -45,6 +46,34 @@ Agreement compare(const std::vector<BatchHit>& a, const std::vector<BatchHit>& b
 }
 
 }  // namespace
+
+BytesFetched mirrorBytesFetched(const PackedBvh& packed, const std::string& kernel, Robustness robust, bool anyHit,
+                                const std::vector<BatchRay>& rays, size_t maxRays) {
+  const KernelInfo& k = findKernel(packed.layout, kernel);
+  const glsl::Storage storage(packed);
+  BytesFetched b;
+  const size_t n = rays.size();
+  b.stride = maxRays > 0 && n > maxRays ? (n + maxRays - 1) / maxRays : 1;
+  const TraceClosestFn closest = k.closest(robust);
+  const TraceAnyFn any = k.any(robust);
+  for (size_t i = 0; i < n; i += b.stride) {
+    const BatchRay& r = rays[i];
+    glsl::Counters c;
+    glsl::MeshHit hit;
+    const glsl::Ray ray{r.origin, r.dir};
+    if (anyHit)
+      any(storage, ray, r.tMin, r.tMax, c);
+    else
+      closest(storage, ray, r.tMin, r.tMax, hit, c);
+    const double v[3] = {double(c.nodeBytes), double(c.triangleBytes), double(c.stackBytes)};
+    for (int f = 0; f < 3; ++f) {
+      b.sum[f] += v[f];
+      b.sumSq[f] += v[f] * v[f];
+    }
+    ++b.rays;
+  }
+  return b;
+}
 
 TraceSetup setupTrace(const TraceCommand& c, const Scene* loaded,
                       std::map<std::string, std::shared_ptr<const PreparedScene>>* trees) {
@@ -252,6 +281,29 @@ nlohmann::json traceResult(const TraceCommand& c, const TraceSetup& s, const Tra
   meanInterval(double(visits), visitsSq, "node_visits_per_ray", j);
   meanInterval(double(tests), testsSq, "triangle_tests_per_ray", j);
   meanInterval(double(boxTests), boxTestsSq, "box_tests_per_ray", j);
+  // Bytes fetched per ray: the GLSL does not count them, so the kernel's C++ mirror traces every
+  // stride-th ray of the same batch again (all of them up to kBytesMirrorRays) and counts them
+  // exactly (traversal/kernel_*.hpp). The means and intervals are over those rays (bytes_rays).
+  const BytesFetched fetched = mirrorBytesFetched(prepared->packed, to.kernel, to.robust, anyHit, rays.rays, kBytesMirrorRays);
+  j["bytes_source"] = "mirror";
+  j["bytes_rays"] = fetched.rays;
+  j["bytes_ray_stride"] = fetched.stride;
+  {
+    const double m = double(fetched.rays);
+    const char* keys[3] = {"node_bytes_per_ray", "triangle_bytes_per_ray", "stack_bytes_per_ray"};
+    for (int f = 0; f < 3; ++f) {
+      j[keys[f]] = m > 0 ? fetched.sum[f] / m : 0.0;
+      if (m < 2) {
+        j[std::string(keys[f]) + "_ci_low"] = nullptr;
+        j[std::string(keys[f]) + "_ci_high"] = nullptr;
+        continue;
+      }
+      const double mean = fetched.sum[f] / m, var = std::max(0.0, (fetched.sumSq[f] - m * mean * mean) / (m - 1.0));
+      const double half = 1.959964 * std::sqrt(var / m);  // as meanInterval above
+      j[std::string(keys[f]) + "_ci_low"] = mean - half;
+      j[std::string(keys[f]) + "_ci_high"] = mean + half;
+    }
+  }
   j["ray_cost"] = prepared->cost.traversalCost * visitsPerRay + prepared->cost.intersectionCost * testsPerRay;
   j["stack_overflow_rays"] = overflows;
   j["hits"] = glFound;

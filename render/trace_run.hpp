@@ -90,6 +90,20 @@ struct TraceRounds {
   int dispatches = 1;        // dispatches per timed sample; glMs are per dispatch
 };
 
+// Bytes fetched per ray (node, triangle, stack: glsl::Counters), counted by the C++ mirror of
+// `kernel` ("" = the layout's default) over every stride-th ray of `rays`, the stride the smallest
+// that keeps the sample at most maxRays (0: every ray). sum and sumSq per kind, in that order.
+struct BytesFetched {
+  size_t rays = 0, stride = 1;
+  double sum[3] = {0.0, 0.0, 0.0}, sumSq[3] = {0.0, 0.0, 0.0};
+};
+BytesFetched mirrorBytesFetched(const PackedBvh& packed, const std::string& kernel, Robustness robust, bool anyHit,
+                                const std::vector<BatchRay>& rays, size_t maxRays);
+// The sample trace's mirror pass counts bytes over: 2^16 rays take the mirror about a second on one
+// core for the bunny's diffuse rays; the per-ray means then have intervals far narrower than the
+// differences between layouts.
+constexpr size_t kBytesMirrorRays = size_t(1) << 16;
+
 // The object `trace --json` prints. Traces once more with the counters (`gl` must be copy 0, whose
 // last timed pass gave the answers compared with the yardstick's). `overflows`: rays whose stack
 // overflowed (the caller fails the run on any).

@@ -27,6 +27,12 @@ struct Counters {
   uint32_t boxTests = 0;
   uint32_t meshRays = 0;
   bool stackOverflow = false;
+  // Bytes fetched, counted by the traversal mirrors only (the GLSL kernels do not count them): node
+  // texels, triangle records (index and vertex texels for the indexed format) and stack entries
+  // pushed and popped. Each kernel_*.hpp states how its counts are derived; docs/layouts.md.
+  uint64_t nodeBytes = 0;
+  uint64_t triangleBytes = 0;
+  uint64_t stackBytes = 0;
 };
 
 constexpr float INF = std::numeric_limits<float>::infinity();

@@ -6,6 +6,15 @@
 
 namespace bvhlab::glsl::bvh2cb_stack {
 
+// Bytes fetched (Counters::nodeBytes, triangleBytes, stackBytes), counted where the GLSL reads:
+// - node: every loadRecord reads a bvh2-cb record's four texels (both children's boxes, links and
+//   counts: layout_bvh2cb.glsl), once per node visit, so nodeBytes = 64 x nodeVisits;
+// - triangle: every triangle test fetches the record in the tree's format (triangleTestBytes);
+// - stack: an entry is a link, a count and an entry distance (uint + uint + float, 12 bytes); each
+//   push counts it, and so does each entry leaving the stack, popped or dropped beyond the hit.
+constexpr uint kNodeBytes = 4u * kTexelBytes;
+constexpr uint kStackEntryBytes = uint(2 * sizeof(uint) + sizeof(float));
+
 template <class Tests>
 inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
                            Counters& c) {
@@ -24,6 +33,7 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
       uint aLink, aCount, bLink, bCount;
       float aEnter, bEnter;
       c.nodeVisits++;
+      c.nodeBytes += kNodeBytes;
       loadRecord(s, int(link), aMin, aMax, aLink, aCount, bMin, bMax, bLink, bCount);
       c.boxTests++;
       bool hitA = Tests::intersectAabb(ray.origin, invDir, aMin, aMax, tMin, hit.t, aEnter);
@@ -39,6 +49,7 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
         stackCount[sp] = bFirst ? aCount : bCount;
         stackEnter[sp] = bFirst ? aEnter : bEnter;
         sp++;
+        c.stackBytes += kStackEntryBytes;
         link = bFirst ? bLink : aLink;
         count = bFirst ? bCount : aCount;
       } else {
@@ -51,14 +62,19 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
       float t;
       vec2 bary;
       c.triTests++;
+      c.triangleBytes += triangleTestBytes(s);
       if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
         hit = MeshHit{t, tri, bary};
         if (anyHit) return true;
       }
     }
-    while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+    while (sp > 0 && stackEnter[sp - 1] > hit.t) {
+      sp--;
+      c.stackBytes += kStackEntryBytes;
+    }
     if (sp == 0) break;
     sp--;
+    c.stackBytes += kStackEntryBytes;
     link = stackLink[sp];
     count = stackCount[sp];
   }

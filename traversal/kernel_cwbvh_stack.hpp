@@ -6,6 +6,20 @@
 
 namespace bvhlab::glsl::cwbvh_stack {
 
+// Bytes fetched (Counters::nodeBytes, triangleBytes, stackBytes), counted where the GLSL reads:
+// - node: the root's grid box reads the root's first texel (cwbvhGridBox), then every visited node
+//   is read whole by loadCwNode, five texels (origin and scales, bases and meta bytes, three texels
+//   of quantised child planes: layout_cwbvh.glsl); decoding its child boxes reads no more. So
+//   nodeBytes = 16 + 80 x nodeVisits;
+// - triangle: every triangle test fetches the record in the tree's format (triangleTestBytes);
+// - stack: an entry is a link, a count and an entry distance (uint + uint + float, 12 bytes); each
+//   push counts it, each entry the insertion sort shifts up counts it twice (read and written; the
+//   comparisons' reads of stackEnter are not counted apart), and each entry leaving the stack counts
+//   it, popped or dropped beyond the hit.
+constexpr uint kRootBoxBytes = 1u * kTexelBytes;
+constexpr uint kNodeBytes = 5u * kTexelBytes;
+constexpr uint kStackEntryBytes = uint(2 * sizeof(uint) + sizeof(float));
+
 constexpr uint kCwbvhInner = 0x80000000u;
 
 template <class Tests>
@@ -19,6 +33,7 @@ inline bool traverseCwbvh(const Storage& s, Ray ray, float tMin, float tMax, boo
 
   vec3 bmin, bmax;
   float tEnter;
+  c.nodeBytes += kRootBoxBytes;
   cwbvhGridBox(s, 0u, bmin, bmax);
   c.boxTests++;
   if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
@@ -27,6 +42,7 @@ inline bool traverseCwbvh(const Storage& s, Ray ray, float tMin, float tMax, boo
   while (true) {
     if (count == kCwbvhInner) {
       c.nodeVisits++;
+      c.nodeBytes += kNodeBytes;
       CwNode node = loadCwNode(s, link);
       int first = sp;
       uint nearLink = 0u, nearCount = 0u;
@@ -72,12 +88,14 @@ inline bool traverseCwbvh(const Storage& s, Ray ray, float tMin, float tMax, boo
             stackLink[j] = stackLink[j - 1];
             stackCount[j] = stackCount[j - 1];
             stackEnter[j] = stackEnter[j - 1];
+            c.stackBytes += 2u * kStackEntryBytes;  // the shifted entry read and written
             j--;
           }
           stackLink[j] = pushLink;
           stackCount[j] = pushCount;
           stackEnter[j] = pushEnter;
           sp++;
+          c.stackBytes += kStackEntryBytes;
         }
       }
       link = nearLink;
@@ -89,14 +107,19 @@ inline bool traverseCwbvh(const Storage& s, Ray ray, float tMin, float tMax, boo
         float t;
         vec2 bary;
         c.triTests++;
+        c.triangleBytes += triangleTestBytes(s);
         if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
           hit = MeshHit{t, tri, bary};
           if (anyHit) return true;
         }
       }
-      while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+      while (sp > 0 && stackEnter[sp - 1] > hit.t) {
+        sp--;
+        c.stackBytes += kStackEntryBytes;
+      }
       if (sp == 0) break;
       sp--;
+      c.stackBytes += kStackEntryBytes;
       link = stackLink[sp];
       count = stackCount[sp];
     }

@@ -6,6 +6,16 @@
 
 namespace bvhlab::glsl::stack_ordered {
 
+// Bytes fetched (Counters::nodeBytes, triangleBytes, stackBytes), counted where the GLSL reads:
+// - node: every loadNode reads a v1 node's two texels (layout.glsl), once per node visit (the root,
+//   both children of each inner node, each popped node), so nodeBytes = 32 x nodeVisits;
+// - triangle: every triangle test fetches the record in the tree's format (triangleTestBytes);
+// - stack: an entry is a node index and its entry distance (int + float, 8 bytes); each push counts
+//   it, and so does each entry leaving the stack, whether popped to be visited or dropped because
+//   its entry distance lies beyond the closest hit.
+constexpr uint kNodeBytes = 2u * kTexelBytes;
+constexpr uint kStackEntryBytes = uint(sizeof(int) + sizeof(float));
+
 template <class Tests>
 inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
                             Counters& c) {
@@ -20,6 +30,7 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
   uint a, escape, count;
   float tEnter;
   c.nodeVisits++;
+  c.nodeBytes += kNodeBytes;
   loadNode(s, node, bmin, bmax, a, escape, count);
   c.boxTests++;
   if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
@@ -32,10 +43,12 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
       uint leftA, leftCount, rightA, rightCount;
       float leftEnter, rightEnter;
       c.nodeVisits++;
+      c.nodeBytes += kNodeBytes;
       loadNode(s, left, bmin, bmax, leftA, escape, leftCount);
       c.boxTests++;
       bool hitLeft = Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, leftEnter);
       c.nodeVisits++;
+      c.nodeBytes += kNodeBytes;
       loadNode(s, right, bmin, bmax, rightA, escape, rightCount);
       c.boxTests++;
       bool hitRight = Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, rightEnter);
@@ -48,6 +61,7 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
         stackNode[sp] = leftFirst ? right : left;
         stackEnter[sp] = leftFirst ? rightEnter : leftEnter;
         sp++;
+        c.stackBytes += kStackEntryBytes;
         node = leftFirst ? left : right;
         a = leftFirst ? leftA : rightA;
         count = leftFirst ? leftCount : rightCount;
@@ -66,15 +80,21 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
       float t;
       vec2 bary;
       c.triTests++;
+      c.triangleBytes += triangleTestBytes(s);
       if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
         hit = MeshHit{t, tri, bary};
         if (anyHit) return true;
       }
     }
-    while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+    while (sp > 0 && stackEnter[sp - 1] > hit.t) {
+      sp--;
+      c.stackBytes += kStackEntryBytes;
+    }
     if (sp == 0) break;
     node = stackNode[--sp];
+    c.stackBytes += kStackEntryBytes;
     c.nodeVisits++;
+    c.nodeBytes += kNodeBytes;
     loadNode(s, node, bmin, bmax, a, escape, count);
   }
   return hit.tri >= 0;

@@ -6,6 +6,14 @@
 
 namespace bvhlab::glsl::stack_unordered {
 
+// Bytes fetched (Counters::nodeBytes, triangleBytes, stackBytes), counted where the GLSL reads:
+// - node: every loadNode reads a v1 node's two texels (layout.glsl), once per node visit, so
+//   nodeBytes = 32 x nodeVisits;
+// - triangle: every triangle test fetches the record in the tree's format (triangleTestBytes);
+// - stack: an entry is one int (4 bytes); the root's push, each child's push and each pop count it.
+constexpr uint kNodeBytes = 2u * kTexelBytes;
+constexpr uint kStackEntryBytes = uint(sizeof(int));
+
 template <class Tests>
 inline bool traverseUnordered(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
                               Counters& c) {
@@ -14,11 +22,14 @@ inline bool traverseUnordered(const Storage& s, Ray ray, float tMin, float tMax,
   StackArray<int> stack(s.stackSize);
   int sp = 0;
   stack[sp++] = 0;
+  c.stackBytes += kStackEntryBytes;
   while (sp > 0) {
     int node = stack[--sp];
+    c.stackBytes += kStackEntryBytes;
     vec3 bmin, bmax;
     uint a, escape, count;
     c.nodeVisits++;
+    c.nodeBytes += kNodeBytes;
     loadNode(s, node, bmin, bmax, a, escape, count);
     if (count > 0u) {
       for (uint i = 0u; i < count; ++i) {
@@ -26,6 +37,7 @@ inline bool traverseUnordered(const Storage& s, Ray ray, float tMin, float tMax,
         float t;
         vec2 bary;
         c.triTests++;
+        c.triangleBytes += triangleTestBytes(s);
         if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
           hit = MeshHit{t, tri, bary};
           if (anyHit) return true;
@@ -38,6 +50,7 @@ inline bool traverseUnordered(const Storage& s, Ray ray, float tMin, float tMax,
       uint childA, childEscape, childCount;
       float tEnter;
       c.nodeVisits++;
+      c.nodeBytes += kNodeBytes;
       loadNode(s, children[k], bmin, bmax, childA, childEscape, childCount);
       c.boxTests++;
       if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) continue;
@@ -46,6 +59,7 @@ inline bool traverseUnordered(const Storage& s, Ray ray, float tMin, float tMax,
         return hit.tri >= 0;
       }
       stack[sp++] = children[k];
+      c.stackBytes += kStackEntryBytes;
     }
   }
   return hit.tri >= 0;

@@ -6,6 +6,13 @@
 
 namespace bvhlab::glsl::stackless {
 
+// Bytes fetched (Counters::nodeBytes, triangleBytes, stackBytes), counted where the GLSL reads:
+// - node: every loadNode reads a v1 node's two texels (layout.glsl), once per node visit, so
+//   nodeBytes = 32 x nodeVisits;
+// - triangle: every triangle test fetches the record in the tree's format (triangleTestBytes);
+// - stack: none (escape links); stackBytes stays 0.
+constexpr uint kNodeBytes = 2u * kTexelBytes;
+
 template <class Tests>
 inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
                               Counters& c) {
@@ -20,6 +27,7 @@ inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax,
       vec3 bmin, bmax;
       float tEnter;
       c.nodeVisits++;
+      c.nodeBytes += kNodeBytes;
       loadNode(s, int(node), bmin, bmax, a, escape, count);
       c.boxTests++;
       if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) {
@@ -41,6 +49,7 @@ inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax,
       float t;
       vec2 bary;
       c.triTests++;
+      c.triangleBytes += triangleTestBytes(s);
       if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
         hit = MeshHit{t, tri, bary};
         if (anyHit) return true;

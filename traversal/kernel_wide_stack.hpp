@@ -6,6 +6,18 @@
 
 namespace bvhlab::glsl::wide_stack {
 
+// Bytes fetched (Counters::nodeBytes, triangleBytes, stackBytes), counted where the GLSL reads:
+// - node: every loadSlot reads one child slot's two texels (box, link, count: layout_wide.glsl): the
+//   root's slot once, then each child slot of each visited node, once per box test, so
+//   nodeBytes = 32 x boxTests;
+// - triangle: every triangle test fetches the record in the tree's format (triangleTestBytes);
+// - stack: an entry is a link, a count and an entry distance (uint + uint + float, 12 bytes); each
+//   push counts it, each entry the insertion sort shifts up counts it twice (read and written; the
+//   comparisons' reads of stackEnter are not counted apart), and each entry leaving the stack counts
+//   it, popped or dropped beyond the hit.
+constexpr uint kSlotBytes = 2u * kTexelBytes;
+constexpr uint kStackEntryBytes = uint(2 * sizeof(uint) + sizeof(float));
+
 template <class Tests>
 inline bool traverseWide(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
                          Counters& c) {
@@ -19,6 +31,7 @@ inline bool traverseWide(const Storage& s, Ray ray, float tMin, float tMax, bool
   vec3 bmin, bmax;
   uint link, count;
   float tEnter;
+  c.nodeBytes += kSlotBytes;
   loadSlot(s, 0u, bmin, bmax, link, count);
   c.boxTests++;
   if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
@@ -33,6 +46,7 @@ inline bool traverseWide(const Storage& s, Ray ray, float tMin, float tMax, bool
       for (uint i = 0u; i < children; ++i) {
         uint childLink, childCount;
         float enter;
+        c.nodeBytes += kSlotBytes;
         loadSlot(s, link + 2u * i, bmin, bmax, childLink, childCount);
         c.boxTests++;
         if (Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, enter)) {
@@ -59,12 +73,14 @@ inline bool traverseWide(const Storage& s, Ray ray, float tMin, float tMax, bool
             stackLink[j] = stackLink[j - 1];
             stackCount[j] = stackCount[j - 1];
             stackEnter[j] = stackEnter[j - 1];
+            c.stackBytes += 2u * kStackEntryBytes;  // the shifted entry read and written
             j--;
           }
           stackLink[j] = pushLink;
           stackCount[j] = pushCount;
           stackEnter[j] = pushEnter;
           sp++;
+          c.stackBytes += kStackEntryBytes;
         }
       }
       link = nearLink;
@@ -76,14 +92,19 @@ inline bool traverseWide(const Storage& s, Ray ray, float tMin, float tMax, bool
         float t;
         vec2 bary;
         c.triTests++;
+        c.triangleBytes += triangleTestBytes(s);
         if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
           hit = MeshHit{t, tri, bary};
           if (anyHit) return true;
         }
       }
-      while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+      while (sp > 0 && stackEnter[sp - 1] > hit.t) {
+        sp--;
+        c.stackBytes += kStackEntryBytes;
+      }
       if (sp == 0) break;
       sp--;
+      c.stackBytes += kStackEntryBytes;
       link = stackLink[sp];
       count = stackCount[sp];
     }

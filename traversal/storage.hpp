@@ -49,6 +49,12 @@ inline vec3 uintBitsToFloat(uvec3 v) { return vec3(uintBitsToFloat(v.x), uintBit
 inline uint floatBitsToUint(float v) { return std::bit_cast<uint>(v); }
 inline uvec3 floatBitsToUint(vec3 v) { return uvec3(floatBitsToUint(v.x), floatBitsToUint(v.y), floatBitsToUint(v.z)); }
 
+// Bytes one fetch of any stream reads: every stream is RGBA32UI texels (layout/layout.hpp), whatever
+// the storage kind (texture buffer, 2D texture, storage buffer). The mirrors' byte counters
+// (Counters::nodeBytes, ...) are texels fetched times this.
+constexpr uint kTexelBytes = uint(sizeof(uvec4));
+static_assert(kTexelBytes == 16, "RGBA32UI texels");
+
 inline uvec4 fetchNode(const Storage& s, int texel) { return s.bvh->nodes.at(size_t(texel)); }
 inline uvec4 fetchTriangle(const Storage& s, int texel) { return s.bvh->triangles.at(size_t(texel)); }
 inline uvec4 fetchAttribute(const Storage& s, int texel) { return s.bvh->attributes.at(size_t(texel)); }

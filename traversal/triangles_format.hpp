@@ -10,6 +10,18 @@
 
 namespace bvhlab::glsl {
 
+// Bytes one Tests::testTriangle fetches in the tree's triangle format, texel by texel as its module
+// reads them: raw 3 vertex texels; precomputed v0, two edges and the normal (4 texels); indexed the
+// index texel, then its 3 VERTEX texels (4 texels; shared vertices are fetched again per triangle,
+// as the GLSL does). Hit attributes (loadAttributes) are fetched after traversal, not counted here.
+inline uint triangleTestBytes(const Storage& s) {
+  switch (s.triangles) {
+    case TriangleFormat::Precomputed: return 4u * kTexelBytes;
+    case TriangleFormat::Indexed: return (1u + 3u) * kTexelBytes;
+    default: return 3u * kTexelBytes;
+  }
+}
+
 inline void loadTriangle(const Storage& s, int tri, vec3& v0, vec3& v1, vec3& v2) {
   switch (s.triangles) {
     case TriangleFormat::Precomputed: return precomputed::loadTriangle(s, tri, v0, v1, v2);
