@@ -1,7 +1,7 @@
 """The report's layout section: runs that differ in the `layout` axis (the texture layout the tree is packed
 in, each with its own kernels) or the `triangle_formats` axis. Per scene a table of layout x kernel (and
 triangle format; time with its interval, ratio to Embree for traced runs, visits, box tests where the kernel
-counts them, bytes per triangle), and one plot of bytes per triangle against time: what memory costs in
+counts them, bytes fetched per ray where the rows have them, bytes per triangle), and one plot of bytes per triangle against time: what memory costs in
 time."""
 import html
 import math
@@ -41,6 +41,11 @@ def section_layouts(page, data):
            "counts once, its child boxes as tests); bytes per triangle counts every stream all in (nodes, "
            "triangles, attributes). Rows sorted by time within each workload.")
     has_boxes = any(num(r.get("box_tests_per_ray")) is not None for r in rows)
+    has_fetched = any(num(r.get("node_bytes_per_ray")) is not None for r in rows)
+    if has_fetched:
+        page.p("<i>Node, triangle, stack bytes/ray</i> (traced runs): the bytes the kernel fetches per ray, counted "
+               "exactly by its C++ mirror over the same batch (a strided sample of it past 65,536 rays), with 95% "
+               "intervals of the mean (docs/layouts.md).")
     formats = len(data.values(rows, "triangle_format")) > 1
     for scene in data.values(rows, "scene"):
         srows = [r for r in rows if label(r, "scene") == scene]
@@ -58,6 +63,8 @@ def section_layouts(page, data):
                        mean_cell(r, "node_visits_per_ray")]
                 if has_boxes:
                     row.append(mean_cell(r, "box_tests_per_ray"))
+                if has_fetched:
+                    row += [mean_cell(r, k) for k in ("node_bytes_per_ray", "triangle_bytes_per_ray", "stack_bytes_per_ray")]
                 row += [mean_cell(r, "triangle_tests_per_ray"), fmt(r.get("bytes_per_triangle"), 4),
                         fmt(r.get("bytes"))]
                 cells.append(row)
@@ -65,6 +72,8 @@ def section_layouts(page, data):
                   "visits/ray [95%]"]
         if has_boxes:
             header.append("box tests/ray [95%]")
+        if has_fetched:
+            header += ["node bytes/ray [95%]", "triangle bytes/ray [95%]", "stack bytes/ray [95%]"]
         header += ["tests/ray [95%]", "bytes/triangle", "bytes"]
         page.table("layouts-table-" + slug(scene), header, cells)
     section_plot(page, "plot-layout-memory", "What memory costs in time", memory_plot(data, rows, formats),
