@@ -11,6 +11,7 @@
 
 #include "datasets/procedural.hpp"
 #include "datasets/scene_io.hpp"
+#include "layout/layout_wide.hpp"
 #include "layout/layouts.hpp"
 #include "layout/triangle_formats.hpp"
 #include "render/prepared_scene.hpp"
@@ -18,6 +19,7 @@
 #include "render/workloads.hpp"
 #include "traversal/embree_tracer.hpp"
 #include "traversal/kernels.hpp"
+#include "traversal/layout_wide.hpp"
 #include "layout_test_util.hpp"
 #include "require.hpp"
 
@@ -105,6 +107,64 @@ TEST(BytesFetched, HandTreeBvh4) {
   EXPECT_EQ(c.nodeBytes, uint64_t((1 + 2) * 2 * kTexelBytes));
   EXPECT_EQ(c.triangleBytes, uint64_t(3 * kTexelBytes));
   EXPECT_EQ(c.stackBytes, uint64_t(2 * (2 * sizeof(uint32_t) + sizeof(float))));
+}
+
+// bvh4 with three leaves one behind the other along +z, under one wide node whose slots hold them near
+// to far (checked below from the packed slots): the first met child is walked next, the second is
+// pushed, the third is pushed below it, which shifts the second up (read and written). So: the root's
+// slot and three child slots, one triangle test, and 2 pushes + 1 shift (2 entries) + 2 drops.
+TEST(BytesFetched, HandTreeBvh4InsertionShift) {
+  Mesh m;
+  for (int k = 0; k < 3; ++k) {
+    const float z = float(k);
+    m.positions.insert(m.positions.end(), {{0, 0, z}, {1, 0, z + 0.1f}, {0, 1, z + 0.1f}});
+    m.triangles.push_back({uint32_t(3 * k), uint32_t(3 * k + 1), uint32_t(3 * k + 2)});
+  }
+  MeshSceneOptions mo;
+  mo.groundPlane = false;
+  const TriangleSoup soup = gatherTriangles(makeMeshScene(std::move(m), mo));
+  const std::vector<Aabb> boxes = triangleBoxes(soup);
+  Bvh bvh;
+  BvhNode root, a, bc, b, c;
+  for (const Aabb& box : boxes) root.bounds.grow(box);
+  root.left = 1;
+  root.right = 2;
+  a.bounds = boxes[0];
+  a.first = 0;
+  a.count = 1;
+  bc.bounds = boxes[1];
+  bc.bounds.grow(boxes[2]);
+  bc.left = 3;
+  bc.right = 4;
+  b.bounds = boxes[1];
+  b.first = 1;
+  b.count = 1;
+  c.bounds = boxes[2];
+  c.first = 2;
+  c.count = 1;
+  bvh.nodes = {root, a, bc, b, c};
+  bvh.primIndices = {0, 1, 2};
+  const PackedBvh packed = findLayout("bvh4").pack(bvh, soup);
+  // The precondition: one wide node of three leaf slots, near to far along +z.
+  const glsl::Storage st(packed);
+  glm::vec3 lo, hi;
+  uint32_t link, count;
+  glsl::loadSlot(st, 0u, lo, hi, link, count);
+  ASSERT_EQ(count, kWideInner + 3u);
+  float lastZ = -1.0f;
+  for (uint32_t i = 0; i < 3; ++i) {
+    uint32_t childLink, childCount;
+    glsl::loadSlot(st, link + 2u * i, lo, hi, childLink, childCount);
+    ASSERT_LT(childCount, kWideInner) << "slot " << i << " is a leaf";
+    ASSERT_GT(lo.z, lastZ) << "slots near to far";
+    lastZ = lo.z;
+  }
+  MeshHit hit;
+  const Counters k = traceOne(packed, "", hit);
+  const uint64_t entry = 2 * sizeof(uint32_t) + sizeof(float);
+  EXPECT_EQ(k.nodeBytes, uint64_t((1 + 3) * 2 * kTexelBytes));
+  EXPECT_EQ(k.triangleBytes, uint64_t(3 * kTexelBytes));
+  EXPECT_EQ(k.stackBytes, 2 * entry + 2 * entry + 2 * entry);
 }
 
 // cwbvh: the root's grid box (its first texel), then the root node whole (five texels:
