@@ -212,6 +212,9 @@ json fakeWithLayout(FakeRenderer& fake, RunRequest& req) {
   out["kernel"] = req.spec.axis("kernel") ? req.spec.axis("kernel")->label : "stack-ordered";
   out["bytes"] = perTriangle * out["triangles"].get<double>();
   out["bytes_per_triangle"] = perTriangle;
+  out["node_bytes_per_ray"] = layout == "v1" ? 96.25 : 680.5;  // bytes fetched per ray (trace's mirror pass)
+  out["triangle_bytes_per_ray"] = 48.0;
+  out["stack_bytes_per_ray"] = 24.0;
   out["frame_ms"] = out["frame_ms"].get<double>() * (layout == "v1" ? 1.0 : 0.8);
   return out;
 }
@@ -316,12 +319,13 @@ TEST_F(LayoutAxis, ReportHasALayoutTablePerSceneAndTheMemoryPlot) {
   runSweep(o);
   const std::string html = readText(writeReport(root / "out"));
   for (const char* id : {"id=\"layouts\"", "id=\"layouts-table-a\"", "id=\"layouts-table-b\"",
-                         "id=\"plot-layout-memory\"", "What memory costs in time", "bytes/triangle"})
+                         "id=\"plot-layout-memory\"", "What memory costs in time", "bytes/triangle", "node bytes/ray",
+                         "triangle bytes/ray", "stack bytes/ray"})
     EXPECT_NE(html.find(id), std::string::npos) << id;
   const size_t table = html.find("id=\"layouts-table-a\"");
   ASSERT_NE(table, std::string::npos);
   const std::string rows = html.substr(table, html.find("</table>", table) - table);
-  for (const char* cell : {"<b>bvh2-cb</b>", "<b>v1</b>", "<td>120.5</td>", "<td>148.9</td>"})
+  for (const char* cell : {"<b>bvh2-cb</b>", "<b>v1</b>", "<td>120.5</td>", "<td>148.9</td>", "<td>680.5</td>", "<td>96.25</td>"})
     EXPECT_NE(rows.find(cell), std::string::npos) << cell << " in " << rows;
   EXPECT_EQ(html.find("Plot omitted: no run reported bytes_per_triangle"), std::string::npos);
 }
@@ -371,6 +375,7 @@ rays = "primary"
     EXPECT_GT(row["bytes_per_triangle"].get<double>(), 0.0);
     if (row.value("workload", json()).is_string()) {
       EXPECT_EQ(row.value("hit_mismatches", -1), 0) << layout;
+      EXPECT_GT(row.value("node_bytes_per_ray", 0.0), 0.0) << layout << ": trace's mirror pass counts bytes";
     }
     bytes[layout] = row["bytes_per_triangle"].get<double>();
   }
