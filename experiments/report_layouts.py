@@ -1,8 +1,8 @@
 """The report's layout section: runs that differ in the `layout` axis (the texture layout the tree is packed
 in, each with its own kernels) or the `triangle_formats` axis. Per scene a table of layout x kernel (and
 triangle format; time with its interval, ratio to Embree for traced runs, visits, box tests where the kernel
-counts them, bytes fetched per ray where the rows have them, bytes per triangle), and one plot of bytes per triangle against time: what memory costs in
-time."""
+counts them, bytes fetched per ray where the rows have them, bytes per triangle), and one plot of bytes per
+triangle against time: what memory costs in time."""
 import html
 import math
 
@@ -64,7 +64,7 @@ def section_layouts(page, data):
                 if has_boxes:
                     row.append(mean_cell(r, "box_tests_per_ray"))
                 if has_fetched:
-                    row += [mean_cell(r, k) for k in ("node_bytes_per_ray", "triangle_bytes_per_ray", "stack_bytes_per_ray")]
+                    row += [mean_cell(r, k + "_bytes_per_ray") for k in ("node", "triangle", "stack")]
                 row += [mean_cell(r, "triangle_tests_per_ray"), fmt(r.get("bytes_per_triangle"), 4),
                         fmt(r.get("bytes"))]
                 cells.append(row)

@@ -99,9 +99,9 @@ struct BytesFetched {
 };
 BytesFetched mirrorBytesFetched(const PackedBvh& packed, const std::string& kernel, Robustness robust, bool anyHit,
                                 const std::vector<BatchRay>& rays, size_t maxRays);
-// The sample trace's mirror pass counts bytes over: 2^16 rays take the mirror about a second on one
-// core for the bunny's diffuse rays; the per-ray means then have intervals far narrower than the
-// differences between layouts.
+// The most rays trace's mirror pass counts bytes over (a strided sample past it): a fraction of a
+// second on one core for the bunny's diffuse rays (test_bytes_fetched traces 50,000 through two
+// mirrors), and per-ray means whose intervals are far narrower than the differences between layouts.
 constexpr size_t kBytesMirrorRays = size_t(1) << 16;
 
 // The object `trace --json` prints. Traces once more with the counters (`gl` must be copy 0, whose
