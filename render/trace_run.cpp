@@ -267,16 +267,20 @@ nlohmann::json traceResult(const TraceCommand& c, const TraceSetup& s, const Tra
   // thousands of rays; the counts are bounded, so the central limit theorem applies). Another builder
   // traced with the same seed gets the same rays: comparing two such means with these intervals as if
   // independent is conservative (the per-ray counts are positively correlated).
-  const auto meanInterval = [n](double sum, double sumSq, const char* key, nlohmann::json& out) {
-    if (n < 2) {
+  // (The bytes below are over the mirror's sample of the rays, so the count is a parameter.)
+  const auto meanIntervalOver = [](double count, double sum, double sumSq, const char* key, nlohmann::json& out) {
+    if (count < 2) {
       out[std::string(key) + "_ci_low"] = nullptr;
       out[std::string(key) + "_ci_high"] = nullptr;
       return;
     }
-    const double mean = sum / n, var = std::max(0.0, (sumSq - n * mean * mean) / (n - 1.0));
-    const double half = 1.959964 * std::sqrt(var / n);  // the normal distribution's 97.5% quantile
+    const double mean = sum / count, var = std::max(0.0, (sumSq - count * mean * mean) / (count - 1.0));
+    const double half = 1.959964 * std::sqrt(var / count);  // the normal distribution's 97.5% quantile
     out[std::string(key) + "_ci_low"] = mean - half;
     out[std::string(key) + "_ci_high"] = mean + half;
+  };
+  const auto meanInterval = [&](double sum, double sumSq, const char* key, nlohmann::json& out) {
+    meanIntervalOver(double(n), sum, sumSq, key, out);
   };
   meanInterval(double(visits), visitsSq, "node_visits_per_ray", j);
   meanInterval(double(tests), testsSq, "triangle_tests_per_ray", j);
@@ -288,21 +292,11 @@ nlohmann::json traceResult(const TraceCommand& c, const TraceSetup& s, const Tra
   j["bytes_source"] = "mirror";
   j["bytes_rays"] = fetched.rays;
   j["bytes_ray_stride"] = fetched.stride;
-  {
+  const char* byteKeys[3] = {"node_bytes_per_ray", "triangle_bytes_per_ray", "stack_bytes_per_ray"};
+  for (int f = 0; f < 3; ++f) {
     const double m = double(fetched.rays);
-    const char* keys[3] = {"node_bytes_per_ray", "triangle_bytes_per_ray", "stack_bytes_per_ray"};
-    for (int f = 0; f < 3; ++f) {
-      j[keys[f]] = m > 0 ? fetched.sum[f] / m : 0.0;
-      if (m < 2) {
-        j[std::string(keys[f]) + "_ci_low"] = nullptr;
-        j[std::string(keys[f]) + "_ci_high"] = nullptr;
-        continue;
-      }
-      const double mean = fetched.sum[f] / m, var = std::max(0.0, (fetched.sumSq[f] - m * mean * mean) / (m - 1.0));
-      const double half = 1.959964 * std::sqrt(var / m);  // as meanInterval above
-      j[std::string(keys[f]) + "_ci_low"] = mean - half;
-      j[std::string(keys[f]) + "_ci_high"] = mean + half;
-    }
+    j[byteKeys[f]] = m > 0 ? fetched.sum[f] / m : 0.0;
+    meanIntervalOver(m, fetched.sum[f], fetched.sumSq[f], byteKeys[f], j);
   }
   j["ray_cost"] = prepared->cost.traversalCost * visitsPerRay + prepared->cost.intersectionCost * testsPerRay;
   j["stack_overflow_rays"] = overflows;

@@ -12,7 +12,7 @@ namespace bvhlab::glsl::bvh2cb_stack {
 // - triangle: every triangle test fetches the record in the tree's format (triangleTestBytes);
 // - stack: an entry is a link, a count and an entry distance (uint + uint + float, 12 bytes); each
 //   push counts it, and so does each entry leaving the stack, popped or dropped beyond the hit.
-constexpr uint kNodeBytes = 4u * kTexelBytes;
+constexpr uint kNodeBytes = bvhlab::kBvh2cbRecordTexels * kTexelBytes;
 constexpr uint kStackEntryBytes = uint(2 * sizeof(uint) + sizeof(float));
 
 template <class Tests>

@@ -17,7 +17,7 @@ namespace bvhlab::glsl::cwbvh_stack {
 //   comparisons' reads of stackEnter are not counted apart), and each entry leaving the stack counts
 //   it, popped or dropped beyond the hit.
 constexpr uint kRootBoxBytes = 1u * kTexelBytes;
-constexpr uint kNodeBytes = 5u * kTexelBytes;
+constexpr uint kNodeBytes = bvhlab::kCwbvhNodeTexels * kTexelBytes;
 constexpr uint kStackEntryBytes = uint(2 * sizeof(uint) + sizeof(float));
 
 constexpr uint kCwbvhInner = 0x80000000u;

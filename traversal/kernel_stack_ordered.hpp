@@ -13,7 +13,7 @@ namespace bvhlab::glsl::stack_ordered {
 // - stack: an entry is a node index and its entry distance (int + float, 8 bytes); each push counts
 //   it, and so does each entry leaving the stack, whether popped to be visited or dropped because
 //   its entry distance lies beyond the closest hit.
-constexpr uint kNodeBytes = 2u * kTexelBytes;
+constexpr uint kNodeBytes = bvhlab::kNodeTexels * kTexelBytes;
 constexpr uint kStackEntryBytes = uint(sizeof(int) + sizeof(float));
 
 template <class Tests>

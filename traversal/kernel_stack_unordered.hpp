@@ -11,7 +11,7 @@ namespace bvhlab::glsl::stack_unordered {
 //   nodeBytes = 32 x nodeVisits;
 // - triangle: every triangle test fetches the record in the tree's format (triangleTestBytes);
 // - stack: an entry is one int (4 bytes); the root's push, each child's push and each pop count it.
-constexpr uint kNodeBytes = 2u * kTexelBytes;
+constexpr uint kNodeBytes = bvhlab::kNodeTexels * kTexelBytes;
 constexpr uint kStackEntryBytes = uint(sizeof(int));
 
 template <class Tests>

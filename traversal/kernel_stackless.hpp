@@ -11,7 +11,7 @@ namespace bvhlab::glsl::stackless {
 //   nodeBytes = 32 x nodeVisits;
 // - triangle: every triangle test fetches the record in the tree's format (triangleTestBytes);
 // - stack: none (escape links); stackBytes stays 0.
-constexpr uint kNodeBytes = 2u * kTexelBytes;
+constexpr uint kNodeBytes = bvhlab::kNodeTexels * kTexelBytes;
 
 template <class Tests>
 inline bool traverseStackless(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,

@@ -15,7 +15,7 @@ namespace bvhlab::glsl::wide_stack {
 //   push counts it, each entry the insertion sort shifts up counts it twice (read and written; the
 //   comparisons' reads of stackEnter are not counted apart), and each entry leaving the stack counts
 //   it, popped or dropped beyond the hit.
-constexpr uint kSlotBytes = 2u * kTexelBytes;
+constexpr uint kSlotBytes = bvhlab::kWideSlotTexels * kTexelBytes;
 constexpr uint kStackEntryBytes = uint(2 * sizeof(uint) + sizeof(float));
 
 template <class Tests>

@@ -16,9 +16,9 @@ namespace bvhlab::glsl {
 // as the GLSL does). Hit attributes (loadAttributes) are fetched after traversal, not counted here.
 inline uint triangleTestBytes(const Storage& s) {
   switch (s.triangles) {
-    case TriangleFormat::Precomputed: return 4u * kTexelBytes;
-    case TriangleFormat::Indexed: return (1u + 3u) * kTexelBytes;
-    default: return 3u * kTexelBytes;
+    case TriangleFormat::Precomputed: return bvhlab::kPrecomputedTriangleTexels * kTexelBytes;
+    case TriangleFormat::Indexed: return (bvhlab::kIndexedTriangleTexels + 3u * bvhlab::kVertexTexels) * kTexelBytes;
+    default: return bvhlab::kTriangleTexels * kTexelBytes;
   }
 }
 
