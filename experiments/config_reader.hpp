@@ -36,7 +36,7 @@ inline const std::vector<std::string>& kRobustness = robustnessNames();
 const std::vector<std::string> kRobustness = {"fast", "watertight"};
 #endif
 const std::vector<std::string> kBranching = {"full", "report"};
-const std::vector<std::string> kSmaaEdges = {"luma", "color"};
+const std::vector<std::string> kSmaaEdges = {"luma", "color", "geometry"};
 const std::vector<std::string> kTextureLod = {"none", "cones", "cones-aniso"};
 const std::vector<std::string> kViews = {"shaded", "normal", "depth", "primid", "visits"};
 const std::vector<std::string> kBackends = {"osmesa", "egl"};

@@ -127,7 +127,7 @@ GpuRenderer::~GpuRenderer() {
   if (!programs_) glDeleteProgram(program_);  // a cached program belongs to its cache
   glDeleteVertexArrays(1, &vao_);
   glDeleteFramebuffers(1, &fbo_);
-  GLuint textures[] = {colorTex_, statsTex_, boxTestsTex_, streams_[0], streams_[1], streams_[2], streams_[3], texArray_, worldTex_};
+  GLuint textures[] = {colorTex_, statsTex_, boxTestsTex_, primaryIdTex_, streams_[0], streams_[1], streams_[2], streams_[3], texArray_, worldTex_};
   glDeleteTextures(GLsizei(std::size(textures)), textures);
   glDeleteBuffers(4, streamBuffers_);
   glDeleteBuffers(1, &ubo_);
@@ -280,6 +280,8 @@ void GpuRenderer::createFramebuffer() {
   glCreateTextures(GL_TEXTURE_2D, 1, &colorTex_);
   glTextureStorage2D(colorTex_, 1, GL_RGBA8, frame_.width, frame_.height);
   glNamedFramebufferTexture(fbo_, GL_COLOR_ATTACHMENT0, colorTex_, 0);
+  // main.glsl's outputs: 0 colour, 1 and 2 the counters (COUNT_STATS), 3 the primary id (PRIMARY_ID_OUT).
+  GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_NONE, GL_NONE, GL_NONE};
   if (options_.countStats) {
     glCreateTextures(GL_TEXTURE_2D, 1, &statsTex_);
     glTextureStorage2D(statsTex_, 1, GL_RGBA32UI, frame_.width, frame_.height);
@@ -287,11 +289,20 @@ void GpuRenderer::createFramebuffer() {
     glCreateTextures(GL_TEXTURE_2D, 1, &boxTestsTex_);
     glTextureStorage2D(boxTestsTex_, 1, GL_R32UI, frame_.width, frame_.height);
     glNamedFramebufferTexture(fbo_, GL_COLOR_ATTACHMENT2, boxTestsTex_, 0);
-    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
-    glNamedFramebufferDrawBuffers(fbo_, 3, bufs);
-  } else {
-    glNamedFramebufferDrawBuffer(fbo_, GL_COLOR_ATTACHMENT0);
+    bufs[1] = GL_COLOR_ATTACHMENT1;
+    bufs[2] = GL_COLOR_ATTACHMENT2;
   }
+  if (options_.primaryIdOut) {
+    glCreateTextures(GL_TEXTURE_2D, 1, &primaryIdTex_);
+    glTextureStorage2D(primaryIdTex_, 1, GL_R32UI, frame_.width, frame_.height);
+    // An integer texture is incomplete (texelFetch reads 0) under the default mipmapped min filter.
+    glTextureParameteri(primaryIdTex_, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(primaryIdTex_, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glNamedFramebufferTexture(fbo_, GL_COLOR_ATTACHMENT3, primaryIdTex_, 0);
+    bufs[3] = GL_COLOR_ATTACHMENT3;
+  }
+  const GLsizei drawn = options_.primaryIdOut ? 4 : options_.countStats ? 3 : 1;
+  glNamedFramebufferDrawBuffers(fbo_, drawn, bufs);
   if (glCheckNamedFramebufferStatus(fbo_, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw std::runtime_error("offscreen framebuffer incomplete");
 }
@@ -351,6 +362,16 @@ std::vector<uint32_t> GpuRenderer::readBoxTests() const {
   glReadBuffer(GL_COLOR_ATTACHMENT2);
   glReadPixels(0, 0, frame_.width, frame_.height, GL_RED_INTEGER, GL_UNSIGNED_INT, px.data());
   checkGl("readBoxTests");
+  return px;
+}
+
+std::vector<uint32_t> GpuRenderer::readPrimaryIds() const {
+  if (!options_.primaryIdOut) throw std::logic_error("readPrimaryIds needs a renderer built with primaryIdOut");
+  std::vector<uint32_t> px(size_t(frame_.width) * frame_.height);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
+  glReadBuffer(GL_COLOR_ATTACHMENT3);
+  glReadPixels(0, 0, frame_.width, frame_.height, GL_RED_INTEGER, GL_UNSIGNED_INT, px.data());
+  checkGl("readPrimaryIds");
   return px;
 }
 

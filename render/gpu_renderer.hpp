@@ -57,9 +57,12 @@ class GpuRenderer {
   std::vector<uint8_t> readColor() const;      // RGBA8, rows bottom-up
   std::vector<glm::uvec4> readStats() const;   // needs ShaderOptions::countStats
   std::vector<uint32_t> readBoxTests() const;  // per pixel, main.glsl's o_boxTests; needs countStats
+  std::vector<uint32_t> readPrimaryIds() const;  // per pixel, primary hit id + 1 (0: miss); needs primaryIdOut
   const AssembledShader& shader() const { return shader_; }
   int programIndex() const { return programIndex_; }  // its index in the cache; -1: its own program
   unsigned colorTexture() const { return colorTex_; }  // RGBA8 result, for post passes and viewers
+  // R32UI primary hit id + 1 per pixel (0: miss); 0 unless built with ShaderOptions::primaryIdOut.
+  unsigned primaryIdTexture() const { return primaryIdTex_; }
   void setCamera(const Camera& camera);
 
  private:
@@ -75,6 +78,7 @@ class GpuRenderer {
   ProgramCache* programs_ = nullptr;
   int programIndex_ = -1;
   unsigned program_ = 0, vao_ = 0, fbo_ = 0, colorTex_ = 0, statsTex_ = 0, boxTestsTex_ = 0, ubo_ = 0;
+  unsigned primaryIdTex_ = 0;  // R32UI, with ShaderOptions::primaryIdOut
   unsigned streams_[4] = {0, 0, 0, 0}, streamBuffers_[4] = {0, 0, 0, 0};  // node, triangle, attribute, vertex
   unsigned texArray_ = 0, worldTex_ = 0;
 };

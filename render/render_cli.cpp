@@ -74,7 +74,7 @@ void addRenderOptions(CLI::App& app, RenderCommand& rc, RenderCliText& text) {
   app.add_option("--exposure", rc.exposure, "exposure multiplier");
   app.add_option("--aa", rc.aa, "anti-aliasing: none | smaa | smaa-low|medium|high|ultra | ssaa4 | ssaa16");
   app.add_option("--smaa-preset", rc.smaaPreset, "SMAA quality: low | medium | high | ultra");
-  app.add_option("--smaa-edges", rc.smaaEdges, "SMAA edge detection: luma (default) | color");
+  app.add_option("--smaa-edges", rc.smaaEdges, "SMAA edge detection: luma (default) | color | geometry (luma, between different primitives only)");
   app.add_option("--texture-lod", rc.textureLod,
                  "texture level of detail: none (level 0) | cones (ray cones) | cones-aniso (ray cones, anisotropic)");
   app.add_option("--robust", rc.robust,

@@ -38,7 +38,7 @@ struct RenderCommand {
   std::optional<float> exposure;
   std::string aa = "none";          // none | smaa | smaa-PRESET | ssaa4 | ssaa16 (regular 2x2 / 4x4 grid in the tracer)
   std::string smaaPreset = "high";  // low | medium | high | ultra
-  std::string smaaEdges = "luma";   // luma | color: what SMAA's edge detection compares
+  std::string smaaEdges = "luma";   // luma | color | geometry: what SMAA's edge detection compares
   std::string textureLod = "none";  // none | cones | cones-aniso (shaders/texture_lod.glsl)
   std::string robust = "watertight";  // one of robustnessNames(); the default is ShaderOptions's (see there)
   bool cpu = false;  // render with the C++ mirror instead of GL

@@ -117,10 +117,13 @@ RenderSetup setupRender(const RenderCommand& cmd, const Scene* loaded) {
   s.smaaOn = cmd.aa == "smaa" || smaaNamed;
   s.smaaPreset = smaaNamed ? cmd.aa.substr(5) : cmd.smaaPreset;
   s.smaa = SmaaSettings::preset(parseSmaaPreset(s.smaaPreset));
-  if (cmd.smaaEdges == "color")
-    s.smaa.edgeMode = SmaaEdgeMode::Color;
-  else if (cmd.smaaEdges != "luma")
-    throw std::invalid_argument("--smaa-edges: unknown mode '" + cmd.smaaEdges + "' (valid: luma, color)");
+  try {
+    s.smaa.edgeMode = parseSmaaEdgeMode(cmd.smaaEdges);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--smaa-edges: ") + e.what());
+  }
+  // Geometry edges read the tracer's primary id: an extra R32UI target, written only then.
+  so.primaryIdOut = s.smaaOn && s.smaa.edgeMode == SmaaEdgeMode::Geometry;
   if (s.smaaOn && cmd.cpu) throw std::invalid_argument("--aa smaa runs on the GPU only (no --cpu)");
 
   // Refused now, not after the frames are rendered.
@@ -167,7 +170,7 @@ double GpuJob::frame(int index, double& aaMs) {
   aaMs = 0.0;
   if (!smaa_) return ms;
   const auto start = std::chrono::steady_clock::now();
-  smaa_->apply(gpu_->colorTexture());
+  smaa_->apply(gpu_->colorTexture(), gpu_->primaryIdTexture());
   glFinish();
   aaMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return ms + aaMs;

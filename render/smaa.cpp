@@ -55,6 +55,13 @@ SmaaPreset parseSmaaPreset(const std::string& name) {
   throw std::invalid_argument("unknown SMAA preset '" + name + "' (valid: low, medium, high, ultra)");
 }
 
+SmaaEdgeMode parseSmaaEdgeMode(const std::string& name) {
+  if (name == "luma") return SmaaEdgeMode::Luma;
+  if (name == "color") return SmaaEdgeMode::Color;
+  if (name == "geometry") return SmaaEdgeMode::Geometry;
+  throw std::invalid_argument("unknown mode '" + name + "' (valid: luma, color, geometry)");
+}
+
 const char* smaaPresetName(SmaaPreset preset) {
   switch (preset) {
     case SmaaPreset::Low: return "low";
@@ -91,6 +98,7 @@ SmaaPass::SmaaPass(int width, int height, const SmaaSettings& settings)
 
   std::string defines = "#define SMAA_THRESHOLD " + std::to_string(settings.threshold) + "\n" +
                         "#define SMAA_EDGE_COLOR " + (settings.edgeMode == SmaaEdgeMode::Color ? "1" : "0") +
+                        "\n#define SMAA_EDGE_GEOMETRY " + (settings.edgeMode == SmaaEdgeMode::Geometry ? "1" : "0") +
                         "\n#define SMAA_MAX_SEARCH_STEPS " + std::to_string(settings.maxSearchSteps) +
                         "\n#define SMAA_CORNER_ROUNDING " + std::to_string(settings.cornerRounding) +
                         "\n#define SMAA_MAX_SEARCH_STEPS_DIAG " + std::to_string(settings.maxDiagSearchSteps) + "\n";
@@ -150,7 +158,12 @@ SmaaPass::~SmaaPass() {
   glDeleteSamplers(1, &linearClamp_);
 }
 
-void SmaaPass::runPass(int pass, unsigned colorTexture) {
+void SmaaPass::checkPrimaryId(unsigned primaryIdTexture) const {
+  if (settings_.edgeMode == SmaaEdgeMode::Geometry && primaryIdTexture == 0)
+    throw std::invalid_argument("SMAA geometry edges need the tracer's primary id texture (ShaderOptions::primaryIdOut)");
+}
+
+void SmaaPass::runPass(int pass, unsigned colorTexture, unsigned primaryIdTexture) {
   const GLfloat zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
   glViewport(0, 0, width_, height_);
   glDisable(GL_BLEND);
@@ -162,6 +175,10 @@ void SmaaPass::runPass(int pass, unsigned colorTexture) {
     glUseProgram(edgesProgram_);
     glBindTextureUnit(kUnit0, colorTexture);
     glBindSampler(kUnit0, 0);
+    if (settings_.edgeMode == SmaaEdgeMode::Geometry) {
+      glBindTextureUnit(kUnit1, primaryIdTexture);
+      glBindSampler(kUnit1, 0);
+    }
   } else if (pass == 1) {
     glBindFramebuffer(GL_FRAMEBUFFER, weightsFbo_);
     glClearNamedFramebufferfv(weightsFbo_, GL_COLOR, 0, zero);
@@ -189,17 +206,19 @@ void SmaaPass::runPass(int pass, unsigned colorTexture) {
   checkGl("SmaaPass pass");
 }
 
-unsigned SmaaPass::apply(unsigned colorTexture) {
-  for (int pass = 0; pass < 3; ++pass) runPass(pass, colorTexture);
+unsigned SmaaPass::apply(unsigned colorTexture, unsigned primaryIdTexture) {
+  checkPrimaryId(primaryIdTexture);
+  for (int pass = 0; pass < 3; ++pass) runPass(pass, colorTexture, primaryIdTexture);
   return outputTex_;
 }
 
-std::array<double, 3> SmaaPass::applyProfiled(unsigned colorTexture) {
+std::array<double, 3> SmaaPass::applyProfiled(unsigned colorTexture, unsigned primaryIdTexture) {
+  checkPrimaryId(primaryIdTexture);
   std::array<double, 3> ms{};
   glFinish();  // whatever was queued before (the tracer's frame) is not the passes' time
   for (int pass = 0; pass < 3; ++pass) {
     const auto start = std::chrono::steady_clock::now();
-    runPass(pass, colorTexture);
+    runPass(pass, colorTexture, primaryIdTexture);
     glFinish();
     ms[pass] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   }

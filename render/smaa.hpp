@@ -13,7 +13,13 @@
 namespace bvhlab {
 
 enum class SmaaPreset { Low, Medium, High, Ultra };
-enum class SmaaEdgeMode { Luma, Color };
+// What the edge pass compares: luma (the paper's default), colour, or luma only between pixels whose
+// primary rays hit different primitives (Geometry: needs the tracer's primary id, ShaderOptions::
+// primaryIdOut). Geometry leaves the contrast inside a primitive alone: a texture's own edges, which
+// texture LOD (--texture-lod) filters, are not blurred a second time.
+enum class SmaaEdgeMode { Luma, Color, Geometry };
+// "luma" | "color" | "geometry"; throws std::invalid_argument naming the valid ones.
+SmaaEdgeMode parseSmaaEdgeMode(const std::string& name);
 
 SmaaPreset parseSmaaPreset(const std::string& name);  // throws std::invalid_argument naming the valid ones
 const char* smaaPresetName(SmaaPreset preset);
@@ -42,10 +48,12 @@ class SmaaPass {
   // Runs the three passes on `colorTexture` (a GL_TEXTURE_2D, RGBA8 holding sRGB-encoded values, of
   // this pass's size, e.g. the tracer's colour attachment). Clears its targets first. Returns the
   // output texture (RGBA8, sRGB-encoded values), owned by this object. Does not wait for the GPU.
-  unsigned apply(unsigned colorTexture);
+  // With SmaaEdgeMode::Geometry, `primaryIdTexture` is the tracer's R32UI primary id
+  // (GpuRenderer::primaryIdTexture()); std::invalid_argument if it is 0 then.
+  unsigned apply(unsigned colorTexture, unsigned primaryIdTexture = 0);
   // The same, waiting for each pass (glFinish) and returning its wall-clock ms: edges, weights, blend.
   // For profiling and the viewer's overlay; apply() leaves the passes pipelined.
-  std::array<double, 3> applyProfiled(unsigned colorTexture);
+  std::array<double, 3> applyProfiled(unsigned colorTexture, unsigned primaryIdTexture = 0);
   // Convenience: uploads RGBA8 bytes (bottom-up, 4*w*h), applies, waits and reads the result back.
   std::vector<uint8_t> apply(const std::vector<uint8_t>& rgbaBottomUp);
 
@@ -66,7 +74,8 @@ class SmaaPass {
   unsigned edgesFbo_ = 0, weightsFbo_ = 0, outputFbo_ = 0;
   unsigned linearClamp_ = 0;  // sampler: bilinear, clamped (edges and area fetches)
 
-  void runPass(int pass, unsigned colorTexture);  // 0: edges, 1: weights, 2: blend
+  void runPass(int pass, unsigned colorTexture, unsigned primaryIdTexture);  // 0: edges, 1: weights, 2: blend
+  void checkPrimaryId(unsigned primaryIdTexture) const;
 };
 
 }  // namespace bvhlab

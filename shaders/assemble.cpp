@@ -134,6 +134,7 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   d << "#define SSAA_GRID " << o.ssaaGrid << "\n";
   if (uber) d << "#define UBER 1\n";
   if (o.countStats) d << "#define COUNT_STATS 1\n";
+  if (o.primaryIdOut) d << "#define PRIMARY_ID_OUT 1\n";
   if (o.robust.offset == OriginOffset::Ulp) d << "#define RAY_OFFSET_ULP 1\n";
   if (o.reinhard) d << "#define TONEMAP_REINHARD 1\n";
   for (int k = 0; k < 6; ++k)

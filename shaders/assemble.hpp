@@ -54,6 +54,9 @@ struct ShaderOptions {
   Storage storage = Storage::Tbo;
   int bvhStackSize = 64;  // from the packed tree depth (see traversal/kernels.hpp)
   bool countStats = false;
+  // Writes the primary ray's hit id (+1, 0 = miss) to colour attachment 3: SMAA's geometry edges
+  // (render/smaa.hpp) keep only edges between different primitives. One SSAA sample's id (the last).
+  bool primaryIdOut = false;
   bool reinhard = false;
   bool uber = false;
   int ssaaGrid = 1;  // shaded view: ssaaGrid^2 regular sub-pixel rays per pixel (1 = off)

@@ -22,6 +22,10 @@ layout(location = 1) out uvec4 o_stats;
 // ray-box tests (g_boxTests) of the pixel's rays: a wide node visit tests several boxes
 layout(location = 2) out uint o_boxTests;
 #endif
+#ifdef PRIMARY_ID_OUT
+// The primary ray's hit id + 1 (0: miss), for SMAA's geometry edges (smaa_edges.glsl).
+layout(location = 3) out uint o_primaryId;
+#endif
 
 Ray cameraRay(vec2 pixel) {
   vec2 ndc = 2.0 * pixel / u_resolution - 1.0;
@@ -110,5 +114,12 @@ void main() {
   o_stats = uvec4(g_nodeVisits, g_triTests, g_meshRays | (g_stackOverflow ? 0x80000000u : 0u),
                   uint(primaryId + 1) | (nonFiniteValue ? 0x80000000u : 0u));
   o_boxTests = g_boxTests;
+#endif
+#ifdef PRIMARY_ID_OUT
+#if VIEW == VIEW_SHADED
+  o_primaryId = uint(g_primaryId + 1);
+#else
+  o_primaryId = uint(primaryId + 1);
+#endif
 #endif
 }

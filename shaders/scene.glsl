@@ -37,6 +37,12 @@ layout(std140, binding = 0) uniform SceneBlock {
   vec4 u_ambient;  // world ambient colour
 };
 
+#ifdef PRIMARY_ID_OUT
+// The primary ray's hit id (Hit::id; -1: miss), set by radiance() and written by main.glsl for
+// SMAA's geometry edges (render/smaa.hpp).
+int g_primaryId = -1;
+#endif
+
 struct Hit {
   float t;
   vec3 normal;      // unit shading normal, outward

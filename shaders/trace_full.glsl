@@ -32,7 +32,11 @@ vec3 radiance(Ray primary) {
   while (sp > 0) {
     PathVertex v = stack[--sp];
     Hit h;
-    if (!intersectScene(v.ray, INF, h)) {
+    const bool found = intersectScene(v.ray, INF, h);
+#ifdef PRIMARY_ID_OUT
+    if (v.depth == 1) g_primaryId = found ? h.id : -1;
+#endif
+    if (!found) {
 #ifdef TEXTURE_LOD
       color += v.weight * worldRadianceCone(v.ray.dir, v.cone.y);
 #else

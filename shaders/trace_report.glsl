@@ -37,7 +37,11 @@ vec3 radiance(Ray primary) {
 #endif
   for (int depth = 1; depth <= MAX_DEPTH; ++depth) {
     Hit h;
-    if (!intersectScene(ray, INF, h)) {
+    const bool found = intersectScene(ray, INF, h);
+#ifdef PRIMARY_ID_OUT
+    if (depth == 1) g_primaryId = found ? h.id : -1;
+#endif
+    if (!found) {
 #ifdef TEXTURE_LOD
       color += weight * worldRadianceCone(ray.dir, cone.y);
 #else

@@ -6,6 +6,7 @@
 #include <functional>
 #include <map>
 
+#include <glad/gl.h>
 #include <gtest/gtest.h>
 
 #include "datasets/image_io.hpp"
@@ -268,6 +269,49 @@ TEST(SmaaPasses, ColourEdgeDetectionFindsEdgesOfEqualLuma) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
       EXPECT_EQ(edges[size_t(y) * w + x], glm::vec2(x == column ? 1.0f : 0.0f, 0.0f)) << x << "," << y;
+}
+
+// Geometry edges: the same luma contrast counts as an edge only where the pixels' primary ids differ.
+// Two vertical luma edges (columns 9 and 21); the id changes only at column 21 (a silhouette), the
+// contrast at column 9 lies inside one primitive (a texture's edge). Luma finds both, geometry only 21.
+TEST(SmaaPasses, GeometryEdgesKeepOnlyContrastBetweenPrimitives) {
+  context();
+  const int w = 32, h = 20;
+  const auto img = makeImage(w, h, [&](int x, int) {
+    const uint8_t v = x < 9 ? 20 : x < 21 ? 230 : 20;
+    return glm::u8vec4(v, v, v, 255);
+  });
+  GLuint colour = 0, ids = 0;
+  glCreateTextures(GL_TEXTURE_2D, 1, &colour);
+  glTextureStorage2D(colour, 1, GL_RGBA8, w, h);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTextureSubImage2D(colour, 0, 0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, img.data());
+  std::vector<uint32_t> idData(size_t(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) idData[size_t(y) * w + x] = x < 21 ? 1u : 7u;
+  glCreateTextures(GL_TEXTURE_2D, 1, &ids);
+  glTextureStorage2D(ids, 1, GL_R32UI, w, h);
+  glTextureParameteri(ids, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(ids, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glTextureSubImage2D(ids, 0, 0, 0, w, h, GL_RED_INTEGER, GL_UNSIGNED_INT, idData.data());
+
+  SmaaSettings luma = SmaaSettings::preset(SmaaPreset::High), geometry = luma;
+  geometry.edgeMode = SmaaEdgeMode::Geometry;
+  SmaaPass byLuma(w, h, luma), byGeometry(w, h, geometry);
+  byLuma.apply(colour);
+  byGeometry.apply(colour, ids);
+  const std::vector<glm::vec2> lumaEdges = byLuma.readEdges(), geometryEdges = byGeometry.readEdges();
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      EXPECT_EQ(lumaEdges[i], glm::vec2(x == 9 || x == 21 ? 1.0f : 0.0f, 0.0f)) << x << "," << y;
+      EXPECT_EQ(geometryEdges[i], glm::vec2(x == 21 ? 1.0f : 0.0f, 0.0f)) << x << "," << y;
+    }
+  EXPECT_THROW(byGeometry.apply(colour), std::invalid_argument);  // no id texture
+  EXPECT_EQ(parseSmaaEdgeMode("geometry"), SmaaEdgeMode::Geometry);
+  EXPECT_THROW(parseSmaaEdgeMode("depth"), std::invalid_argument);
+  glDeleteTextures(1, &colour);
+  glDeleteTextures(1, &ids);
 }
 
 TEST(SmaaPasses, StairStepGetsTheWeightsTheAreaTexturePredicts) {

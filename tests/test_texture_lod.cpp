@@ -9,6 +9,7 @@
 
 #include "cli_run.hpp"
 #include "render/render_cli.hpp"
+#include "render/smaa.hpp"
 #include "render_fixture.hpp"
 #include "shaders/texture_mips.hpp"
 
@@ -323,6 +324,60 @@ TEST(TextureLod, MipChainAveragesEveryTexel) {
   EXPECT_EQ(chain[1].height, 1);
   EXPECT_FLOAT_EQ(chain[1].texels[0].x, 2.5f);
   EXPECT_THROW(buildMipChain(t, 4, 2), std::invalid_argument);
+}
+
+// SMAA's geometry edges (--smaa-edges geometry) read the primary ray's hit id, which the shaded view
+// writes from inside radiance() (both branching modes): it must equal the id the primid debug view
+// computes for the same pixel. SMAA then changes only pixels within two of an id boundary (an edge lies
+// between a pixel and its left or lower neighbour; the blend reads the weights of the four neighbours),
+// and does change some: the checker's own edges, filtered by cones, stay as they were.
+TEST(TextureLod, SmaaGeometryEdgesFollowThePrimaryIds) {
+  auto p = prepareToml(kTexturedScene);
+  const int w = 96, h = 54;
+  const FrameOptions f = smallFrame(p->scene, w, h);
+  glContext();
+  for (Branching branching : {Branching::Full, Branching::Report}) {
+    ShaderOptions shaded = tracerOptions(*p);
+    shaded.textureLod = TextureLod::ConesAniso;
+    shaded.branching = branching;
+    shaded.primaryIdOut = true;
+    ShaderOptions primid = shaded;
+    primid.view = View::PrimId;
+    primid.countStats = true;
+    GpuRenderer debug(*p, primid, f);
+    debug.drawFrame();
+    const std::vector<uint32_t> expected = debug.readPrimaryIds();
+    const std::vector<glm::uvec4> stats = debug.readStats();
+    GpuRenderer gpu(*p, shaded, f);
+    gpu.drawFrame();
+    const std::vector<uint32_t> ids = gpu.readPrimaryIds();
+    std::map<uint32_t, int> seen;
+    for (size_t i = 0; i < ids.size(); ++i) {
+      ASSERT_EQ(expected[i], stats[i].w & 0x7FFFFFFFu) << "pixel " << i;
+      ASSERT_EQ(ids[i], expected[i]) << branchingName(branching) << ", pixel " << i;
+      ++seen[ids[i]];
+    }
+    EXPECT_GE(seen.size(), 8u) << "the miss, the plane, five objects and the mesh-free scene's glass sphere";
+
+    SmaaSettings settings = SmaaSettings::preset(SmaaPreset::High);
+    settings.edgeMode = SmaaEdgeMode::Geometry;
+    SmaaPass smaa(w, h, settings);
+    smaa.apply(gpu.colorTexture(), gpu.primaryIdTexture());
+    const std::vector<uint8_t> in = gpu.readColor(), out = smaa.readOutput();
+    const auto id = [&](int x, int y) { return ids[size_t(std::clamp(y, 0, h - 1)) * w + std::clamp(x, 0, w - 1)]; };
+    int changed = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t i = size_t(y) * w + x;
+        if (std::equal(in.begin() + 4 * i, in.begin() + 4 * i + 3, out.begin() + 4 * i)) continue;
+        ++changed;
+        bool boundary = false;
+        for (int dy = -2; dy <= 2; ++dy)
+          for (int dx = -2; dx <= 2; ++dx) boundary = boundary || id(x + dx, y + dy) != id(x, y);
+        EXPECT_TRUE(boundary) << "SMAA changed pixel " << x << "," << y << " far from any primitive boundary";
+      }
+    EXPECT_GT(changed, w) << "geometry edges blended nothing";
+  }
 }
 
 TEST(TextureLod, BadOptionValueIsRefused) {
