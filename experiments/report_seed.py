@@ -91,9 +91,17 @@ def seed_sections(page, data):
                 fmt(float(np.mean(a[..., :3]))), label(shallow, "depth"), fmt(float(np.mean(b[..., :3]))),
                 label(deep, "depth")))
 
-    # Fig. 12: SMAA comparison.
+    # Fig. 12: SMAA comparison; again with ray-cone texture LOD when the config has its sweep.
     page.section("seed-fig12", "Fig. 12 — SMAA off vs on", level=3)
-    rows = [r for r in in_sweep(data.ok, "fig8") if r.get("image")]
+    seed_fig12(page, data, "fig8", "")
+    if in_sweep(data.ok, "fig12-cones"):
+        seed_fig12(page, data, "fig12-cones", " with ray-cone texture LOD")
+
+
+def seed_fig12(page, data, sweep, what):
+    """SMAA off and on, side by side with a zoom on where SMAA changed the image most, from the runs of
+    `sweep` (aa none and smaa on one scene: the scene with the mesh first)."""
+    rows = [r for r in in_sweep(data.ok, sweep) if r.get("image")]
     pairs = []
     for s in data.values(rows, "scene"):
         off = [r for r in rows if label(r, "scene") == s and label(r, "aa") in ("none", None)]
@@ -101,7 +109,7 @@ def seed_sections(page, data):
         if off and on:
             pairs.append((s, off[0], on[0]))
     if not pairs:
-        page.note("No pair of fig8 runs with aa=none and aa=smaa on the same scene.")
+        page.note("No pair of %s runs with aa=none and aa=smaa on the same scene." % html.escape(sweep))
     # The seed shows the scene with the mesh; prefer it when there is one.
     pairs.sort(key=lambda p: 0 if (num(p[1].get("triangles")) or 0) > 0 else 1)
     for s, off, on in pairs[:1]:
@@ -122,7 +130,11 @@ def seed_sections(page, data):
             axs[1][col].set_title("%s, zoomed 4×" % name, fontsize=9)
         for ax in axs.flat:
             ax.set_axis_off()
-        page.figure(fig, "Fig. 12 measured (%s): the red window is where SMAA changed the image most." % html.escape(s))
+        lod = on.get("texture_lod")
+        setting = "" if not lod or lod == "none" else " (texture LOD %s, SMAA %s edges)" % (
+            html.escape(str(lod)), html.escape(str(on.get("smaa_edges") or "luma")))
+        page.figure(fig, "Fig. 12 measured%s%s (%s): the red window is where SMAA changed the image most." % (
+            what, setting, html.escape(s)))
         mae = float(np.mean(np.abs(a[..., :3] - b[..., :3]))) * (255.0 if a.dtype != np.uint8 else 1.0)
         page.p("SMAA changes the image by a mean of %s (8-bit units) and takes %s the frame time without it." % (
             fmt(mae), data.ratio_text(on, off)))
@@ -133,7 +145,8 @@ def aa_preset(row):
     v = label(row, "aa")
     v = "smaa-%s" % row["smaa_preset"] if v == "smaa" and row.get("smaa_preset") else v
     # Colour edge detection is a variant of the SMAA mode, not another scene setting (luma: the default).
-    v = v + " (colour edges)" if v.startswith("smaa") and row.get("smaa_edges") == "color" else v
+    edges = {"color": " (colour edges)", "geometry": " (geometry edges)"}.get(row.get("smaa_edges"), "")
+    v = v + edges if v.startswith("smaa") else v
     # Texture filtering by ray cones is part of the mode too (issue 40): "smaa-high + cones".
     lod = row.get("texture_lod")
     return v + " + " + str(lod) if lod and lod != "none" else v

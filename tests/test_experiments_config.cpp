@@ -210,9 +210,9 @@ leaf_sizes = [1, 4]
 TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
   const fs::path dir = fs::path(BVHLAB_SOURCE_DIR) / "experiments" / "configs";
   std::map<std::string, size_t> expectedRuns = {
-      {"quick.toml", 72},      {"seed-figures.toml", 18}, {"builders.toml", 1990}, {"accuracy-vs-time.toml", 30},
-      {"antialiasing.toml", 28},  // 2 scenes x (6 modes + colour edges + {none, smaa-high} x 3 texture LODs) + 2 references
-      {"texture-lod.toml", 14},   // 2 scenes x {none, smaa-high} x 3 texture LODs + 2 references
+      {"quick.toml", 72},      {"seed-figures.toml", 20}, {"builders.toml", 1990}, {"accuracy-vs-time.toml", 30},
+      {"antialiasing.toml", 34},  // 2 scenes x (6 modes + colour edges + ({none, smaa-high} + smaa-high geometry edges) x 3 texture LODs) + 2 references
+      {"texture-lod.toml", 20},   // 2 scenes x {none, smaa-high luma, smaa-high geometry} x 3 texture LODs + 2 references
       {"flythrough.toml", 15}, {"large.toml", 2}, {"bench.toml", 400},
       {"morton-grid.toml", 20}, {"ploc-top-down.toml", 12}, {"storage.toml", 15},
       {"sbvh-knobs.toml", 15},  // 3 scenes x (sah-binned + 4 sbvh settings)

@@ -262,11 +262,17 @@ def cpu_texture_lod():
         if len(base) != 1:
             raise DataError(f"{rel(cpath)}: {len(base)} runs of {s} without AA and without LOD, expected 1")
         e0 = num(base[0], "image_mae", cpath)
-        for aa in ("none", "smaa-high"):
+        # SMAA's edge detection: luma (the paper's) re-blurs the texture edges cones filtered; geometry
+        # edges leave them alone. Runs of an older result directory have luma only.
+        edges = [m for m in ("luma", "geometry")
+                 if any(x.get("aa") == "smaa-high" and (x.get("smaa_edges") or "luma") == m for x in mine)]
+        for aa, edge in [("none", None)] + [("smaa-high", m) for m in edges]:
             for lod in ("none", "cones", "cones-aniso"):
-                r = [x for x in mine if x.get("aa") == aa and x.get("texture_lod") == lod]
+                r = [x for x in mine if x.get("aa") == aa and x.get("texture_lod") == lod and
+                     (edge is None or (x.get("smaa_edges") or "luma") == edge)]
                 if len(r) != 1:
-                    raise DataError(f"{rel(cpath)}: {len(r)} runs of {s} with aa={aa}, texture_lod={lod}, expected 1")
+                    raise DataError(f"{rel(cpath)}: {len(r)} runs of {s} with aa={aa}, smaa_edges={edge}, "
+                                    f"texture_lod={lod}, expected 1")
                 r = r[0]
                 e = num(r, "image_mae", cpath)
                 ms = with_ci(num(r, "frame_ms", cpath), num(r, "frame_ms_ci_low", cpath),
@@ -279,8 +285,9 @@ def cpu_texture_lod():
                         raise DataError(f"{rel(fpath)}: no paired texture_lod comparison for run {r.get('key')}")
                     ratio, lo, hi, verdict = cost[r.get("key")]
                     c = with_ci(ratio, lo, hi, f3)
-                out.append([str(s), f"`{aa}`", f"`{lod}`", f"{e:.2f}", f3(e / e0), ms, c, verdict])
-    header = ["scene", "aa", "texture_lod", "error", "error / (none, none)", "frame ms [95%]",
+                out.append([str(s), f"`{aa}`", "–" if edge is None else f"`{edge}`", f"`{lod}`", f"{e:.2f}",
+                            f3(e / e0), ms, c, verdict])
+    header = ["scene", "aa", "smaa edges", "texture_lod", "error", "error / (none, none)", "frame ms [95%]",
               "time / same aa without LOD [95%]", "verdict"]
     lines = table(header, out)
     r0 = runs[0]
