@@ -3,6 +3,7 @@
 // paths, the render command line, and every shipped config against the real registries and data.
 #include "test_experiments_fixture.hpp"
 #include "layout/layouts.hpp"
+#include "traversal/kernels.hpp"
 
 using namespace bvhlab::experiments_test;
 
@@ -223,6 +224,8 @@ TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
   expectedRuns["layouts.toml"] = 8 * layouts().size();
   // layouts-gpu.toml: 3 scenes x 2 workloads per registered layout, on the EGL backend.
   expectedRuns["layouts-gpu.toml"] = 6 * layouts().size();
+  // layouts-paper-gpu.toml: 6 scenes x 3 workloads per registered kernel (`kernels = "all"`, each with its layout).
+  expectedRuns["layouts-paper-gpu.toml"] = 18 * allKernels().size();
   std::set<std::string> seen;
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (entry.path().extension() != ".toml") continue;
