@@ -1,18 +1,20 @@
 #!/bin/bash
 # One prepared GPU session, in the order that matters if time runs out: (1) the EGL path on the GPU
 # (the report scene rendered shaded and as a node-visit heatmap, with GL_RENDERER in the JSON), (2)
-# builders-gpu.toml, (3) layouts-gpu.toml with 8 s of rounds per group, (4) kernels-gpu.toml, (5) the report
-# scene's 1080p frames over the 9 builders with and without shared programs (docs/gpu.md, "Frame
-# groups"). Each step has a time cap; a
+# layouts-paper-gpu.toml (every layout with every kernel, the scenes past the L2 cache), (3)
+# builders-gpu.toml, (4) layouts-gpu.toml with 8 s of rounds per group, (5) kernels-gpu.toml, (6) the
+# report scene's 1080p frames over the 9 builders with and without shared programs (docs/gpu.md, "Frame
+# groups"). Each step has a time cap (0 skips it); a
 # sweep stopped by its cap keeps its finished runs (resume with the same command). Results go to OUTDIR
 # as a few files (PNG, JSON, one .tgz per sweep with its results.csv, results.json, findings.json and runs/);
 # `bvhlab report DIR` makes the HTML where you unpack.
 # Run from the repository root:
-#   bash experiments/remote/gpu-run.sh BUNDLE OUTDIR [BUILDERS_S [LAYOUTS_S [KERNELS_S [SHARING_S]]]]
+#   bash experiments/remote/gpu-run.sh BUNDLE OUTDIR [PAPER_S [BUILDERS_S [LAYOUTS_S [KERNELS_S [SHARING_S]]]]]
+# The default caps fit one 10-minute call: 360 s for step 2, 150 s for step 3, the older steps 4-6 skipped.
 # BUNDLE: a folder or .tar.xz from experiments/remote/bundle.py (or "installed": ./build/bvhlab as it is).
 # datasets/cache must hold the meshes and worlds (bash datasets/fetch.sh, or unpack a copy of it).
 set -u
-bundle=$1; out=$2; builders_s=${3:-230}; layouts_s=${4:-150}; kernels_s=${5:-110}; sharing_s=${6:-60}
+bundle=$1; out=$2; paper_s=${3:-360}; builders_s=${4:-150}; layouts_s=${5:-0}; kernels_s=${6:-0}; sharing_s=${7:-0}
 t0=$(date +%s); step() { echo "[gpu-run t=$(( $(date +%s) - t0 ))s] $*"; }
 mkdir -p "$out" /tmp/gpu-run
 if [ "$bundle" = installed ]; then
@@ -38,7 +40,8 @@ head -c 600 "$out/render_report.json"; echo
 timeout 60 "$B" render datasets/scenes/report.toml --backend egl --width 1280 --height 720 --frames 5 \
   --view visits -o "$out/visits_gpu.png" --json > "$out/render_visits.json"; echo "rc=$?"
 
-sweep() {  # name config seconds
+sweep() {  # name config seconds (0: skipped)
+  [ "$3" -gt 0 ] || { step "$1 skipped"; return; }
   step "$1 (at most $3 s)"
   timeout "$3" "$B" run "$2" --out "/tmp/gpu-run/$1" --no-report > "/tmp/gpu-run/$1.log" 2>&1; echo "rc=$?"
   tail -3 "/tmp/gpu-run/$1.log"
@@ -50,6 +53,7 @@ sweep() {  # name config seconds
     tar -tzf "$out/$1.tgz" "$1/$f" > /dev/null 2>&1 || echo "gpu-run: warning: $1.tgz has no $f"
   done
 }
+sweep layouts-paper-gpu experiments/configs/layouts-paper-gpu.toml "$paper_s"
 sweep builders-gpu experiments/configs/builders-gpu.toml "$builders_s"
 sed 's/^max_seconds = [0-9]*/max_seconds = 8/' experiments/configs/layouts-gpu.toml > /tmp/gpu-run/layouts-gpu.toml
 sed -i 's|"\.\./\.\./datasets/|"'"$PWD"'/datasets/|' /tmp/gpu-run/layouts-gpu.toml
@@ -61,7 +65,7 @@ printf '[[sweep]]\nname = "frames"\nscenes = { file = "%s/datasets/scenes/report
 sed 's/^\[measure\]/[measure]\nshare_programs = false/' /tmp/gpu-run/shared.toml > /tmp/gpu-run/unshared.toml
 step "sharing (at most $sharing_s s each)"
 mkdir -p /tmp/gpu-run/sharing
-for s in shared unshared; do
+[ "$sharing_s" -gt 0 ] && for s in shared unshared; do
   timeout "$sharing_s" "$B" run /tmp/gpu-run/$s.toml --out /tmp/gpu-run/sharing/$s --no-report > /tmp/gpu-run/sharing/$s.log 2>&1
   echo "$s rc=$?"; grep 'sah-binned' /tmp/gpu-run/sharing/$s.log | tail -1
 done
