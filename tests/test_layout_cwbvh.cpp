@@ -5,6 +5,7 @@
 // bytes a node, every builder x robustness pair against brute force, the hard-case suite, and the GLSL
 // kernel against its C++ mirror per ray (answer, visits, triangle tests, box tests).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <random>
@@ -143,9 +144,23 @@ void checkPacked(const Bvh& bvh, const TriangleSoup& soup) {
         EXPECT_LT(cwbvhDecode(n.origin[a], 255, n.scale[a] * 0.5f), frame.max[a]) << "a finer grid would have done";
       }
     }
+    // Slots by octant: the packer's assignment of these children (cwbvhAssignSlots), each child once;
+    // an empty slot holds meta 0 and q bytes 0.
+    std::vector<glm::vec3> centroids;
+    for (const WideChild& ch : w.children) centroids.push_back(c.binary.nodes[ch.binaryNode].bounds.center());
+    const std::array<int, 8> childOf = cwbvhAssignSlots(centroids, frame.center());
+    std::vector<int> slotted(w.children.size(), 0);
     uint32_t rank = 0, offset = 0;
-    for (uint32_t s = 0; s < n.children; ++s) {
-      const WideChild& ch = w.children[s];
+    for (uint32_t s = 0; s < 8; ++s) {
+      if (childOf[s] < 0) {
+        EXPECT_EQ(n.meta[s], 0u) << "an empty slot holds meta 0";
+        EXPECT_EQ(n.qlo[s], glm::uvec3(0u));
+        EXPECT_EQ(n.qhi[s], glm::uvec3(0u));
+        continue;
+      }
+      ASSERT_LT(size_t(childOf[s]), w.children.size());
+      slotted[size_t(childOf[s])]++;
+      const WideChild& ch = w.children[size_t(childOf[s])];
       const Aabb& exact = c.binary.nodes[ch.binaryNode].bounds;
       glsl::vec3 mirrorMin, mirrorMax;
       glsl::cwbvhChildBox(mirror, s, mirrorMin, mirrorMax);
@@ -188,7 +203,7 @@ void checkPacked(const Bvh& bvh, const TriangleSoup& soup) {
       }
       maxDepth = std::max(maxDepth, it.depth + 1);
     }
-    for (uint32_t s = n.children; s < 8; ++s) EXPECT_EQ(n.meta[s], 0u) << "unused slots hold 0";
+    EXPECT_EQ(std::count(slotted.begin(), slotted.end(), 1), long(w.children.size())) << "every child in one slot";
   }
   ASSERT_EQ(failures, 0);
   EXPECT_EQ(std::count(reached.begin(), reached.end(), 1), long(nodes)) << "every node reached once";
