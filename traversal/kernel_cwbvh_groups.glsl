@@ -55,6 +55,11 @@ uint cwbvhOctant(vec3 invDir) {
   return (invDir.x < 0.0 ? 1u : 0u) | (invDir.y < 0.0 ? 2u : 0u) | (invDir.z < 0.0 ? 4u : 0u);
 }
 
+// A group's hit mask holds slot s at bit s ^ octInv, octInv = 7 - octant: findMSB then takes the slots
+// in the order octant, octant ^ 1, ..., octant ^ 7 (bit 7 - k holds slot k ^ octant).
+uint cwbvhHitBit(uint slot, uint octInv) { return slot ^ octInv; }
+uint cwbvhSlotOfBit(uint bit, uint octInv) { return bit ^ octInv; }
+
 // S = scale * invDir cut to 16 significant bits: toward 0 (lo planes), away from 0 (hi planes). The
 // clamp keeps S finite; the rounding up of 2^119 is 2^119 (no low bits), so it stays finite.
 void cwbvhScaledInverse(vec3 scale, vec3 invDir, out vec3 sLo, out vec3 sHi) {
@@ -99,13 +104,13 @@ bool traverseCwbvhGroups(Ray ray, float tMin, float tMax, bool anyHit, out MeshH
   if (!intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
   // The current node group (x = childBase, y = hit mask | imask << 8): the root alone, as an inner
   // child in slot 0 of base 0.
-  uvec2 group = uvec2(0u, (1u << octInv) | (1u << 8));
+  uvec2 group = uvec2(0u, (1u << cwbvhHitBit(0u, octInv)) | (1u << 8));
   while (true) {
     // The group's next child by octant order (a group here always has one: the root's, and a group is
     // pushed only with bits left); the rest of the group is pushed if bits remain.
     uint bit = uint(findMSB(group.y & 0xFFu));
     group.y &= ~(1u << bit);
-    uint slot = bit ^ octInv;
+    uint slot = cwbvhSlotOfBit(bit, octInv);
     uint imask = (group.y >> 8) & 0xFFu;
     uint child = group.x + uint(bitCount(imask & ((1u << slot) - 1u)));
     if ((group.y & 0xFFu) != 0u) {
@@ -153,7 +158,7 @@ bool traverseCwbvhGroups(Ray ray, float tMin, float tMax, bool anyHit, out MeshH
       bool met = enter <= exit;
 #endif
       if (met) {
-        if (inner) nodeHits |= 1u << (c ^ octInv);
+        if (inner) nodeHits |= 1u << cwbvhHitBit(c, octInv);
         else triHits |= 1u << c;
       }
     }

@@ -32,6 +32,9 @@ inline uint cwbvhOctant(vec3 invDir) {
   return (invDir.x < 0.0f ? 1u : 0u) | (invDir.y < 0.0f ? 2u : 0u) | (invDir.z < 0.0f ? 4u : 0u);
 }
 
+inline uint cwbvhHitBit(uint slot, uint octInv) { return slot ^ octInv; }
+inline uint cwbvhSlotOfBit(uint bit, uint octInv) { return bit ^ octInv; }
+
 inline void cwbvhScaledInverse(vec3 scale, vec3 invDir, vec3& sLo, vec3& sHi) {
   vec3 s = clamp(scale * invDir, vec3(-kCwbvhMaxScaledInverse), vec3(kCwbvhMaxScaledInverse));
   uvec3 b = floatBitsToUint(s);
@@ -76,11 +79,11 @@ inline bool traverseCwbvhGroups(const Storage& s, Ray ray, float tMin, float tMa
   cwbvhGridBox(s, 0u, bmin, bmax);
   c.boxTests++;
   if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
-  uvec2 group = uvec2(0u, (1u << octInv) | (1u << 8));
+  uvec2 group = uvec2(0u, (1u << cwbvhHitBit(0u, octInv)) | (1u << 8));
   while (true) {
     uint bit = uint(findMSB(group.y & 0xFFu));
     group.y &= ~(1u << bit);
-    uint slot = bit ^ octInv;
+    uint slot = cwbvhSlotOfBit(bit, octInv);
     uint imask = (group.y >> 8) & 0xFFu;
     uint child = group.x + uint(bitCount(imask & ((1u << slot) - 1u)));
     if ((group.y & 0xFFu) != 0u) {
@@ -127,7 +130,7 @@ inline bool traverseCwbvhGroups(const Storage& s, Ray ray, float tMin, float tMa
         met = enter <= exit;
       }
       if (met) {
-        if (inner) nodeHits |= 1u << (i ^ octInv);
+        if (inner) nodeHits |= 1u << cwbvhHitBit(i, octInv);
         else triHits |= 1u << i;
       }
     }
