@@ -35,6 +35,12 @@ inline uint cwbvhOctant(vec3 invDir) {
 inline uint cwbvhHitBit(uint slot, uint octInv) { return slot ^ octInv; }
 inline uint cwbvhSlotOfBit(uint bit, uint octInv) { return bit ^ octInv; }
 
+inline uint cwbvhEnterBits(float t) {
+  uint b = floatBitsToUint(t);
+  return (b & 0x80000000u) != 0u ? (b + 0xFFFFu) >> 16 : b >> 16;
+}
+inline float cwbvhEnterBound(uint bits16) { return uintBitsToFloat(bits16 << 16); }
+
 inline void cwbvhScaledInverse(vec3 scale, vec3 invDir, vec3& sLo, vec3& sHi) {
   vec3 s = clamp(scale * invDir, vec3(-kCwbvhMaxScaledInverse), vec3(kCwbvhMaxScaledInverse));
   uvec3 b = floatBitsToUint(s);
@@ -79,9 +85,9 @@ inline bool traverseCwbvhGroups(const Storage& s, Ray ray, float tMin, float tMa
   cwbvhGridBox(s, 0u, bmin, bmax);
   c.boxTests++;
   if (!Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter)) return false;
-  uvec2 group = uvec2(0u, (1u << cwbvhHitBit(0u, octInv)) | (1u << 8));
+  uvec2 group = uvec2(0u, (1u << cwbvhHitBit(0u, octInv)) | (1u << 8) | (cwbvhEnterBits(tEnter) << 16));
+  uint bit = cwbvhHitBit(0u, octInv);  // the child the next step takes from the group
   while (true) {
-    uint bit = uint(findMSB(group.y & 0xFFu));
     group.y &= ~(1u << bit);
     uint slot = cwbvhSlotOfBit(bit, octInv);
     uint imask = (group.y >> 8) & 0xFFu;
@@ -106,6 +112,9 @@ inline bool traverseCwbvhGroups(const Storage& s, Ray ray, float tMin, float tMa
     uvec2 nearY = cwbvhPlaneBytes(node, negative.y ? 4u : 1u), farY = cwbvhPlaneBytes(node, negative.y ? 1u : 4u);
     uvec2 nearZ = cwbvhPlaneBytes(node, negative.z ? 5u : 2u), farZ = cwbvhPlaneBytes(node, negative.z ? 2u : 5u);
     uint nodeHits = 0u, innerSlots = 0u, triHits = 0u;
+    float groupEnter = INF;
+    uint nearestBit = 0u;
+    uvec4 leafEnter = uvec4(0u);
     for (uint i = 0u; i < 8u; ++i) {
       uint meta = cwbvhMeta(node, i);
       if (meta == 0u) continue;
@@ -113,9 +122,10 @@ inline bool traverseCwbvhGroups(const Storage& s, Ray ray, float tMin, float tMa
       if (inner) innerSlots |= 1u << i;
       c.boxTests++;
       bool met;
+      float enter;
       if constexpr (robustBox) {
         cwbvhChildBox(node, i, bmin, bmax);
-        met = Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, tEnter);
+        met = Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, enter);
       } else {
         vec3 tNear = vec3(uvec3(cwbvhByte(nearX, i), cwbvhByte(nearY, i), cwbvhByte(nearZ, i))) * sNear + off;
         vec3 tFar = vec3(uvec3(cwbvhByte(farX, i), cwbvhByte(farY, i), cwbvhByte(farZ, i))) * sFar + off;
@@ -125,19 +135,27 @@ inline bool traverseCwbvhGroups(const Storage& s, Ray ray, float tMin, float tMa
           tNear = mix(tNear, mix(vec3(INF), vec3(-INF), inSlab), parallel);
           tFar = mix(tFar, mix(vec3(-INF), vec3(INF), inSlab), parallel);
         }
-        float enter = max(max(tNear.x, tNear.y), max(tNear.z, tMin));
+        enter = max(max(tNear.x, tNear.y), max(tNear.z, tMin));
         float exit = min(min(tFar.x, tFar.y), min(tFar.z, hit.t));
         met = enter <= exit;
       }
       if (met) {
-        if (inner) nodeHits |= 1u << cwbvhHitBit(i, octInv);
-        else triHits |= 1u << i;
+        if (inner) {
+          nodeHits |= 1u << cwbvhHitBit(i, octInv);
+          if (enter < groupEnter) nearestBit = cwbvhHitBit(i, octInv);
+          groupEnter = min(groupEnter, enter);
+        } else {
+          triHits |= 1u << cwbvhHitBit(i, octInv);
+          leafEnter[int(i >> 1)] |= cwbvhEnterBits(enter) << (16u * (i & 1u));
+        }
       }
     }
-    group = uvec2(node.childBase, nodeHits | (innerSlots << 8));
+    group = uvec2(node.childBase, nodeHits | (innerSlots << 8) | (cwbvhEnterBits(groupEnter) << 16));
     while (triHits != 0u) {
-      uint leaf = uint(findLSB(triHits));
-      triHits &= triHits - 1u;
+      uint tbit = uint(findMSB(triHits));
+      triHits &= ~(1u << tbit);
+      uint leaf = cwbvhSlotOfBit(tbit, octInv);
+      if (cwbvhEnterBound((leafEnter[int(leaf >> 1)] >> (16u * (leaf & 1u))) & 0xFFFFu) > hit.t) continue;
       uint first = cwbvhLeafFirst(node, leaf);
       uint count = cwbvhMeta(node, leaf);
       for (uint i = 0u; i < count; ++i) {
@@ -152,13 +170,14 @@ inline bool traverseCwbvhGroups(const Storage& s, Ray ray, float tMin, float tMa
         }
       }
     }
-    if ((group.y & 0xFFu) == 0u) {
-      if (sp == 0) break;
+    bit = nearestBit;
+    while ((group.y & 0xFFu) == 0u || cwbvhEnterBound(group.y >> 16) > hit.t) {
+      if (sp == 0) return hit.tri >= 0;
       group = stack[--sp];
       c.stackBytes += kStackEntryBytes;
+      bit = uint(findMSB(group.y & 0xFFu));
     }
   }
-  return hit.tri >= 0;
 }
 
 template <class Tests = FastTests>
