@@ -179,6 +179,22 @@ TEST(BytesFetched, HandTreeCwbvh) {
   EXPECT_EQ(c.stackBytes, uint64_t(2 * (2 * sizeof(uint32_t) + sizeof(float))));
 }
 
+// cwbvh-groups on the same tree: the root's grid box, the root node whole; both leaves are met and form
+// the node's triangle group, taken nearest first (by octant: the +z ray takes the near leaf's slot
+// first); the near triangle's hit then culls the far leaf, entered beyond it. Nothing is pushed: the
+// root's group holds one child, taken from registers.
+TEST(BytesFetched, HandTreeCwbvhGroups) {
+  const TriangleSoup soup = twoTriangles();
+  const PackedBvh packed = findLayout("cwbvh").pack(handTree(soup), soup);
+  MeshHit hit;
+  const Counters c = traceOne(packed, "cwbvh-groups", hit);
+  EXPECT_EQ(c.nodeBytes, uint64_t((1 + 5) * kTexelBytes));
+  EXPECT_EQ(c.triangleBytes, uint64_t(3 * kTexelBytes));
+  EXPECT_EQ(c.stackBytes, 0u);
+  EXPECT_EQ(c.nodeVisits, 1u);
+  EXPECT_EQ(c.boxTests, 3u);
+}
+
 // Per kernel, on a sphere and a soup with random rays: node bytes follow the visits (or, for the
 // wide kernels that fetch one slot per box test, the box tests); triangle bytes are triangle tests
 // times the record size of the format; a closest-hit walk pops every entry it pushed, so its stack
