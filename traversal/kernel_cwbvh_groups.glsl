@@ -29,10 +29,12 @@
 //   far byte arrays chosen once by the direction's sign per axis (qlo is near where invDir >= 0, qhi
 //   where it is negative). Per child and plane then one multiply-add: t = float(q) * S' + off. S' is S
 //   cut to 16 significant bits, rounded toward 0 for the lo planes and away from 0 for the hi planes:
-//   an 8-bit q times a 16-bit S' is exact, so the multiply-add rounds once whether or not a compiler
-//   fuses it (GLSL and the C++ mirror agree bit for bit), and the planes it tests lie at p + q s' with
-//   s' <= scale for lo and >= scale for hi, i.e. never inside the quantised box (outward by at most
-//   2^-15 of the node's extent); the packer's conservative quantisation is thus kept by the exact test.
+//   an 8-bit q times a 16-bit S' is exact (S' normal: scale >= 2^-126 and |invDir| >= 1 for direction
+//   components of magnitude <= 1), so the multiply-add rounds once whether or not a compiler fuses it
+//   (GLSL and the C++ mirror agree bit for bit). The planes it tests lie at p + q s' with s' <= scale for
+//   lo and s' >= scale for hi: in exact arithmetic never inside the quantised box (outward by at most
+//   2^-15 of the node's extent), which the packer made contain the child. The test itself then rounds
+//   as ray_box.glsl's slab test does, with no promise at the last ulp (the robust test below has one).
 //   A ray parallel to an axis (|invDir| at least kParallelInverse, ray_box.glsl) takes, for that axis,
 //   the slab test's closed-slab rule on the decoded planes, as ray_box.glsl does: whether the origin
 //   lies between them. With the robust box test (BVH_BOX_ROBUST, --robust box or watertight) the
@@ -43,7 +45,8 @@
 //   walk starts from a group holding the root alone.
 //
 // NaN: invDir is finite (rayInverseDirection); S is clamped to +-2^119 so that q * S' <= 255 * 2^119 is
-// finite (a clamped S changes only planes 2^119 / |invDir| node units apart, beyond any scene here),
+// finite (the clamp acts only where scale |invDir| > 2^119: off a parallel axis |invDir| < 5e29, so for
+// nodes over about 3e8 units wide, far beyond the scenes here; on a parallel axis the rule below decides),
 // off is finite or +-inf, so t = q S' + off is a sum of a finite and a finite-or-infinite value: never
 // NaN. The parallel rule replaces t by +-INF. The masks and indices are integers.
 //
@@ -193,10 +196,11 @@ bool traverseCwbvhGroups(Ray ray, float tMin, float tMax, bool anyHit, out MeshH
     // and meta) is tested now, lazily, leaf by leaf from registers.
     group = uvec2(node.childBase, nodeHits | (innerSlots << 8) | (cwbvhEnterBits(groupEnter) << 16));
     while (triHits != 0u) {
-      uint bit = uint(findMSB(triHits));
-      triHits &= ~(1u << bit);
-      uint c = cwbvhSlotOfBit(bit, octInv);
-      if (cwbvhEnterBound((leafEnter[c >> 1] >> (16u * (c & 1u))) & 0xFFFFu) > hit.t) continue;  // entered beyond the hit
+      uint tbit = uint(findMSB(triHits));
+      triHits &= ~(1u << tbit);
+      uint c = cwbvhSlotOfBit(tbit, octInv);
+      // A leaf entered beyond the closest hit is skipped.
+      if (cwbvhEnterBound((leafEnter[c >> 1] >> (16u * (c & 1u))) & 0xFFFFu) > hit.t) continue;
       uint first = cwbvhLeafFirst(node, c);
       uint count = cwbvhMeta(node, c);
       for (uint i = 0u; i < count; ++i) {
@@ -219,6 +223,7 @@ bool traverseCwbvhGroups(Ray ray, float tMin, float tMax, bool anyHit, out MeshH
       bit = uint(findMSB(group.y & 0xFFu));
     }
   }
+  return hit.tri >= 0;  // not reached: the loop returns
 }
 
 // Closest hit with tMin < t < tMax; hit.tri = -1 and hit.t = tMax when there is none.

@@ -178,6 +178,7 @@ inline bool traverseCwbvhGroups(const Storage& s, Ray ray, float tMin, float tMa
       bit = uint(findMSB(group.y & 0xFFu));
     }
   }
+  return hit.tri >= 0;
 }
 
 template <class Tests = FastTests>
