@@ -15,6 +15,8 @@
 // ratios (median of per-round ratios) with two 95% intervals: the order-statistic one (independent
 // rounds) and the moving-block bootstrap one (render/frame_stats.hpp pairedRatioBlock), which holds
 // when neighbouring rounds are alike (they are: a frame's work depends on its phase in the clip).
+// Once, after the rounds: the EPO of each strategy's last tree and how long that one EPO took on one
+// thread (what ClipOptions::epo would add per frame).
 //   bench_updates [--frames=F] [--rounds=N]
 #include <chrono>
 #include <cmath>
@@ -28,6 +30,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "builders/epo.hpp"
 #include "builders/update.hpp"
 #include "render/frame_stats.hpp"
 
@@ -77,6 +80,7 @@ const std::vector<Row> kRows = {{"refit", "refit", "sah-binned"},
 
 struct Results {
   std::vector<std::vector<double>> ms, sah;  // per row, per timed round
+  std::vector<double> epo, epoMs;            // per row: the last tree's EPO and the time it took (1 thread)
 };
 Results g_results;
 
@@ -111,6 +115,15 @@ void updates(benchmark::State& state) {
     state.SetIterationTime(total / 1000.0);
   }
   for (size_t i = 0; i < kRows.size(); ++i) state.counters[kRows[i].label + "_ms"] = medianOf(results.ms[i]);
+  // What an EPO per frame would add to a clip (UpdateRecord::epo is optional for that reason): once per
+  // strategy, on its last tree, outside the rounds.
+  const uint32_t last = uint32_t((round + g_frames - 1) % g_frames);
+  for (size_t i = 0; i < kRows.size(); ++i) {
+    const auto start = std::chrono::steady_clock::now();
+    results.epo.push_back(endPointOverlap(strategies[i]->tree(), frames.v0[last], frames.v1[last], frames.v2[last],
+                                          strategies[i]->options().build.cost, 1));
+    results.epoMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  }
   g_results = std::move(results);
 }
 
@@ -119,12 +132,14 @@ void printSummary() {
   if (r.ms.empty() || r.ms[0].empty()) return;
   std::printf("\nupdate time per frame, 100,352-triangle wave sphere, 1 thread, %zu timed rounds (%u frames per loop)\n",
               r.ms[0].size(), g_frames);
-  std::printf("%-22s %10s %24s %12s\n", "strategy", "median ms", "95% interval", "median SAH");
+  std::printf("%-22s %10s %24s %12s %10s %14s\n", "strategy", "median ms", "95% interval", "median SAH", "last EPO",
+              "EPO ms (once)");
   for (size_t i = 0; i < kRows.size(); ++i) {
     const std::optional<Interval> m = medianInterval(r.ms[i]);
     char interval[64] = "-";
     if (m) std::snprintf(interval, sizeof interval, "[%.3f, %.3f]", m->low, m->high);
-    std::printf("%-22s %10.3f %24s %12.3f\n", kRows[i].label.c_str(), medianOf(r.ms[i]), interval, medianOf(r.sah[i]));
+    std::printf("%-22s %10.3f %24s %12.3f %10.3f %14.1f\n", kRows[i].label.c_str(), medianOf(r.ms[i]), interval,
+                medianOf(r.sah[i]), r.epo[i], r.epoMs[i]);
   }
   const std::pair<size_t, size_t> pairs[] = {{0, 2}, {0, 3}, {1, 2}, {1, 3}, {1, 0}, {2, 3}};
   std::printf("\npaired ratio of update times (a / b, median of per-round ratios)\n");
