@@ -106,29 +106,24 @@ void applyRotation(Bvh& bvh, uint32_t index, Rotation rotation) {
 }
 
 uint32_t refitRotateBvh(Bvh& bvh, const FrameTriangles& frame, const CostModel& cost) {
-  // The post-order is taken before any swap: a swap at N relinks only N's children and grandchildren,
-  // which come before N in the order and are not visited again, so the rest of the order holds for the
-  // whole pass (the next frame's pass takes a new order from the new topology).
+  // The whole refit first, then the swaps, children before parents: the same tree as swapping at each
+  // node as soon as it is refit, because a swap at N changes the boxes of N's children only (to the
+  // union of their new children, whose boxes are final by then) and never N's box or an ancestor's
+  // (each holds the same leaves). The post-order is taken before any swap: a swap at N relinks only
+  // N's children and grandchildren, which come before N in the order and are not visited again, so the
+  // rest of the order holds for the whole pass (the next frame takes a new order from the new topology).
   const std::vector<uint32_t> order = refitOrder(bvh);
-  if (!(cost.traversalCost > 0.0f)) {
-    refitBvh(bvh, order, frame);
-    return 0;
-  }
-  // Leaves and inner nodes refit in one pass, each inner node's swap made as soon as it is refit.
+  refitBvh(bvh, order, frame);
+  if (!(cost.traversalCost > 0.0f)) return 0;
   uint32_t rotations = 0;
-  size_t begin = 0;
-  for (size_t k = 0; k < order.size(); ++k) {
-    if (bvh.nodes[order[k]].isLeaf()) continue;
-    // Refit the run of nodes up to and including this inner node, then rotate at it.
-    refitBvh(bvh, std::span<const uint32_t>(order).subspan(begin, k + 1 - begin), frame);
-    begin = k + 1;
-    const Rotation rotation = bestRotation(bvh, order[k]);
+  for (const uint32_t node : order) {
+    if (bvh.nodes[node].isLeaf()) continue;
+    const Rotation rotation = bestRotation(bvh, node);
     if (rotation != Rotation::None) {
-      applyRotation(bvh, order[k], rotation);
+      applyRotation(bvh, node, rotation);
       ++rotations;
     }
   }
-  refitBvh(bvh, std::span<const uint32_t>(order).subspan(begin), frame);  // a tree of one leaf
   return rotations;
 }
 

@@ -453,8 +453,9 @@ TEST(RebuildPolicies, SahTriggerBoundsTheSahOfAnExplodingMesh) {
 // ---- threads ----------------------------------------------------------------------------------------
 
 // The builders run their top levels and subtrees on several threads (above 4,096 primitives), and EPO
-// shares its nodes among threads; refit and rotations run on one. The records (all but the times) and
-// the trees of every frame are the same for 1 thread and for 4.
+// shares its nodes among threads; refit and rotations run on one. The records (all but the times; the
+// tree hash filled in by the frame callback, as a caller above the layout library does) and the trees
+// of every frame are the same for 1 thread and for 4.
 TEST(Updates, SameResultsForAnyThreadCount) {
   const Clip clip = explodeClip(80, 40, 5, 0.1f);  // 6,400 triangles: above the builders' parallel cut
   const std::vector<FrameTriangles> frames = clip.all();
@@ -470,7 +471,10 @@ TEST(Updates, SameResultsForAnyThreadCount) {
       clipOptions.epoThreads = threads;
       trees.emplace_back();
       records.push_back(runClip(*makeUpdateStrategy(spec, options), frames, clipOptions,
-                                [&](uint32_t, const Bvh& tree, UpdateRecord&) { trees.back().push_back(tree); }));
+                                [&](uint32_t f, const Bvh& tree, UpdateRecord& record) {
+                                  trees.back().push_back(tree);
+                                  record.treeHash = treeHash(tree, frames[f]);  // as trace/render would
+                                }));
     }
     for (size_t f = 0; f < frames.size(); ++f) {
       EXPECT_TRUE(identical(trees[0][f], trees[1][f])) << "frame " << f;
@@ -479,6 +483,8 @@ TEST(Updates, SameResultsForAnyThreadCount) {
       ASSERT_TRUE(records[0][f].epo && records[1][f].epo);
       EXPECT_EQ(*records[0][f].epo, *records[1][f].epo);
       EXPECT_EQ(records[0][f].rotations, records[1][f].rotations);
+      EXPECT_EQ(records[0][f].treeHash, records[1][f].treeHash);
+      EXPECT_EQ(records[0][f].treeHash.size(), 16u);
     }
   }
 }
