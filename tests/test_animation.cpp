@@ -355,6 +355,28 @@ TEST(SceneAtFrame, CameraPathMovesTheCamera) {
   EXPECT_EQ(sceneAtFrame(s, 39).camera.eye, glm::vec3(5, 1, 0));
 }
 
+// The example of docs/scene-format.md's "Animation" section loads and moves as the page says.
+TEST(AnimationDocs, TheExampleLoadsAndMoves) {
+  if (!fs::exists(fs::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes/cow.off"))
+    BVHLAB_SKIP_OR_FAIL("needs the dataset cache: run `bash datasets/fetch.sh`");
+  std::ifstream in(fs::path(BVHLAB_SOURCE_DIR) / "docs/scene-format.md");
+  const std::string doc((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t section = doc.find("\n## Animation\n");
+  ASSERT_NE(section, std::string::npos);
+  const size_t begin = doc.find("```toml\n", section);
+  ASSERT_NE(begin, std::string::npos);
+  std::string example = doc.substr(begin + 8, doc.find("```", begin + 8) - begin - 8);
+  for (size_t at = example.find("../cache/"); at != std::string::npos; at = example.find("../cache/", at))
+    example.replace(at, 9, (fs::path(BVHLAB_SOURCE_DIR) / "datasets/cache").string() + "/");
+  const Scene s = loadScene(writeScene("docs", example));
+  ASSERT_TRUE(s.animation);
+  EXPECT_EQ(clipFrames(s), 60);
+  const Scene q = sceneAtFrame(s, 30);
+  EXPECT_EQ(glm::vec3(q.objects[0].transform[3]), glm::vec3(2, 0, 0));
+  EXPECT_TRUE(s.animation->objects[1].deforms());
+  EXPECT_FLOAT_EQ(sceneAtFrame(s, 59).camera.eye.x, 6.0f);
+}
+
 // ---- the bench animations ----
 
 class BenchAnimation : public ::testing::TestWithParam<std::string> {};
