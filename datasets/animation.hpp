@@ -161,5 +161,8 @@ std::vector<ObjectInstance> objectInstances(const Scene& scene, int frame);
 // The object's local-space mesh at `frame`: the rest mesh deformed (rest mesh when it does not deform;
 // the world-space mesh for a static mesh object). Triangles and vertex order as the rest mesh's.
 Mesh localMeshAt(const Scene& scene, int object, int frame);
+// The object's world-space mesh at `frame` (what setFrame writes into Scene::meshes) without changing
+// the scene. Throws InputError when a vertex leaves float's range.
+Mesh worldMeshAt(const Scene& scene, int object, int frame);
 
 }  // namespace bvhlab

@@ -118,6 +118,23 @@ std::vector<ObjectInstance> objectInstances(const Scene& scene, int frame) {
   return out;
 }
 
+Mesh worldMeshAt(const Scene& scene, int object, int frame) {
+  checkFrame(scene, frame);
+  if (object < 0 || size_t(object) >= scene.objects.size())
+    throw std::out_of_range("object " + std::to_string(object) + " of " + std::to_string(scene.objects.size()));
+  const Object& o = scene.objects[size_t(object)];
+  if (o.kind != ObjectKind::Mesh) throw std::invalid_argument("object '" + o.name + "' is not a mesh");
+  const ObjectAnimation* anim =
+      scene.animation && size_t(object) < scene.animation->objects.size() ? &scene.animation->objects[size_t(object)] : nullptr;
+  if (!anim || anim->localMesh < 0) return scene.meshes[size_t(o.mesh)];
+  Mesh out;
+  out.name = scene.meshes[size_t(o.mesh)].name;
+  out.material = scene.meshes[size_t(o.mesh)].material;
+  writeMesh(*anim, scene.animation->localMeshes[size_t(anim->localMesh)], timeOf(scene, frame), transformAt(*anim, frame), out,
+            "object '" + o.name + "' at frame " + std::to_string(frame));
+  return out;
+}
+
 Mesh localMeshAt(const Scene& scene, int object, int frame) {
   checkFrame(scene, frame);
   if (object < 0 || size_t(object) >= scene.objects.size())
