@@ -1,6 +1,8 @@
 // The TOML scene reader (scene_io.hpp's loadScene, docs/scene-format.md): every key validated, every
 // error one line "FILE:LINE: message". Positions are read in double and stored relative to
 // Scene::origin; mesh files are read in double (loadMeshData) and baked to world space in double.
+// Typed value reads live in toml_fields.hpp; a [clip]'s keys and deformations are read by
+// animation_reader.cpp and evaluated by datasets/animation.hpp (the loaded scene is frame 0).
 #include <algorithm>
 #include <cmath>
 #include <fstream>
