@@ -262,6 +262,39 @@ TEST(Deformations, ExplodeByComponentsKeepsEachComponentRigid) {
   }
 }
 
+// Normals follow the deformation through its Jacobian: deformJacobian matches central differences of
+// deformPositions. Step ~1e-5 (rest positions are float, so the step actually taken divides): the
+// truncation error is ~h^2 times the third derivative (<= (2 pi / 0.7)^3 ~ 700 here: ~1e-7) and the
+// rounding error ~1e-16 / h = 1e-11, both below the 1e-6 bound.
+TEST(Deformations, JacobianMatchesFiniteDifferences) {
+  std::vector<ObjectAnimation> anims(3);
+  anims[0].deform.kind = DeformKind::Wave;
+  anims[0].deform.amplitude = 0.3, anims[0].deform.wavelength = 0.7, anims[0].deform.frequency = 0.8;
+  anims[0].deform.direction = glm::normalize(glm::dvec3(1, 0.2, 0.3));
+  anims[1].deform.kind = DeformKind::Twist;
+  anims[1].deform.angleDeg = 70, anims[1].deform.frequency = 0.3, anims[1].halfHeight = 1.3;
+  anims[1].deform.axis = glm::normalize(glm::dvec3(0.2, 1, -0.1));
+  anims[1].deform.centre = glm::dvec3(0.1, 0.2, -0.3);
+  anims[2].deform.kind = DeformKind::Breathe;
+  anims[2].deform.amplitude = 0.4, anims[2].deform.frequency = 0.6;
+  const double t = 0.45, h = 1e-5;
+  for (const ObjectAnimation& a : anims)
+    for (const glm::dvec3 p : {glm::dvec3(0.3, -0.7, 0.2), glm::dvec3(-1.1, 0.9, 0.4), glm::dvec3(0.05, 1.2, -0.8)}) {
+      SCOPED_TRACE(deformKindName(a.deform.kind));
+      const glm::dmat3 j = deformJacobian(a, p, t);
+      for (int axis = 0; axis < 3; ++axis) {
+        Mesh two;
+        glm::dvec3 e(0.0);
+        e[axis] = h;
+        two.positions = {glm::vec3(p + e), glm::vec3(p - e)};
+        std::vector<glm::dvec3> out;
+        deformPositions(a, two, t, out);
+        const glm::dvec3 column = (out[0] - out[1]) / (glm::dvec3(two.positions[0]) - glm::dvec3(two.positions[1]))[axis];
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(j[axis][k], column[k], 1e-6) << axis << "," << k;
+      }
+    }
+}
+
 TEST(Deformations, EvaluationIsBitForBitDeterministic) {
   const std::vector<std::string> deforms = {"kind = \"wave\"\namplitude = 0.1\n", "kind = \"twist\"\n",
                                             "kind = \"breathe\"\n", "kind = \"explode\"\n"};
