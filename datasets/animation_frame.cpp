@@ -87,6 +87,22 @@ Scene sceneAtFrame(const Scene& scene, int frame) {
   return copy;
 }
 
+void triangleCorners(const Scene& scene, std::vector<glm::vec3>& v0, std::vector<glm::vec3>& v1,
+                     std::vector<glm::vec3>& v2) {
+  const size_t n = scene.triangleCount();
+  v0.resize(n), v1.resize(n), v2.resize(n);
+  size_t i = 0;
+  for (const Mesh& m : scene.meshes)
+    for (const glm::uvec3& t : m.triangles) {
+      // An index past the vertices is refused, as gatherTriangles refuses it, never read.
+      const size_t count = m.positions.size();
+      if (t.x >= count || t.y >= count || t.z >= count)
+        throw InputError("mesh '" + m.name + "': triangle " + std::to_string(i) + " uses a vertex past " + std::to_string(count));
+      v0[i] = m.positions[t.x], v1[i] = m.positions[t.y], v2[i] = m.positions[t.z];
+      ++i;
+    }
+}
+
 std::vector<ObjectInstance> objectInstances(const Scene& scene, int frame) {
   checkFrame(scene, frame);
   std::vector<uint32_t> first(scene.meshes.size() + 1, 0);

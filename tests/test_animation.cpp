@@ -371,6 +371,9 @@ TEST(SceneAtFrame, InstancesCoverTheSoupAndTheirTransformPlacesTheLocalTriangles
       }
     }
     EXPECT_EQ(next, soup.size());
+    std::vector<glm::vec3> v0, v1, v2;
+    triangleCorners(q, v0, v1, v2);
+    EXPECT_TRUE(sameBits(v0, soup.v0) && sameBits(v1, soup.v1) && sameBits(v2, soup.v2));
   }
 }
 
