@@ -615,6 +615,37 @@ TEST(TwoLevelGlsl, GlslEqualsTheMirrorAndBruteForce) {
       }
     }
   }
+  // The ray tracer's shader (`bvhlab trace`: trace_rays.glsl) assembles and compiles over a two-level
+  // tree, closest and any hit, with the counters.
+  for (const auto& [layout, kernel] : {layoutKernels()[0], layoutKernels()[3]})
+    for (bool anyHit : {false, true}) {
+      const AssembledShader shader =
+          assembleRayTracer(kernel, Storage::Tbo, Robustness::Watertight, 8, anyHit, true, layout, "raw", true);
+      EXPECT_TRUE(shader.hasModule("two_level.glsl"));
+      try {
+        glDeleteProgram(test::compileCompute(shader.source));
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << layout << "/" << kernel << ": " << shader.mapLog(e.what());
+      }
+    }
+  // The renderer's fragment shader (uber: every module) compiles over a two-level tree too. Its
+  // shading still takes normals in object space (instanceNormalToWorld is not called by shade.glsl).
+  {
+    ShaderOptions options;
+    options.uber = true;
+    options.twoLevel = true;
+    const AssembledShader shader = assembleTracer(SceneFeatures{}, options);
+    GLuint fs = glCreateShader(GL_FRAGMENT_SHADER);
+    const char* text = shader.source.c_str();
+    glShaderSource(fs, 1, &text, nullptr);
+    glCompileShader(fs);
+    GLint ok = 0;
+    glGetShaderiv(fs, GL_COMPILE_STATUS, &ok);
+    char log[4096] = {};
+    glGetShaderInfoLog(fs, sizeof log, nullptr, log);
+    EXPECT_TRUE(ok) << shader.mapLog(log);
+    glDeleteShader(fs);
+  }
   std::printf("two-level GLSL vs mirror on %s: %zu of %zu ray queries agree on hits and every counter\n",
               context->renderer().c_str(), identical, compared);
   EXPECT_EQ(identical, compared);
