@@ -16,6 +16,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include "builders/builder.hpp"
 #include "gl_compute.hpp"
 #include "layout/layouts.hpp"
 #include "layout/pack_two_level.hpp"
@@ -72,6 +73,36 @@ void checkMirrorAgainstBruteForce(const TwoLevelScene& scene, size_t rayCount, u
 
 TEST(TwoLevel, MirrorEqualsBruteForceOverTheFlattenedScene) {
   checkMirrorAgainstBruteForce(randomScene(glm::vec3(0.0f), glm::vec3(1.0f), 12, 3), 600, 5, "near the origin");
+}
+
+// The TLAS by every registered builder (over the instances' world boxes, no triangles), leaves of
+// one and of four instances.
+TEST(TwoLevel, AnyBuilderBuildsTheTopLevel) {
+  const TwoLevelScene scene = randomScene(glm::vec3(0.0f), glm::vec3(1.0f), 16, 41);
+  const std::vector<FlatTriangle> flat = flatten(scene);
+  Aabb bounds;
+  for (const FlatTriangle& f : flat)
+    for (const glm::dvec3& v : {f.v0, f.v1, f.v2}) bounds.grow(glm::vec3(v));
+  const std::vector<RayQuery> rays = sceneRays(scene, bounds, 200, 42);
+  std::vector<Reference> refs;
+  for (const RayQuery& q : rays) refs.push_back(reference(flat, q));
+  const std::vector<PackedBvh> blases = packBlases(scene, "bvh2-cb");
+  for (const BuilderInfo& b : builders())
+    for (uint32_t leaf : {1u, 4u}) {
+      SCOPED_TRACE(b.name + " leaf " + std::to_string(leaf));
+      TopLevelBuild top{b.name, {}};
+      top.options.maxLeafSize = leaf;
+      const PackedTwoLevel packed = packTwoLevel(blases, scene.instances, top);
+      const glsl::Storage storage(packed.streams);
+      const TwoLevelMirror m = twoLevelMirror("bvh2cb-stack-ordered", Robustness::Watertight);
+      Tally tally;
+      for (size_t i = 0; i < rays.size(); ++i) {
+        const MirrorRun r = runMirror(m, storage, rays[i]);
+        agrees(packed, r.closest, r.any, r.hit, refs[i], rays[i], b.name, tally);
+      }
+      EXPECT_EQ(tally.failures, 0u);
+      EXPECT_GT(tally.hits, tally.clear / 10);
+    }
 }
 
 TEST(TwoLevel, FarFromTheOriginAndNonUniformlyScaled) {

@@ -3,7 +3,7 @@
 // two_level.hpp.
 //
 // One module for every kernel that has a two-level walk: the assembler (shaders/assemble.cpp,
-// appendTraversal) puts the kernel's file in twice, once before this module as
+// appendKernel) puts the kernel's file in twice, once before this module as
 //   #define KERNEL_WALK blasWalk    #define KERNEL_LEAF_TEST testTriangle
 // and once after it as
 //   #define KERNEL_WALK tlasWalk    #define KERNEL_LEAF_TEST testInstance
