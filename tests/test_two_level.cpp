@@ -339,9 +339,9 @@ struct GlRun {
   bool overflow;
 };
 
-std::vector<GlRun> traceOnGl(const std::string& layout, const std::string& kernel, Robustness robust,
+std::vector<GlRun> traceOnGl(const std::string& layout, const std::string& kernel, Robustness robust, Storage storage,
                              const PackedTwoLevel& p, const std::vector<RayQuery>& rays) {
-  const AssembledShader shader = assembleTraversal(kernel, Storage::Tbo, robust, stackSizeFor(p.streams), "", layout, "raw", true);
+  const AssembledShader shader = assembleTraversal(kernel, storage, robust, stackSizeFor(p.streams), "", layout, "raw", true);
   GLuint program;
   try {
     program = test::compileCompute(shader.source + kTwoLevelMain);
@@ -350,17 +350,36 @@ std::vector<GlRun> traceOnGl(const std::string& layout, const std::string& kerne
     return {};
   }
   const std::vector<glm::uvec4>* streams[3] = {&p.streams.nodes, &p.streams.triangles, &p.streams.attributes};
+  // The streams in the storage kind: texture buffers or 2D textures on units 0..2, or storage buffers
+  // at traversal/storage_ssbo.glsl's bindings 4..6.
   GLuint buffers[3], textures[3];
   glCreateBuffers(3, buffers);
-  glCreateTextures(GL_TEXTURE_BUFFER, 3, textures);
+  glCreateTextures(storage == Storage::Tex2D ? GL_TEXTURE_2D : GL_TEXTURE_BUFFER, 3, textures);
   for (GLuint unit = 0; unit < 3; ++unit) {
-    glNamedBufferData(buffers[unit], GLsizeiptr(streams[unit]->size() * sizeof(glm::uvec4)), streams[unit]->data(), GL_STATIC_DRAW);
+    const std::vector<glm::uvec4>& texels = *streams[unit];
+    if (storage == Storage::Tex2D) {
+      const GLsizei w = GLsizei(kTex2DWidth), h = GLsizei((texels.size() + kTex2DWidth - 1) / kTex2DWidth);
+      std::vector<glm::uvec4> padded(size_t(w) * size_t(h), glm::uvec4(0));
+      std::copy(texels.begin(), texels.end(), padded.begin());
+      glTextureStorage2D(textures[unit], 1, GL_RGBA32UI, w, h);
+      glTextureSubImage2D(textures[unit], 0, 0, 0, w, h, GL_RGBA_INTEGER, GL_UNSIGNED_INT, padded.data());
+      glTextureParameteri(textures[unit], GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTextureParameteri(textures[unit], GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      glBindTextureUnit(unit, textures[unit]);
+      continue;
+    }
+    glNamedBufferData(buffers[unit], GLsizeiptr(texels.size() * sizeof(glm::uvec4)), texels.data(), GL_STATIC_DRAW);
+    if (storage == Storage::Ssbo) {
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4 + unit, buffers[unit]);
+      continue;
+    }
     glTextureBuffer(textures[unit], GL_RGBA32UI, buffers[unit]);
     glBindTextureUnit(unit, textures[unit]);
   }
   glUseProgram(program);
   const char* names[3] = {"u_nodes", "u_triangles", "u_attributes"};
-  for (int unit = 0; unit < 3; ++unit) glUniform1i(glGetUniformLocation(program, names[unit]), unit);
+  for (int unit = 0; unit < 3; ++unit)
+    if (storage != Storage::Ssbo) glUniform1i(glGetUniformLocation(program, names[unit]), unit);
   std::vector<glm::vec4> in;
   for (const RayQuery& q : rays) {
     in.emplace_back(q.ray.origin, q.tMin);
@@ -414,17 +433,20 @@ TEST(TwoLevelGlsl, GlslEqualsTheMirrorAndBruteForce) {
     for (const RayQuery& q : rays) refs.push_back(reference(flat, q));
     for (const auto& [layout, kernel] : layoutKernels()) {
       const PackedTwoLevel packed = packTwoLevel(packBlases(c.scene, layout), c.scene.instances);
-      const glsl::Storage storage(packed.streams);
-      for (Robustness robust : {Robustness::Fast, Robustness::Watertight}) {
-        const std::string who = std::string(c.name) + " " + layout + "/" + kernel + "/" + robustnessName(robust);
+      const glsl::Storage mirrorStorage(packed.streams);
+      // Every storage kind reads the same streams; the fast tests, and the watertight ones from tbo.
+      for (const auto& [robust, storage] : {std::pair{Robustness::Fast, Storage::Tbo}, std::pair{Robustness::Watertight, Storage::Tbo},
+                                            std::pair{Robustness::Fast, Storage::Tex2D}, std::pair{Robustness::Fast, Storage::Ssbo}}) {
+        const std::string who = std::string(c.name) + " " + layout + "/" + kernel + "/" + robustnessName(robust) + "/" +
+                                 storageName(storage);
         SCOPED_TRACE(who);
-        const std::vector<GlRun> gpu = traceOnGl(layout, kernel, robust, packed, rays);
+        const std::vector<GlRun> gpu = traceOnGl(layout, kernel, robust, storage, packed, rays);
         ASSERT_EQ(gpu.size(), rays.size());
         const TwoLevelMirror m = twoLevelMirror(kernel, robust);
         Tally tally;
         size_t failures = 0;
         for (size_t i = 0; i < rays.size(); ++i) {
-          const MirrorRun r = runMirror(m, storage, rays[i]);
+          const MirrorRun r = runMirror(m, mirrorStorage, rays[i]);
           const GlRun& g = gpu[i];
           agrees(packed, g.closest, g.any, g.hit, refs[i], rays[i], "GLSL " + who, tally);
           const uint32_t mc[6] = {r.cc.blas.nodeVisits, r.cc.blas.triTests, r.cc.blas.boxTests,
