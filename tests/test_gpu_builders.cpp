@@ -26,6 +26,7 @@
 #include "layout/triangle_formats.hpp"
 #include "render/gl_context.hpp"
 #include "require.hpp"
+#include "traversal_test_util.hpp"
 
 namespace bvhlab {
 namespace {
@@ -245,6 +246,28 @@ TEST_F(GpuBuilders, RegisteredAsAGpuBuilderAndTimedPerPhase) {
   for (const auto& [phase, ms] : t.phaseMedianMs) EXPECT_GE(ms, 0.0) << phase;
   EXPECT_GT(t.medianMs, 0.0);
   EXPECT_THROW(timeGpuBuild("lbvh", set.input(), {}, 6), std::invalid_argument);
+}
+
+// Builder x kernel against brute force for lbvh-gpu's trees (test_traversal runs the CPU builders;
+// its executable does not register the GPU builders): every kernel's closest and any hit on a sphere
+// and a random soup equal brute force's.
+TEST_F(GpuBuilders, EveryKernelOnLbvhGpuTreesFindsTheBruteForceHits) {
+  using namespace traversaltest;
+  for (const TriangleSoup& soup : {soupOf({sphereMesh(16, 32, 1.0f)}), soupOf({randomSoupMesh(600, 4)})}) {
+    const std::vector<RayQuery> rays = mixedRays(soup, 300, 1);
+    std::vector<BruteHit> truth;
+    size_t hits = 0;
+    for (const RayQuery& q : rays) {
+      truth.push_back(bruteForce(soup, q));
+      hits += truth.back().found;
+    }
+    const std::vector<Aabb> boxes = triangleBoxes(soup);
+    const std::vector<glm::vec3> centroids = triangleCentroids(soup);
+    const BuildInput input{boxes, centroids, soup.v0, soup.v1, soup.v2};
+    checkTree(soup, {"lbvh-gpu", packBvh(buildBvh("lbvh-gpu", input, BuildOptions{}), soup)}, rays, truth);
+    EXPECT_GT(hits, rays.size() / 10);
+    EXPECT_LT(hits, rays.size());
+  }
 }
 
 // Without a current context the registry's lbvh-gpu makes its own (as `bvhlab build` runs it).
