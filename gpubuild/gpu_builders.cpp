@@ -9,6 +9,8 @@
 #include <glad/gl.h>
 #include <GL/osmesa.h>
 #include <EGL/egl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
 
 #include "builders/builder.hpp"
 #include "gpubuild/gpu_lbvh.hpp"
@@ -23,7 +25,9 @@ namespace {
 class BuildContext {
  public:
   BuildContext() {
-    if (OSMesaGetCurrentContext() == nullptr && eglGetCurrentContext() == EGL_NO_CONTEXT) {
+    // OSMesa and EGL: the headless contexts (render/gl_context.hpp); GLFW: the viewer's window.
+    if (OSMesaGetCurrentContext() == nullptr && eglGetCurrentContext() == EGL_NO_CONTEXT &&
+        glfwGetCurrentContext() == nullptr) {
       const char* env = std::getenv("BVHLAB_GPU_BUILD_BACKEND");
       own_ = createContext(env && *env ? parseBackend(env) : Backend::OSMesa);
       return;
@@ -38,15 +42,20 @@ class BuildContext {
   }
   ~BuildContext() {
     if (own_) return;
-    glUseProgram(GLuint(program_));
+    glUseProgram(glIsProgram(GLuint(program_)) ? GLuint(program_) : 0);  // a deleted one was current until now
     for (GLuint i = 0; i < bindings_.size(); ++i) {
       const Binding& b = bindings_[i];
-      if (b.buffer != 0 && b.size > 0)
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, i, GLuint(b.buffer), GLintptr(b.start), GLsizeiptr(b.size));
+      const GLuint buffer = GLuint(b.buffer);
+      GLint64 bytes = 0;
+      if (buffer != 0 && glIsBuffer(buffer)) glGetNamedBufferParameteri64v(buffer, GL_BUFFER_SIZE, &bytes);
+      if (bytes == 0)  // none, deleted since, or empty: nothing to put back
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+      else if (b.size > 0 && b.start + b.size <= bytes)  // a range (glBindBufferRange)
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, i, buffer, GLintptr(b.start), GLsizeiptr(b.size));
       else
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, GLuint(b.buffer));
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, buffer);
     }
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, GLuint(generic_));
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, glIsBuffer(GLuint(generic_)) ? GLuint(generic_) : 0);
   }
   BuildContext(const BuildContext&) = delete;
   BuildContext& operator=(const BuildContext&) = delete;

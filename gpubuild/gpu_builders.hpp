@@ -3,10 +3,10 @@
 // GPU builders to the registry at run time, and every program that should offer them calls
 // registerGpuBuilders() first (the bvhlab app does, before it parses a command).
 //
-// A GPU builder builds in the current GL context (render, trace, measure: the renderer's). When no
-// context is current (build, or a run before any rendering) it makes a headless one for the build:
-// OSMesa, or EGL when BVHLAB_GPU_BUILD_BACKEND=egl (the path to a GPU). In a context it did not make
-// it restores the program and shader storage bindings it changed.
+// A GPU builder builds in the current GL context (render, trace, measure: the renderer's; view: the
+// window's). When no context is current (build, or a run before any rendering) it makes a headless
+// one for the build: OSMesa, or EGL when BVHLAB_GPU_BUILD_BACKEND=egl (the path to a GPU). In a
+// context it did not make it restores the program and shader storage bindings it changed.
 #pragma once
 #include <cstddef>
 #include <optional>

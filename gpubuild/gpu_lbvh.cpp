@@ -24,10 +24,14 @@ std::vector<T> download(GLuint buffer, size_t count) {
   return out;
 }
 
-// The buffers of one build, deleted with it.
+// The buffers of one build, deleted with it; the storage-buffer slots the passes bound are cleared
+// first, so that no binding names a deleted buffer afterwards.
 struct Buffers {
   std::array<GLuint, 15> ids{};
-  ~Buffers() { glDeleteBuffers(GLsizei(ids.size()), ids.data()); }
+  ~Buffers() {
+    for (GLuint slot = 0; slot < 6; ++slot) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, 0);
+    glDeleteBuffers(GLsizei(ids.size()), ids.data());
+  }
 };
 
 }  // namespace

@@ -25,7 +25,7 @@ class GpuRadixSort {
   static uint32_t blocks(uint32_t n) { return (n + kBlock - 1) / kBlock; }
   static uint64_t countBytes(uint32_t n) { return uint64_t(256) * blocks(n) * 4; }
   // Sorts the n keys in `keys`; `scratch` holds n keys, `counts` countBytes(n). The result is in `keys`
-  // (an even number of passes).
+  // (an even number of passes). Leaves storage-buffer slots 0..2 bound to the three buffers.
   void sort(GLuint keys, GLuint scratch, GLuint counts, uint32_t n) const;
 
  private:

@@ -199,6 +199,7 @@ TEST_F(GpuBuilders, RadixSortIsStdStableSort) {
     sort.sort(buffers[0], buffers[1], buffers[2], n);
     std::vector<gpubuild::GpuKey> sorted(n);
     glGetNamedBufferSubData(buffers[0], 0, GLsizeiptr(n * 12), sorted.data());
+    for (GLuint slot = 0; slot < 3; ++slot) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, 0);
     glDeleteBuffers(3, buffers);
     checkGl("reading the sorted keys");
     auto code = [](const gpubuild::GpuKey& k) { return uint64_t(k.hi) << 32 | k.lo; };
