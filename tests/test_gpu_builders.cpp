@@ -11,7 +11,10 @@
 #include <gtest/gtest.h>
 #include <glad/gl.h>
 
+#include <nlohmann/json.hpp>
+
 #include "builder_test_util.hpp"
+#include "cli_run.hpp"
 #include "builders/builder.hpp"
 #include "builders/test_inputs.hpp"
 #include "datasets/bench_generators.hpp"
@@ -276,6 +279,43 @@ TEST(GpuBuildersNoContext, BuildsInAHeadlessContextOfItsOwn) {
   registerGpuBuilders();
   const PrimitiveSet set = testing::randomSoup(2000, 6);
   EXPECT_TRUE(testing::identical(buildBvh("lbvh-gpu", set.input(), {}), buildBvh("lbvh", set.input(), {})));
+}
+
+// The command line: `builders` marks lbvh-gpu as a GPU builder; `build --json` reports its GL-timed
+// median with an interval and the phases, and the same tree_hash as lbvh; size bits are a usage error.
+TEST(GpuBuildersCli, BuildJsonHasGpuTimesAndLbvhsHash) {
+  std::string obj;
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 0; j <= 20; ++j) obj += "v " + std::to_string(i) + " " + std::to_string((i * j) % 7) + " " + std::to_string(j) + "\n";
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j) {
+      const int a = i * 21 + j + 1, b = a + 1, c = a + 21, d = c + 1;
+      obj += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(d) + "\n";
+      obj += "f " + std::to_string(a) + " " + std::to_string(d) + " " + std::to_string(c) + "\n";
+    }
+  const std::string mesh = clitest::writeTemp("grid.obj", obj).string();
+  const clitest::Result list = clitest::run("builders");
+  ASSERT_EQ(list.code, 0) << list.err;
+  EXPECT_NE(list.out.find("lbvh-gpu     gpu"), std::string::npos) << list.out;
+  EXPECT_NE(list.out.find("lbvh         cpu"), std::string::npos) << list.out;
+  const clitest::Result gpu = clitest::run("build --mesh " + mesh + " --builder lbvh-gpu --json --gpu-builds 6");
+  const clitest::Result cpu = clitest::run("build --mesh " + mesh + " --builder lbvh --json");
+  ASSERT_EQ(gpu.code, 0) << gpu.err;
+  ASSERT_EQ(cpu.code, 0) << cpu.err;
+  const nlohmann::json g = nlohmann::json::parse(gpu.out), c = nlohmann::json::parse(cpu.out);
+  EXPECT_EQ(g["primitives"], 800);
+  EXPECT_EQ(g["tree_hash"], c["tree_hash"]);
+  EXPECT_FALSE(c.contains("gpu_build_ms"));
+  const nlohmann::json& t = g["gpu_build_ms"];
+  EXPECT_EQ(t["builds"], 6);
+  EXPECT_LE(t["low"].get<double>(), t["median"].get<double>());
+  EXPECT_LE(t["median"].get<double>(), t["high"].get<double>());
+  EXPECT_GT(t["median"].get<double>(), 0.0);
+  for (const char* phase : {"morton", "sort", "hierarchy", "fit", "collapse"})
+    EXPECT_TRUE(g["gpu_phases_ms"].contains(phase)) << phase;
+  const clitest::Result sized = clitest::run("build --mesh " + mesh + " --builder lbvh-gpu --morton-size-bits 2");
+  EXPECT_EQ(sized.code, 2);
+  EXPECT_NE(sized.err.find("--morton-size-bits"), std::string::npos) << sized.err;
 }
 
 }  // namespace
