@@ -126,6 +126,17 @@ TEST_F(GpuBuilders, OptionsAndGridsGiveLbvhsTree) {
   BuildOptions axes;
   axes.mortonGrid = MortonGrid::Axes;
   expectSameAsLbvh(testing::gridSoup(120, 40).input(), axes);  // a flat scene: the axes grid differs from the cube
+  // Centroids spread 1e-33 on x (2^21 / 1e-33 overflows a float: the CPU's scale is 0 there), 1e-30
+  // on y (a finite scale near 2^21 / 1e-30) and 1 on z; with the axes grid each axis over its own.
+  PrimitiveSet tiny;
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 3000; ++i) {
+    const glm::vec3 c(1e-33f * u(rng), 1e-30f * u(rng), u(rng));
+    tiny.addTriangle(c, c + glm::vec3(0.0f, 0.0f, 1e-3f), c + glm::vec3(0.0f, 1e-31f, 0.0f));
+  }
+  expectSameAsLbvh(tiny.input(), axes);
+  expectSameAsLbvh(tiny.input());
   BuildOptions costly;
   costly.cost.traversalCost = 3.0f, costly.cost.intersectionCost = 0.5f;
   expectSameAsLbvh(set.input(), costly);
