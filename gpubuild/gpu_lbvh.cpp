@@ -114,8 +114,12 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   }
   checkGl("lbvh-gpu: uploading the input");
 
-  GLuint queries[6];
-  glGenQueries(6, queries);
+  struct Queries {  // deleted on every way out, a GL error's exception included
+    GLuint ids[6];
+    Queries() { glGenQueries(6, ids); }
+    ~Queries() { glDeleteQueries(6, ids); }
+  } timestamps;
+  const GLuint* queries = timestamps.ids;
   // A timestamp after each phase, each followed by glFlush: llvmpipe takes a timestamp when it runs
   // its command queue, not where the query was issued (without the flush, measured here: the
   // collapse phase read 0.04 ms and the fit phase took its time); on a GPU the flush only submits.
@@ -172,7 +176,6 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
     for (int q = 0; q < 6; ++q) glGetQueryObjectui64v(queries[q], GL_QUERY_RESULT, &stamps[q]);
     for (int p = 0; p < 5; ++p) times->phases.emplace_back(kPhases[p], double(stamps[p + 1] - stamps[p]) * 1e-6);
   }
-  glDeleteQueries(6, queries);
 
   // Download (untimed) and the depth-first emission of builders/collapse.hpp's emitCollapsed: an
   // emitted inner node's children take the slots base, base + 1, then the left child's descendants,

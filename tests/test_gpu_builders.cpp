@@ -247,6 +247,22 @@ TEST_F(GpuBuilders, SizesPastTheGlLimitsAreRefusedBeforeAnyWork) {
   EXPECT_THROW(buildBvh("lbvh-gpu", set.input(), sized), std::invalid_argument);
 }
 
+// A GL error surfaces as an exception naming the step it was found in (here one left pending before
+// the build, found by the first check, after the upload).
+TEST_F(GpuBuilders, AGlErrorNamesTheStep) {
+  const PrimitiveSet set = testing::randomSoup(100, 8);
+  const gpubuild::GpuLbvh lbvh;
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, 987654321u);  // never generated: GL_INVALID_OPERATION in a core profile
+  try {
+    lbvh.build(set.input(), {});
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("GL_INVALID_OPERATION in lbvh-gpu: uploading the input"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(testing::identical(lbvh.build(set.input(), {}), buildBvh("lbvh", set.input(), {})));  // and goes on
+}
+
 TEST_F(GpuBuilders, RegisteredAsAGpuBuilderAndTimedPerPhase) {
   EXPECT_TRUE(findBuilder("lbvh-gpu").gpu);
   EXPECT_FALSE(findBuilder("lbvh").gpu);
