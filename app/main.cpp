@@ -15,7 +15,7 @@
 #include "experiments/findings_command.hpp"
 #include "experiments/provenance.hpp"
 #include "experiments/runner.hpp"
-#include "gpubuild/gpu_builders.hpp"
+#include "builders/gpu/gpu_builders.hpp"
 #include "layout/layout.hpp"
 #include "layout/layouts.hpp"
 #include "layout/triangle_formats.hpp"

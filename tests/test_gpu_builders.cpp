@@ -1,4 +1,4 @@
-// The GPU builders (gpubuild/) on llvmpipe: lbvh-gpu builds lbvh's tree node for node (so the same
+// The GPU builders (builders/gpu/) on llvmpipe: lbvh-gpu builds lbvh's tree node for node (so the same
 // tree_hash) on the bunny, on inputs full of equal Morton codes and on a 100k-triangle bench mesh; its
 // radix sort alone against std::stable_sort; 0 and 1 primitives as the CPU builders; sizes past the
 // GL limits refused before any work; registration.
@@ -20,9 +20,9 @@
 #include "datasets/bench_generators.hpp"
 #include "datasets/scene.hpp"
 #include "datasets/scene_io.hpp"
-#include "gpubuild/gpu_builders.hpp"
-#include "gpubuild/gpu_lbvh.hpp"
-#include "gpubuild/gpu_radix_sort.hpp"
+#include "builders/gpu/gpu_builders.hpp"
+#include "builders/gpu/gpu_lbvh.hpp"
+#include "builders/gpu/gpu_radix_sort.hpp"
 #include "layout/layout.hpp"
 #include "layout/layouts.hpp"
 #include "layout/tree_hash.hpp"

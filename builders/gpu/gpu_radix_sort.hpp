@@ -7,7 +7,7 @@
 
 #include <glad/gl.h>
 
-#include "gpubuild/gpu_compute.hpp"
+#include "builders/gpu/gpu_compute.hpp"
 
 namespace bvhlab::gpubuild {
 

@@ -1,5 +1,5 @@
-// The GPU builders' registration, context handling and timing (gpubuild/gpu_builders.hpp).
-#include "gpubuild/gpu_builders.hpp"
+// The GPU builders' registration, context handling and timing (builders/gpu/gpu_builders.hpp).
+#include "builders/gpu/gpu_builders.hpp"
 
 #include <array>
 #include <cstdlib>
@@ -13,7 +13,7 @@
 #include <GLFW/glfw3.h>
 
 #include "builders/builder.hpp"
-#include "gpubuild/gpu_lbvh.hpp"
+#include "builders/gpu/gpu_lbvh.hpp"
 #include "render/gl_context.hpp"
 
 namespace bvhlab {

@@ -1,7 +1,7 @@
 // lbvh-gpu: the CPU lbvh's tree (builders/lbvh.cpp), built by GLSL compute passes in the current GL
 // context. Phases (each timed by GL timestamp queries):
 //   morton     centroid bounds (atomics), the grid (one invocation, the CPU's float rounding), codes
-//   sort       stable radix sort by (code, index) (gpubuild/gpu_radix_sort.hpp)
+//   sort       stable radix sort by (code, index) (builders/gpu/gpu_radix_sort.hpp)
 //   hierarchy  labels for equal-code runs and Karras's radix tree (gpubuild_labels/hierarchy.glsl)
 //   fit        boxes bottom-up with atomic counters
 //   collapse   the SAH leaf collapse's counts, inner-node counts and costs, bottom-up likewise
@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "builders/bvh.hpp"
-#include "gpubuild/gpu_compute.hpp"
-#include "gpubuild/gpu_radix_sort.hpp"
+#include "builders/gpu/gpu_compute.hpp"
+#include "builders/gpu/gpu_radix_sort.hpp"
 
 namespace bvhlab::gpubuild {
 

@@ -1,5 +1,5 @@
-// lbvh-gpu's passes and download (gpubuild/gpu_lbvh.hpp).
-#include "gpubuild/gpu_lbvh.hpp"
+// lbvh-gpu's passes and download (builders/gpu/gpu_lbvh.hpp).
+#include "builders/gpu/gpu_lbvh.hpp"
 
 #include <array>
 #include <stdexcept>

@@ -1,5 +1,5 @@
-// The GPU radix sort (gpubuild/gpu_radix_sort.hpp).
-#include "gpubuild/gpu_radix_sort.hpp"
+// The GPU radix sort (builders/gpu/gpu_radix_sort.hpp).
+#include "builders/gpu/gpu_radix_sort.hpp"
 
 #include <utility>
 

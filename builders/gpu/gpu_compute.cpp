@@ -1,5 +1,5 @@
-// The GL glue of the GPU builders (gpubuild/gpu_compute.hpp).
-#include "gpubuild/gpu_compute.hpp"
+// The GL glue of the GPU builders (builders/gpu/gpu_compute.hpp).
+#include "builders/gpu/gpu_compute.hpp"
 
 #include <stdexcept>
 

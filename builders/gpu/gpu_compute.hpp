@@ -1,4 +1,4 @@
-// The GL glue of the GPU builders: a compute program made from an embedded .glsl module (gpubuild/),
+// The GL glue of the GPU builders: a compute program made from an embedded .glsl module (builders/gpu/),
 // its dispatch with an error that names the pass, and the implementation limits a build must fit in.
 #pragma once
 #include <cstdint>
