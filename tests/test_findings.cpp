@@ -3,6 +3,7 @@
 // autocorrelated rounds, and a fake clock with drift and AR(1) noise that checks the whole rule both
 // ways (identical configurations are rarely called, a real 10% difference is).
 #include <cmath>
+#include <map>
 #include <random>
 
 #include "experiments/findings.hpp"
@@ -264,6 +265,38 @@ TEST(FindingsBaselines, TheBaselineIsTheConfigsFirstValueOrItsChoiceNeverTheFast
   // Config order, not row order: b1 listed first.
   const json reordered = computeFindings(rows, json{{"builder", {"b1", "b0", "b2"}}});
   for (const json& c : reordered["comparisons"]) EXPECT_EQ(c["b_label"], "b1") << c.dump();
+}
+
+// Kernels are nested in layouts: in a layout the kernel baseline does not walk, its kernels are compared
+// with its first kernel in config order; and the layout comparison takes each layout at that kernel.
+TEST(FindingsBaselines, KernelsOfALayoutWithoutTheBaselineKernelAreComparedWithItsFirstKernel) {
+  FakeClock clock(5);
+  json rows = oneProcess(clock, 4, {1.0, 1.2, 0.8, 1.1}, true);
+  const std::vector<std::pair<std::string, std::string>> runs = {
+      {"v1", "ko"}, {"v1", "ku"}, {"w8", "new"}, {"w8", "old"}};
+  for (size_t i = 0; i < runs.size(); ++i) {
+    rows[i]["builder"] = "b";
+    rows[i]["layout"] = runs[i].first;
+    rows[i]["kernel"] = runs[i].second;
+  }
+  const json order = {{"layout", {"v1", "w8"}}, {"kernel", {"ko", "ku", "new", "old"}}};
+  const json f = computeFindings(rows, order);
+  std::map<std::string, std::string> kernelPairs;  // a_label -> b_label on the kernel axis
+  std::vector<std::string> layoutPairs;
+  for (const json& c : f["comparisons"]) {
+    if (c["kind"] != "axis") continue;
+    if (c["axis"] == "kernel") kernelPairs[c["a_label"]] = c["b_label"];
+    if (c["axis"] == "layout") layoutPairs.push_back(c["a_values"]["kernel"].get<std::string>() + "/" +
+                                                     c["b_values"]["kernel"].get<std::string>());
+  }
+  EXPECT_EQ(kernelPairs, (std::map<std::string, std::string>{{"ku", "ko"}, {"old", "new"}})) << f.dump();
+  EXPECT_EQ(layoutPairs, (std::vector<std::string>{"new/ko"})) << f.dump();
+  // Listing the old kernel first makes it w8's reference instead.
+  const json reordered = computeFindings(rows, json{{"layout", {"v1", "w8"}}, {"kernel", {"ko", "ku", "old", "new"}}});
+  bool found = false;
+  for (const json& c : reordered["comparisons"])
+    if (c["kind"] == "axis" && c["axis"] == "kernel" && c["a_label"] == "new") found = c["b_label"] == "old";
+  EXPECT_TRUE(found) << reordered.dump();
 }
 
 TEST_F(Experiments, FindingsBaselineIsValidatedWithFileLineAndKey) {
