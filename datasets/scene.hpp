@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -107,6 +108,8 @@ struct RenderSettings {
 // 2^-13 = 1.2e-4, about where it reaches the tracer's secondary-ray offsets and rounding would show.
 constexpr double kRebaseDistance = 1024.0;
 
+struct SceneAnimation;  // datasets/animation.hpp
+
 struct Scene {
   std::filesystem::path source;  // scene file (or mesh file) it came from
   // World position of this scene's coordinate origin. Every position (camera, lights, object
@@ -124,6 +127,10 @@ struct Scene {
   std::vector<Mesh> meshes;      // world-space triangles
   std::vector<Image> images;     // textures and world maps
   RenderSettings settings;
+  // The clip, keys, deformations and object-space rest meshes of an animated scene (a [clip] in the
+  // scene file; datasets/animation.hpp), or null for a static scene. Immutable and shared by copies;
+  // the fields above hold frame 0 (setFrame moves them to another frame).
+  std::shared_ptr<const SceneAnimation> animation;
 
   size_t triangleCount() const;
 };

@@ -10,15 +10,18 @@
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <tuple>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <toml++/toml.h>
 
+#include "datasets/animation_reader.hpp"
 #include "datasets/bench_generators.hpp"
 #include "datasets/image_io.hpp"
 #include "datasets/mesh_io.hpp"
 #include "datasets/procedural.hpp"
 #include "datasets/scene_io.hpp"
+#include "datasets/toml_fields.hpp"
 #include "datasets/toml_guard.hpp"
 
 namespace bvhlab {
@@ -26,43 +29,17 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using namespace toml_fields;
+
 constexpr std::string_view kBuiltinPrefix = "builtin:";
 constexpr int kBuiltinTextureSize = 512;
 constexpr int kMaxImageSide = 16384;
 constexpr int kMaxDepth = 32;
 
-struct Range {
-  double lo, hi;
-  bool loOpen, hiOpen;
-  bool contains(double v) const {
-    return (loOpen ? v > lo : v >= lo) && (hiOpen ? v < hi : v <= hi);
-  }
-  std::string describe() const {
-    auto num = [](double x) {
-      std::ostringstream s;
-      s << x;
-      return s.str();
-    };
-    if (std::isinf(hi)) return std::string(loOpen ? "> " : ">= ") + num(lo);
-    return std::string(loOpen ? "(" : "[") + num(lo) + ", " + num(hi) + (hiOpen ? ")" : "]");
-  }
-};
-constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr Range kNonNegative{0.0, kInf, false, true};
-constexpr Range kPositive{0.0, kInf, true, true};
-constexpr Range kUnit{0.0, 1.0, false, false};
-constexpr Range kAny{-kInf, kInf, true, true};
-
-std::string fmt(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 // Reads one TOML scene file into a Scene; all validation and error formatting lives here.
-class SceneReader {
+class SceneReader : toml_fields::TomlFields {
  public:
-  explicit SceneReader(const fs::path& file) : file_(file), dir_(file.parent_path()) {}
+  explicit SceneReader(const fs::path& file) : TomlFields(file), dir_(file.parent_path()), anim_(file) {}
 
   Scene read() {
     std::error_code ec;
@@ -83,11 +60,16 @@ class SceneReader {
       failAt(e.source().begin.line, "TOML syntax error: " + std::string(e.description()));
     }
     scene_.source = file_;
-    checkKeys(root, {"description", "camera", "render", "world", "light", "material", "object"}, "the top level");
+    checkKeys(root, {"description", "clip", "camera", "render", "world", "light", "material", "object"}, "the top level");
     if (auto* d = root.get("description"); d && !d->is_string()) fail(*d, "description must be a string");
 
     const toml::table* camera = tableAt(root, "camera");
     if (!camera) failAt(1, "missing [camera] section (eye and target are required)");
+    // A [clip] makes the scene animated (datasets/animation.hpp); keys and deformations need one.
+    if (const toml::table* t = tableAt(root, "clip")) {
+      animation_ = std::make_shared<SceneAnimation>();
+      animation_->clip = anim_.readClip(*t);
+    }
     readCamera(*camera);
     if (const toml::table* t = tableAt(root, "render")) readRender(*t);
     if (const toml::table* t = tableAt(root, "world")) readWorld(*t);
@@ -96,106 +78,30 @@ class SceneReader {
     const auto objects = tableArray(root, "object");
     if (objects.empty()) failAt(1, "scene has no [[object]]");
     for (const toml::table* t : objects) readObject(*t);
+    if (animation_) {
+      scene_.animation = animation_;
+      setFrame(scene_, 0);  // the loaded scene is frame 0: animated meshes and transforms written here
+    }
     return std::move(scene_);
   }
 
  private:
-  fs::path file_, dir_;
+  fs::path dir_;
   Scene scene_;
   std::map<std::string, int> imageIndex_;     // canonical path or builtin name -> Scene::images
   std::map<std::string, MeshData> meshCache_; // canonical path -> object-space mesh (double positions)
   std::map<std::string, int> materialIndex_;  // name -> Scene::materials
+  AnimationReader anim_;
+  std::shared_ptr<SceneAnimation> animation_;  // null: no [clip]
+  // (mesh data, fit, unwelded) -> SceneAnimation::localMeshes: instances of one mesh share their rest mesh.
+  std::map<std::tuple<const MeshData*, double, bool>, int> localMeshIndex_;
+  const Clip* clip() const { return animation_ ? &animation_->clip : nullptr; }
 
-  // ---- errors ----
-  [[noreturn]] void failAt(size_t line, const std::string& message) const {
-    throw InputError(file_.string() + ":" + std::to_string(line) + ": " + message);
-  }
-  [[noreturn]] void fail(const toml::node& node, const std::string& message) const {
-    failAt(node.source().begin.line, message);
-  }
-
-  // ---- structure ----
-  void checkKeys(const toml::table& t, std::initializer_list<std::string_view> allowed, const std::string& where) const {
-    for (auto&& [key, node] : t) {
-      if (std::find(allowed.begin(), allowed.end(), key.str()) != allowed.end()) continue;
-      std::string list;
-      for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      failAt(key.source().begin.line ? key.source().begin.line : node.source().begin.line,
-             "unknown key '" + std::string(key.str()) + "' in " + where + " (allowed: " + list + ")");
-    }
-  }
-
-  const toml::table* tableAt(const toml::table& root, std::string_view key) const {
-    const toml::node* n = root.get(key);
-    if (!n) return nullptr;
-    if (!n->is_table()) fail(*n, "'" + std::string(key) + "' must be a table: write [" + std::string(key) + "]");
-    return n->as_table();
-  }
-
-  std::vector<const toml::table*> tableArray(const toml::table& root, std::string_view key) const {
-    std::vector<const toml::table*> out;
-    const toml::node* n = root.get(key);
-    if (!n) return out;
-    const toml::array* a = n->as_array();
-    if (!a || !a->is_array_of_tables())
-      fail(*n, "'" + std::string(key) + "' must be an array of tables: write [[" + std::string(key) + "]]");
-    for (const toml::node& e : *a) out.push_back(e.as_table());
-    return out;
-  }
-
-  // ---- typed values ----
-  double number(const toml::node& n, const std::string& name, Range range = kAny) const {
-    if (!n.is_number()) fail(n, name + " must be a number");
-    const double v = n.value<double>().value_or(0.0);
-    if (!std::isfinite(v)) fail(n, name + " is NaN or infinite");
-    if (!range.contains(v)) fail(n, name + " must be " + range.describe() + " (got " + fmt(v) + ")");
-    return v;
-  }
-  float getFloat(const toml::table& t, std::string_view key, const std::string& where, float def,
-                 Range range = kAny) const {
-    const toml::node* n = t.get(key);
-    return n ? float(number(*n, where + "." + std::string(key), range)) : def;
-  }
-  int getInt(const toml::table& t, std::string_view key, const std::string& where, int def, int lo, int hi) const {
-    const toml::node* n = t.get(key);
-    if (!n) return def;
-    const std::string name = where + "." + std::string(key);
-    if (!n->is_integer()) fail(*n, name + " must be an integer");
-    const int64_t v = n->value<int64_t>().value_or(0);
-    if (v < lo || v > hi) fail(*n, name + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + std::to_string(v) + ")");
-    return int(v);
-  }
-  bool getBool(const toml::table& t, std::string_view key, const std::string& where, bool def) const {
-    const toml::node* n = t.get(key);
-    if (!n) return def;
-    if (!n->is_boolean()) fail(*n, where + "." + std::string(key) + " must be true or false");
-    return n->value<bool>().value_or(def);
-  }
-  std::optional<std::string> getString(const toml::table& t, std::string_view key, const std::string& where) const {
-    const toml::node* n = t.get(key);
-    if (!n) return std::nullopt;
-    if (!n->is_string()) fail(*n, where + "." + std::string(key) + " must be a string");
-    return n->value<std::string>();
-  }
-  std::string requireString(const toml::table& t, std::string_view key, const std::string& where) const {
-    auto s = getString(t, key, where);
-    if (!s) failAt(t.source().begin.line, where + ": missing required key '" + std::string(key) + "'");
-    return *s;
-  }
   // The `mesh` node of a mesh object (a missing one is reported, never dereferenced).
   const toml::node& requireMeshNode(const toml::table& t, const std::string& where) const {
     const toml::node* n = t.get("mesh");
     if (!n) failAt(t.source().begin.line, where + ": missing required key 'mesh' (or 'generate')");
     return *n;
-  }
-  // An array of exactly N numbers, each in `range`.
-  template <int N>
-  glm::vec<N, float> vecOf(const toml::node& n, const std::string& name, Range range = kAny) const {
-    const toml::array* a = n.as_array();
-    if (!a || a->size() != size_t(N)) fail(n, name + " must be an array of " + std::to_string(N) + " numbers");
-    glm::vec<N, float> v;
-    for (int i = 0; i < N; ++i) v[i] = float(number(*a->get(size_t(i)), name + "[" + std::to_string(i) + "]", range));
-    return v;
   }
   // A position, read in double precision and stored relative to the scene's origin (Scene::origin), so
   // a scene far from the world origin keeps the float precision of the same scene near it.
@@ -204,40 +110,6 @@ class SceneReader {
     if (!n) return std::nullopt;
     return glm::vec3(pointOf(*n, where + "." + std::string(key)) - scene_.origin);
   }
-  glm::dvec3 pointOf(const toml::node& n, const std::string& name) const {
-    const toml::array* a = n.as_array();
-    if (!a || a->size() != 3) fail(n, name + " must be an array of 3 numbers");
-    glm::dvec3 v;
-    for (int i = 0; i < 3; ++i) v[i] = number(*a->get(size_t(i)), name + "[" + std::to_string(i) + "]");
-    return v;
-  }
-  std::optional<glm::vec3> getVec3(const toml::table& t, std::string_view key, const std::string& where,
-                                   Range range = kAny) const {
-    const toml::node* n = t.get(key);
-    if (!n) return std::nullopt;
-    return vecOf<3>(*n, where + "." + std::string(key), range);
-  }
-  glm::vec3 requireVec3(const toml::table& t, std::string_view key, const std::string& where, Range range = kAny) const {
-    auto v = getVec3(t, key, where, range);
-    if (!v) failAt(t.source().begin.line, where + ": missing required key '" + std::string(key) + "'");
-    return *v;
-  }
-  // A number s (meaning [s, s, s] / [s, s]) or an array of N numbers.
-  template <int N>
-  glm::vec<N, float> scalarOrVec(const toml::node& n, const std::string& name, Range range) const {
-    if (n.is_number()) return glm::vec<N, float>(float(number(n, name, range)));
-    return vecOf<N>(n, name, range);
-  }
-
-  // Keys that only some kinds accept: a clear message instead of a bare "unknown key".
-  void rejectForeignKeys(const toml::table& t, const std::string& where, const std::string& kind,
-                         std::initializer_list<std::pair<std::string_view, std::string_view>> keyToKind) const {
-    for (auto [key, owner] : keyToKind)
-      if (owner != kind)
-        if (const toml::node* n = t.get(key))
-          fail(*n, where + ": key '" + std::string(key) + "' is only valid with kind = \"" + std::string(owner) + "\"");
-  }
-
   // ---- files ----
   fs::path resolve(const std::string& relative) const { return (dir_ / relative).lexically_normal(); }
 
@@ -336,8 +208,12 @@ class SceneReader {
   // ---- sections ----
   void readCamera(const toml::table& t) {
     const std::string w = "camera";
-    checkKeys(t, {"eye", "target", "up", "fov"}, "[camera]");
+    checkKeys(t, {"eye", "target", "up", "fov", "keys"}, "[camera]");
     Camera& c = scene_.camera;
+    if (const toml::node* keys = t.get("keys")) {
+      readCameraPath(t, *keys);
+      return;
+    }
     if (!t.get("eye")) failAt(t.source().begin.line, w + ": missing required key 'eye'");
     if (!t.get("target")) failAt(t.source().begin.line, w + ": missing required key 'target'");
     // Camera-relative coordinates for far scenes: every position is stored relative to the eye (the
@@ -348,16 +224,52 @@ class SceneReader {
     if (glm::any(glm::greaterThanEqual(glm::abs(eye), glm::dvec3(kRebaseDistance)))) scene_.origin = eye;
     c.eye = *getPoint(t, "eye", w);
     c.target = *getPoint(t, "target", w);
-    c.up = getVec3(t, "up", w).value_or(glm::vec3(0, 1, 0));
-    c.fovDeg = getFloat(t, "fov", w, c.fovDeg, Range{0.0, 180.0, true, true});
+    readCameraLens(t);
+    if (const char* problem = cameraProblem(c)) failAt(t.source().begin.line, std::string("camera: ") + problem);
+  }
+
+  void readCameraLens(const toml::table& t) {
+    Camera& c = scene_.camera;
+    c.up = getVec3(t, "up", "camera").value_or(glm::vec3(0, 1, 0));
+    c.fovDeg = getFloat(t, "fov", "camera", c.fovDeg, Range{0.0, 180.0, true, true});
+    if (!(glm::length(c.up) > 0.0f)) fail(*t.get("up"), "camera.up must not be zero");
+  }
+
+  // Why the camera has no view basis, or null.
+  static const char* cameraProblem(const Camera& c) {
     const glm::vec3 view = c.target - c.eye;
     // Relative tolerances: a view vector shorter than 1e-6 of the eye's magnitude, or an up vector
     // within ~0.06 degrees of it, leaves the camera basis undefined or numerically meaningless.
     const float scale = std::max({1.0f, glm::length(c.eye), glm::length(c.target)});
-    if (!(glm::length(view) > 1e-6f * scale)) failAt(t.source().begin.line, "camera: eye and target coincide");
-    if (!(glm::length(c.up) > 0.0f)) fail(*t.get("up"), "camera.up must not be zero");
+    if (!(glm::length(view) > 1e-6f * scale)) return "eye and target coincide";
     if (!(glm::length(glm::cross(glm::normalize(view), glm::normalize(c.up))) > 1e-3f))
-      failAt(t.source().begin.line, "camera: up is parallel to the view direction");
+      return "up is parallel to the view direction";
+    return nullptr;
+  }
+
+  // [[camera.keys]]: the camera path (datasets/animation.hpp); the origin follows the first key's eye.
+  void readCameraPath(const toml::table& t, const toml::node& keys) {
+    for (const char* k : {"eye", "target"})
+      if (const toml::node* n = t.get(k))
+        fail(*n, "camera: give either eye and target or [[camera.keys]], not both (the keys hold the eye and target)");
+    readCameraLens(t);
+    const std::vector<CameraKeyInput> in = anim_.readCameraKeys(keys, clip(), scene_.camera.fovDeg);
+    const glm::dvec3 eye = in.front().key.eye;
+    if (glm::any(glm::greaterThanEqual(glm::abs(eye), glm::dvec3(kRebaseDistance)))) scene_.origin = eye;
+    std::vector<CameraKey>& path = animation_->camera;
+    for (CameraKeyInput k : in) {
+      k.key.eye -= scene_.origin;
+      k.key.target -= scene_.origin;
+      path.push_back(k.key);
+    }
+    // Every frame of the clip must have a camera basis, between keys too.
+    size_t key = 0;
+    for (int f = 0; f < animation_->clip.frames; ++f) {
+      while (key + 1 < in.size() && in[key + 1].key.frame <= f) ++key;
+      if (const char* problem = cameraProblem(sampleCamera(path, double(f), scene_.camera)))
+        failAt(in[key].line, "camera.keys: at frame " + std::to_string(f) + " " + problem);
+    }
+    scene_.camera = sampleCamera(path, 0.0, scene_.camera);
   }
 
   void readRender(const toml::table& t) {
@@ -463,7 +375,7 @@ class SceneReader {
 
   void readObject(const toml::table& t) {
     checkKeys(t, {"kind", "name", "material", "translate", "rotate", "scale", "major_radius", "minor_radius",
-                  "infinite", "mesh", "fit", "generate", "triangles", "seed"},
+                  "infinite", "mesh", "fit", "generate", "triangles", "seed", "keys", "deform"},
               "[[object]]");
     Object o;
     const std::string ordinal = "object " + std::to_string(scene_.objects.size() + 1);
@@ -481,7 +393,7 @@ class SceneReader {
     const std::string w = ordinal + " (" + o.name + ")";
     rejectForeignKeys(t, w, kind, {{"major_radius", "torus"}, {"minor_radius", "torus"}, {"infinite", "plane"},
                                    {"mesh", "mesh"}, {"fit", "mesh"}, {"generate", "mesh"}, {"triangles", "mesh"},
-                                   {"seed", "mesh"}});
+                                   {"seed", "mesh"}, {"deform", "mesh"}});
 
     if (auto name = getString(t, "material", w)) {
       auto it = materialIndex_.find(*name);
@@ -495,6 +407,17 @@ class SceneReader {
     } else {
       o.material = defaultMaterial();
     }
+    // Animation (datasets/animation.hpp): keys replace the fixed placement; a deformation bends the mesh
+    // in object space before the placement or the keys.
+    ObjectAnimation anim;
+    if (const toml::node* keys = t.get("keys")) {
+      for (const char* k : {"translate", "rotate", "scale"})
+        if (const toml::node* n = t.get(k))
+          fail(*n, w + ": '" + k + "' and keys exclude each other (the keys place the object: give position, "
+                   "rotation and scale in them)");
+      anim.keys = anim_.readObjectKeys(*keys, clip(), scene_.origin, w);
+    }
+    if (const toml::node* d = t.get("deform")) anim.deform = anim_.readDeform(*d, clip(), w);
 
     // World = translate + R S local, so subtracting the origin from the translation rebases the object.
     // The float transform places analytic objects; mesh vertices go through the same transform in
@@ -536,9 +459,20 @@ class SceneReader {
     if (o.kind == ObjectKind::Plane) o.infinite = getBool(t, "infinite", w, false);
     if (o.kind == ObjectKind::Mesh) {
       const MeshData& data = t.get("generate") ? generatedMeshFor(t, w) : meshFor(requireMeshNode(t, w), requireString(t, "mesh", w));
+      const glm::dmat4 placement = toWorldD;
+      float fitSize = 0.0f;
       if (const toml::node* fit = t.get("fit")) {
-        const float size = float(number(*fit, w + ".fit", kPositive));
-        toWorldD = toWorldD * fitTransform(data, size);
+        fitSize = float(number(*fit, w + ".fit", kPositive));
+        toWorldD = toWorldD * fitTransform(data, fitSize);
+      }
+      if (anim.animated()) {
+        anim.placement = placement;
+        o.mesh = int(scene_.meshes.size());
+        scene_.meshes.push_back(animatedMesh(t, data, fitSize, anim));  // positions written by setFrame
+        scene_.meshes.back().material = o.material;
+        scene_.objects.push_back(o);
+        animation_->objects.push_back(std::move(anim));
+        return;
       }
       Mesh mesh;
       try {
@@ -552,6 +486,44 @@ class SceneReader {
       scene_.meshes.push_back(std::move(mesh));
     }
     scene_.objects.push_back(o);
+    if (animation_) animation_->objects.push_back(std::move(anim));
+  }
+
+  // An animated mesh object's rest mesh in object space (after `fit`; shared with every object of the
+  // same data, fit and piece split), its deformation's defaults from that mesh, and a copy of the rest
+  // mesh as the object's scene mesh (setFrame writes its world positions).
+  Mesh animatedMesh(const toml::table& t, const MeshData& data, float fitSize, ObjectAnimation& anim) {
+    const bool unweld = anim.deform.kind == DeformKind::Explode && !anim.deform.componentPieces;
+    const auto key = std::make_tuple(&data, double(fitSize), unweld);
+    auto it = localMeshIndex_.find(key);
+    if (it == localMeshIndex_.end()) {
+      Mesh rest;
+      try {
+        rest = bakeMesh(data, fitSize > 0.0f ? fitTransform(data, fitSize) : glm::dmat4(1.0));
+      } catch (const InputError& e) {
+        fail(t.get("mesh") ? *t.get("mesh") : *t.get("generate"), std::string("mesh: ") + e.what());
+      }
+      if (unweld) rest = unweldTriangles(rest);
+      it = localMeshIndex_.emplace(key, int(animation_->localMeshes.size())).first;
+      animation_->localMeshes.push_back(std::move(rest));
+    }
+    anim.localMesh = it->second;
+    const Mesh& rest = animation_->localMeshes[size_t(it->second)];
+    Deform& d = anim.deform;
+    if (anim.deforms()) {
+      glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+      for (const glm::vec3& p : rest.positions) {
+        lo = glm::min(lo, glm::dvec3(p));
+        hi = glm::max(hi, glm::dvec3(p));
+      }
+      if (!d.centreGiven && !rest.positions.empty()) d.centre = 0.5 * lo + 0.5 * hi;
+      double half = 0.0;
+      for (const glm::vec3& p : rest.positions) half = std::max(half, std::abs(glm::dot(glm::dvec3(p) - d.centre, d.axis)));
+      // A mesh flat across the twist axis has no height to twist over: every angle is then 0 anyway.
+      anim.halfHeight = half > 0.0 ? half : 1.0;
+      if (d.kind == DeformKind::Explode) prepareExplode(anim, rest);
+    }
+    return rest;
   }
 
   // Moves the mesh's bounding box so its bottom centre is at the origin and scales it uniformly so

@@ -1,0 +1,52 @@
+// Refitting a tree to moved triangles: the topology stays, every box is recomputed bottom-up.
+//
+// A leaf's box becomes the union of the boxes of the triangles it references, an inner node's the
+// union of its two children's boxes: exact (min/max of floats, no epsilon), so a refit of a tree over
+// triangles that did not move gives back the builder's boxes (bit for bit up to the sign of a zero
+// coordinate: min(-0, +0) keeps whichever came first, and the builder and the refit may meet the two
+// in different orders). One thread: the work is a single pass over the nodes, and its result cannot
+// depend on a thread count.
+//
+// A tree whose builder splits primitives (sbvh) references a triangle from several leaves, each box
+// holding a clipped part of it; a refit cannot know the clip regions of moved triangles and gives each
+// such leaf the box of its whole triangles (still a valid, conservative tree, no longer the builder's).
+#pragma once
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "builders/bvh.hpp"
+
+namespace bvhlab {
+
+// The triangles of one frame: triangle i is (v0[i], v1[i], v2[i]); the three spans have one length.
+struct FrameTriangles {
+  std::span<const glm::vec3> v0, v1, v2;
+  size_t size() const { return v0.size(); }
+};
+
+// Every node reachable from the root, children before their parent (a post-order), for refitBvh. It
+// depends on the topology only: compute it once and reuse it while the topology does not change.
+// Throws std::invalid_argument for a tree that is not one (child out of range, node reached twice).
+std::vector<uint32_t> refitOrder(const Bvh& bvh);
+
+// Recomputes the boxes of the nodes in `order` (refitOrder(bvh)) from `frame`. Throws
+// std::invalid_argument when the spans differ in length or a leaf references a triangle past their
+// end, and InputError (datasets/scene.hpp) naming the triangle when a vertex is not finite (the tree
+// is left partly refit then).
+void refitBvh(Bvh& bvh, std::span<const uint32_t> order, const FrameTriangles& frame);
+// The same with the order computed here.
+void refitBvh(Bvh& bvh, const FrameTriangles& frame);
+
+// The box of triangle i of the frame (the one builders get: layout/layout.hpp triangleBoxes).
+inline Aabb triangleBox(const FrameTriangles& frame, size_t i) {
+  Aabb box;
+  box.grow(frame.v0[i]);
+  box.grow(frame.v1[i]);
+  box.grow(frame.v2[i]);
+  return box;
+}
+
+}  // namespace bvhlab
