@@ -20,6 +20,7 @@
 #include "render/frame_stats.hpp"
 #include "render/gl_context.hpp"
 #include "render/ray_tracer_gl.hpp"
+#include "render/trace_clip.hpp"
 #include "render/trace_run.hpp"
 
 namespace bvhlab {
@@ -103,6 +104,7 @@ json traceGroup(const GroupSpec& spec) {
   std::map<std::string, Scene> scenes;
   std::map<std::string, std::shared_ptr<const PreparedScene>> trees;  // runs with one treeKey share it
   json deferred = json::object();
+  json clips = json::object();  // runs with --update: measured on their own (traceClip)
   const double fraction = groupMemoryFraction();
   const double budget = fraction * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
   uint64_t uploads = 0;  // GL bytes the runs set up so far will upload (tree and rays)
@@ -112,6 +114,20 @@ json traceGroup(const GroupSpec& spec) {
     try {
       if (!item.error.empty()) throw InputError(item.error);
       r->cmd = parseTraceArgs(item.args);
+      if (!r->cmd.update.empty()) {
+        // A clip (`trace --update`) is its own measured unit: its frames are timed in order, in a GL
+        // context of its own made and dropped here, before the group's; it is not interleaved with
+        // the group's runs.
+        uint64_t overflows = 0;
+        json j = traceClip(r->cmd, overflows);
+        j["session"] = g.session;
+        j["program"] = nullptr;
+        if (overflows > 0)
+          clips[r->key] = {{"error", "traversal stack overflowed on " + std::to_string(overflows) + " rays"}, {"result", j}};
+        else
+          clips[r->key] = std::move(j);
+        continue;
+      }
       auto scene = scenes.find(r->cmd.render.input);
       if (scene == scenes.end()) scene = scenes.emplace(r->cmd.render.input, loadInput(r->cmd.render.input)).first;
       r->setup.emplace(setupTrace(r->cmd, &scene->second, &trees));
@@ -325,6 +341,7 @@ json traceGroup(const GroupSpec& spec) {
   }
   for (auto& r : runs) r->copies.clear();  // before the context goes
   results.update(deferred);
+  results.update(clips);
   out["runs"] = std::move(results);
   out["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
