@@ -30,7 +30,7 @@ namespace {
 // key, i = last at or after the last key (the caller then takes that key as it is).
 template <class Key>
 std::pair<size_t, double> locate(const std::vector<Key>& keys, double frame) {
-  // The first key whose frame is greater than `frame` (a NaN frame compares false: the first key).
+  // The first key whose frame is greater than `frame` (none for a NaN frame: then the last key holds).
   const auto next = std::upper_bound(keys.begin(), keys.end(), frame,
                                      [](double f, const Key& k) { return f < double(k.frame); });
   if (next == keys.begin()) return {0, 0.0};

@@ -145,6 +145,12 @@ void setFrame(Scene& scene, int frame);
 // A copy of `scene` at `frame` (the animation data is shared, not copied: see Scene::animation).
 Scene sceneAtFrame(const Scene& scene, int frame);
 
+// The world-space corners of every triangle of the scene as it stands (after setFrame), in
+// gatherTriangles order: triangle i is (v0[i], v1[i], v2[i]). What a refit or a rebuild needs per frame
+// (builders/refit.hpp FrameTriangles spans them), without gatherTriangles' normals, uvs and checks.
+void triangleCorners(const Scene& scene, std::vector<glm::vec3>& v0, std::vector<glm::vec3>& v1,
+                     std::vector<glm::vec3>& v2);
+
 // An object as an instance for two-level trees: its local-space triangles and its transform at a frame.
 // Moving or deforming mesh objects have object-space triangles (localMesh >= 0; a static one is its
 // world-space mesh with the identity transform).
@@ -161,5 +167,8 @@ std::vector<ObjectInstance> objectInstances(const Scene& scene, int frame);
 // The object's local-space mesh at `frame`: the rest mesh deformed (rest mesh when it does not deform;
 // the world-space mesh for a static mesh object). Triangles and vertex order as the rest mesh's.
 Mesh localMeshAt(const Scene& scene, int object, int frame);
+// The object's world-space mesh at `frame` (what setFrame writes into Scene::meshes) without changing
+// the scene. Throws InputError when a vertex leaves float's range.
+Mesh worldMeshAt(const Scene& scene, int object, int frame);
 
 }  // namespace bvhlab

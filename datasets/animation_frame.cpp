@@ -87,6 +87,22 @@ Scene sceneAtFrame(const Scene& scene, int frame) {
   return copy;
 }
 
+void triangleCorners(const Scene& scene, std::vector<glm::vec3>& v0, std::vector<glm::vec3>& v1,
+                     std::vector<glm::vec3>& v2) {
+  const size_t n = scene.triangleCount();
+  v0.resize(n), v1.resize(n), v2.resize(n);
+  size_t i = 0;
+  for (const Mesh& m : scene.meshes)
+    for (const glm::uvec3& t : m.triangles) {
+      // An index past the vertices is refused, as gatherTriangles refuses it, never read.
+      const size_t count = m.positions.size();
+      if (t.x >= count || t.y >= count || t.z >= count)
+        throw InputError("mesh '" + m.name + "': triangle " + std::to_string(i) + " uses a vertex past " + std::to_string(count));
+      v0[i] = m.positions[t.x], v1[i] = m.positions[t.y], v2[i] = m.positions[t.z];
+      ++i;
+    }
+}
+
 std::vector<ObjectInstance> objectInstances(const Scene& scene, int frame) {
   checkFrame(scene, frame);
   std::vector<uint32_t> first(scene.meshes.size() + 1, 0);
@@ -115,6 +131,23 @@ std::vector<ObjectInstance> objectInstances(const Scene& scene, int frame) {
     }
     out.push_back(inst);
   }
+  return out;
+}
+
+Mesh worldMeshAt(const Scene& scene, int object, int frame) {
+  checkFrame(scene, frame);
+  if (object < 0 || size_t(object) >= scene.objects.size())
+    throw std::out_of_range("object " + std::to_string(object) + " of " + std::to_string(scene.objects.size()));
+  const Object& o = scene.objects[size_t(object)];
+  if (o.kind != ObjectKind::Mesh) throw std::invalid_argument("object '" + o.name + "' is not a mesh");
+  const ObjectAnimation* anim =
+      scene.animation && size_t(object) < scene.animation->objects.size() ? &scene.animation->objects[size_t(object)] : nullptr;
+  if (!anim || anim->localMesh < 0) return scene.meshes[size_t(o.mesh)];
+  Mesh out;
+  out.name = scene.meshes[size_t(o.mesh)].name;
+  out.material = scene.meshes[size_t(o.mesh)].material;
+  writeMesh(*anim, scene.animation->localMeshes[size_t(anim->localMesh)], timeOf(scene, frame), transformAt(*anim, frame), out,
+            "object '" + o.name + "' at frame " + std::to_string(frame));
   return out;
 }
 

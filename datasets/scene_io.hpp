@@ -1,5 +1,6 @@
 // Scenes from files: TOML scene descriptions (docs/scene-format.md) and bare meshes.
-// Code: scene_reader.cpp (TOML), scene_io.cpp (bare meshes, loadInput), scene_transform.cpp.
+// Code: scene_reader.cpp (TOML), scene_io.cpp (bare meshes, loadInput), scene_transform.cpp;
+// animated scenes (a [clip]): datasets/animation.hpp.
 // Every problem with an input is one InputError line, "FILE:LINE: message" where a line is known.
 #pragma once
 #include <filesystem>

@@ -1,6 +1,8 @@
 // The TOML scene reader (scene_io.hpp's loadScene, docs/scene-format.md): every key validated, every
 // error one line "FILE:LINE: message". Positions are read in double and stored relative to
 // Scene::origin; mesh files are read in double (loadMeshData) and baked to world space in double.
+// Typed value reads live in toml_fields.hpp; a [clip]'s keys and deformations are read by
+// animation_reader.cpp and evaluated by datasets/animation.hpp (the loaded scene is frame 0).
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -80,6 +82,7 @@ class SceneReader : toml_fields::TomlFields {
     for (const toml::table* t : objects) readObject(*t);
     if (animation_) {
       scene_.animation = animation_;
+      checkAnimatedMeshes(objects);
       setFrame(scene_, 0);  // the loaded scene is frame 0: animated meshes and transforms written here
     }
     return std::move(scene_);
@@ -524,6 +527,27 @@ class SceneReader : toml_fields::TomlFields {
       if (d.kind == DeformKind::Explode) prepareExplode(anim, rest);
     }
     return rest;
+  }
+
+  // Every animated mesh stays within float's range at frame 0, its key frames and the last frame: between
+  // keys a rigid pose is a convex blend of the keys' (positions and scales; rotations keep lengths),
+  // wave, twist and breathe are bounded by their amplitude, and explode's pieces are farthest out at
+  // the end.
+  void checkAnimatedMeshes(const std::vector<const toml::table*>& tables) const {
+    for (size_t i = 0; i < scene_.objects.size(); ++i) {
+      const ObjectAnimation& a = animation_->objects[i];
+      if (scene_.objects[i].kind != ObjectKind::Mesh || a.localMesh < 0) continue;
+      std::vector<int> frames = {0, animation_->clip.frames - 1};
+      for (const RigidKey& k : a.keys) frames.push_back(k.frame);
+      for (int f : frames) {
+        try {
+          worldMeshAt(scene_, int(i), f);
+        } catch (const InputError& e) {
+          const toml::node* n = tables[i]->get(a.deforms() ? "deform" : "keys");
+          failAt(n ? n->source().begin.line : tables[i]->source().begin.line, e.what());
+        }
+      }
+    }
   }
 
   // Moves the mesh's bounding box so its bottom centre is at the origin and scales it uniformly so

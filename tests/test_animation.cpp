@@ -262,6 +262,39 @@ TEST(Deformations, ExplodeByComponentsKeepsEachComponentRigid) {
   }
 }
 
+// Normals follow the deformation through its Jacobian: deformJacobian matches central differences of
+// deformPositions. Step ~1e-5 (rest positions are float, so the step actually taken divides): the
+// truncation error is ~h^2 times the third derivative (<= (2 pi / 0.7)^3 ~ 700 here: ~1e-7) and the
+// rounding error ~1e-16 / h = 1e-11, both below the 1e-6 bound.
+TEST(Deformations, JacobianMatchesFiniteDifferences) {
+  std::vector<ObjectAnimation> anims(3);
+  anims[0].deform.kind = DeformKind::Wave;
+  anims[0].deform.amplitude = 0.3, anims[0].deform.wavelength = 0.7, anims[0].deform.frequency = 0.8;
+  anims[0].deform.direction = glm::normalize(glm::dvec3(1, 0.2, 0.3));
+  anims[1].deform.kind = DeformKind::Twist;
+  anims[1].deform.angleDeg = 70, anims[1].deform.frequency = 0.3, anims[1].halfHeight = 1.3;
+  anims[1].deform.axis = glm::normalize(glm::dvec3(0.2, 1, -0.1));
+  anims[1].deform.centre = glm::dvec3(0.1, 0.2, -0.3);
+  anims[2].deform.kind = DeformKind::Breathe;
+  anims[2].deform.amplitude = 0.4, anims[2].deform.frequency = 0.6;
+  const double t = 0.45, h = 1e-5;
+  for (const ObjectAnimation& a : anims)
+    for (const glm::dvec3 p : {glm::dvec3(0.3, -0.7, 0.2), glm::dvec3(-1.1, 0.9, 0.4), glm::dvec3(0.05, 1.2, -0.8)}) {
+      SCOPED_TRACE(deformKindName(a.deform.kind));
+      const glm::dmat3 j = deformJacobian(a, p, t);
+      for (int axis = 0; axis < 3; ++axis) {
+        Mesh two;
+        glm::dvec3 e(0.0);
+        e[axis] = h;
+        two.positions = {glm::vec3(p + e), glm::vec3(p - e)};
+        std::vector<glm::dvec3> out;
+        deformPositions(a, two, t, out);
+        const glm::dvec3 column = (out[0] - out[1]) / (glm::dvec3(two.positions[0]) - glm::dvec3(two.positions[1]))[axis];
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(j[axis][k], column[k], 1e-6) << axis << "," << k;
+      }
+    }
+}
+
 TEST(Deformations, EvaluationIsBitForBitDeterministic) {
   const std::vector<std::string> deforms = {"kind = \"wave\"\namplitude = 0.1\n", "kind = \"twist\"\n",
                                             "kind = \"breathe\"\n", "kind = \"explode\"\n"};
@@ -338,6 +371,9 @@ TEST(SceneAtFrame, InstancesCoverTheSoupAndTheirTransformPlacesTheLocalTriangles
       }
     }
     EXPECT_EQ(next, soup.size());
+    std::vector<glm::vec3> v0, v1, v2;
+    triangleCorners(q, v0, v1, v2);
+    EXPECT_TRUE(sameBits(v0, soup.v0) && sameBits(v1, soup.v1) && sameBits(v2, soup.v2));
   }
 }
 
@@ -353,6 +389,28 @@ TEST(SceneAtFrame, CameraPathMovesTheCamera) {
   EXPECT_FLOAT_EQ(q.camera.eye.z, 2.5f);
   EXPECT_FLOAT_EQ(q.camera.fovDeg, 50.0f);
   EXPECT_EQ(sceneAtFrame(s, 39).camera.eye, glm::vec3(5, 1, 0));
+}
+
+// The example of docs/scene-format.md's "Animation" section loads and moves as the page says.
+TEST(AnimationDocs, TheExampleLoadsAndMoves) {
+  if (!fs::exists(fs::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes/cow.off"))
+    BVHLAB_SKIP_OR_FAIL("needs the dataset cache: run `bash datasets/fetch.sh`");
+  std::ifstream in(fs::path(BVHLAB_SOURCE_DIR) / "docs/scene-format.md");
+  const std::string doc((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t section = doc.find("\n## Animation\n");
+  ASSERT_NE(section, std::string::npos);
+  const size_t begin = doc.find("```toml\n", section);
+  ASSERT_NE(begin, std::string::npos);
+  std::string example = doc.substr(begin + 8, doc.find("```", begin + 8) - begin - 8);
+  for (size_t at = example.find("../cache/"); at != std::string::npos; at = example.find("../cache/", at))
+    example.replace(at, 9, (fs::path(BVHLAB_SOURCE_DIR) / "datasets/cache").string() + "/");
+  const Scene s = loadScene(writeScene("docs", example));
+  ASSERT_TRUE(s.animation);
+  EXPECT_EQ(clipFrames(s), 60);
+  const Scene q = sceneAtFrame(s, 30);
+  EXPECT_EQ(glm::vec3(q.objects[0].transform[3]), glm::vec3(2, 0, 0));
+  EXPECT_TRUE(s.animation->objects[1].deforms());
+  EXPECT_FLOAT_EQ(sceneAtFrame(s, 59).camera.eye.x, 6.0f);
 }
 
 // ---- the bench animations ----
@@ -463,6 +521,10 @@ TEST(AnimationErrors, EveryProblemNamesFileLineAndKey) {
        "deform.pieces must be \"triangles\" or \"components\""},
       {"explode seed", kClip + kCamera + mesh + "[object.deform]\nkind = \"explode\"\nseed = -1 #!\n", "deform.seed must be a non-negative integer"},
       {"NaN deform value", kClip + kCamera + mesh + "[object.deform]\nkind = \"twist\"\nangle = nan #!\n", "deform.angle is NaN or infinite"},
+      {"explode past float's range", kClip + kCamera + mesh + "[object.deform] #!\nkind = \"explode\"\nspeed = 3e38\nspeed_jitter = 0\n",
+       "leaves float's range"},
+      {"key position past float's range", kClip + kCamera + mesh + "[[object.keys]] #!\nframe = 0\n[[object.keys]]\nframe = 9\nposition = [1e39, 0, 0]\n",
+       "object 'mesh1' at frame 39: vertex 0 leaves float's range"},
       {"camera keys and eye", kClip + "[camera]\neye = [0, 1, 5] #!\n[[camera.keys]]\nframe = 0\neye = [0, 1, 5]\ntarget = [0, 0, 0]\n" + box,
        "give either eye and target or [[camera.keys]]"},
       {"camera keys without clip", "[camera]\n[[camera.keys]] #!\nframe = 0\neye = [0, 1, 5]\ntarget = [0, 0, 0]\n" + box,

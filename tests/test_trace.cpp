@@ -361,7 +361,9 @@ std::vector<std::string> benchScenes() {
 
 INSTANTIATE_TEST_SUITE_P(Bench, BenchSceneTrace, ::testing::ValuesIn(benchScenes()),
                          [](const ::testing::TestParamInfo<std::string>& i) {
-                           return i.param.substr(0, i.param.size() - 5);
+                           std::string name = i.param.substr(0, i.param.size() - 5);
+                           std::replace(name.begin(), name.end(), '-', '_');  // gtest names: [A-Za-z0-9_]
+                           return name;
                          });
 
 TEST(TraceCli, JsonHasTheIssueKeys) {

@@ -180,12 +180,12 @@ bool notRaised(double after, double before, size_t nodes) {
 
 // ---- refit ------------------------------------------------------------------------------------------
 
-class EveryBuilder : public ::testing::TestWithParam<std::string> {};
+class RefitEveryBuilder : public ::testing::TestWithParam<std::string> {};
 
 // A refit of a tree over triangles that did not move gives back the builder's tree: the same nodes,
 // bit for bit, and the same tree hash. A builder that splits primitives (sbvh) keeps clipped leaf
 // boxes a refit cannot know: its refit tree holds the build's boxes instead.
-TEST_P(EveryBuilder, RefitOfAnUnmovedMeshIsTheBuild) {
+TEST_P(RefitEveryBuilder, RefitOfAnUnmovedMeshIsTheBuild) {
   const Clip clip = waveClip(40, 30, 1);
   for (uint32_t leafSize : {1u, 4u}) {
     UpdateOptions options;
@@ -210,7 +210,7 @@ TEST_P(EveryBuilder, RefitOfAnUnmovedMeshIsTheBuild) {
 
 // After a refit to a moved mesh, every box is the exact union of what it holds, at every frame of a
 // clip, for both the smooth and the exploding clip.
-TEST_P(EveryBuilder, RefitBoxesAreExactUnionsAtEveryFrame) {
+TEST_P(RefitEveryBuilder, RefitBoxesAreExactUnionsAtEveryFrame) {
   const bool splits = testing::splitsPrimitives(GetParam());
   for (const Clip& clip : {waveClip(30, 20, 6), explodeClip(24, 16, 6)}) {
     UpdateOptions options;
@@ -232,7 +232,7 @@ TEST_P(EveryBuilder, RefitBoxesAreExactUnionsAtEveryFrame) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Builders, EveryBuilder, ::testing::ValuesIn(builderNames()),
+INSTANTIATE_TEST_SUITE_P(Updates, RefitEveryBuilder, ::testing::ValuesIn(builderNames()),
                          [](const auto& info) {
                            std::string name = info.param;
                            std::replace(name.begin(), name.end(), '-', '_');
