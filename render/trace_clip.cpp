@@ -19,6 +19,7 @@
 #include "layout/layouts.hpp"
 #include "layout/tree_hash.hpp"
 #include "layout/triangle_formats.hpp"
+#include "render/clip_update.hpp"
 #include "render/exit_status.hpp"
 #include "render/gl_context.hpp"
 #include "render/ray_tracer_gl.hpp"
@@ -85,42 +86,21 @@ ClipTotal clipTotal(std::span<const ClipFrameSamples> frames, uint64_t seed) {
 
 nlohmann::json traceClip(const TraceCommand& c, uint64_t& overflowsTotal) {
   const RenderCommand& rc = c.render;
-  try {
-    parseUpdateSpec(c.update);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string("--update: ") + e.what());
-  }
-  if (c.updateRepeats < 1) throw std::invalid_argument("--update-repeats must be >= 1");
   TraceSetup s;
   s.workload = parseWorkload(c.rays);
   if (rc.frames < 1 || rc.warmup < 0) throw std::invalid_argument("--frames must be >= 1 and --warmup >= 0");
   s.setup = setupRender(rc);
   for (const std::string& w : s.setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';
-  const int sceneFrames = clipFrames(s.setup.scene);
-  if (c.clipFrames < 0 || c.clipStep < 1) throw std::invalid_argument("--clip-frames must be >= 0 and --clip-step >= 1");
-  int frameCount = (sceneFrames + c.clipStep - 1) / c.clipStep;
-  if (c.clipFrames > 0) frameCount = std::min(frameCount, c.clipFrames);
-  if (sceneFrames <= 1)
-    throw std::invalid_argument("--update: " + rc.input +
-                                " is not animated (its clip has 1 frame); --update needs a scene with a clip");
-  UpdateOptions uo;
-  uo.builder = rc.builder;
-  uo.build = s.setup.build;
-  std::vector<std::unique_ptr<UpdateStrategy>> strategies;
-  for (int k = 0; k < c.updateRepeats; ++k) {
-    try {
-      strategies.push_back(makeUpdateStrategy(c.update, uo));
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(std::string("--update: ") + e.what());
-    }
-  }
+  const ClipPlan plan = planClip(rc, s.setup.scene);
+  const int sceneFrames = plan.sceneFrames, frameCount = plan.count;
+  ClipUpdater updater(rc, s.setup.build);
   const LayoutInfo& packer = findLayout(s.setup.shader.layout);
   const std::string triangleFormat = findTriangleFormat(s.setup.shader.triangles).name;
   s.tracer.kernel = s.setup.shader.kernel;
   s.tracer.storage = s.setup.shader.storage;
   s.tracer.robust = s.setup.shader.robust;
   s.tracer.anyHit = isAnyHit(s.workload);
-  const CostModel cost = uo.build.cost;
+  const CostModel cost = updater.cost();
   Scene scene = std::move(s.setup.scene);  // frame 0 as loaded; setFrame moves it on
 
   std::unique_ptr<GlContext> ctx = createContext(s.setup.backend);
@@ -134,7 +114,7 @@ nlohmann::json traceClip(const TraceCommand& c, uint64_t& overflowsTotal) {
   size_t triangles = 0;
   std::string kernelName;
   for (int f = 0; f < frameCount; ++f) {
-    const int sceneFrame = f * c.clipStep;
+    const int sceneFrame = plan.sceneFrame(f);
     if (f > 0) setFrame(scene, sceneFrame);
     // The frame's scene as a yardstick sees it (no tree: the strategy keeps that).
     auto frame = std::make_shared<PreparedScene>();
@@ -151,22 +131,11 @@ nlohmann::json traceClip(const TraceCommand& c, uint64_t& overflowsTotal) {
 
     // The update: every copy of the strategy once, each timed.
     ClipFrameSamples& sm = samples[size_t(f)];
-    const FrameTriangles ft{soup.v0, soup.v1, soup.v2};
-    bool rebuilt = false, agree = true;
-    double sah0 = 0.0;
-    for (size_t k = 0; k < strategies.size(); ++k) {
-      const auto start = Clock::now();
-      const bool r = strategies[k]->update(ft);
-      sm.update.push_back(msSince(start));
-      const double sah = sahCost(strategies[k]->tree(), cost);
-      if (k == 0) {
-        rebuilt = r;
-        sah0 = sah;
-      } else if (r != rebuilt || sah != sah0) {
-        agree = false;
-      }
-    }
-    const Bvh& tree = strategies[0]->tree();
+    const ClipUpdater::Step step = updater.update(soup);
+    sm.update = step.ms;
+    const bool rebuilt = step.rebuilt, agree = step.agree;
+    const double sah0 = step.sah;
+    const Bvh& tree = updater.tree();
 
     // Pack (CPU) and re-upload (GL), timed together as upload_ms; the re-upload repeated as often as
     // the update is, the pack once.
@@ -180,7 +149,7 @@ nlohmann::json traceClip(const TraceCommand& c, uint64_t& overflowsTotal) {
       recompiled = true;
     }
     std::vector<double> glUpload;
-    for (int k = 0; k < c.updateRepeats; ++k) {
+    for (int k = 0; k < rc.updateRepeats; ++k) {
       glFinish();
       start = Clock::now();
       gl->setTree(packed);
@@ -214,14 +183,14 @@ nlohmann::json traceClip(const TraceCommand& c, uint64_t& overflowsTotal) {
     nlohmann::json j;
     j["frame"] = sceneFrame;
     j["rebuilt"] = rebuilt;
-    j["rotations"] = strategies[0]->rotations();
+    j["rotations"] = updater.rotations();
     putTimes(j, "update_ms", sm.update);
     putTimes(j, "upload_ms", sm.upload);
     j["pack_ms"] = packMs;
     j["gl_upload_ms_all"] = glUpload;
     putTimes(j, "ms", sm.trace);
     j["sah_cost"] = sah0;
-    if (c.epo) j["epo"] = endPointOverlap(tree, soup.v0, soup.v1, soup.v2, cost);
+    if (rc.epo) j["epo"] = endPointOverlap(tree, soup.v0, soup.v1, soup.v2, cost);
     j["node_visits_per_ray"] = double(visits) / n;
     j["triangle_tests_per_ray"] = double(tests) / n;
     j["box_tests_per_ray"] = double(boxTests) / n;
@@ -243,7 +212,7 @@ nlohmann::json traceClip(const TraceCommand& c, uint64_t& overflowsTotal) {
   clip["frames"] = frameCount;
   clip["fps"] = clipFps(scene);
   clip["scene_frames"] = sceneFrames;
-  clip["step"] = c.clipStep;
+  clip["step"] = plan.step;
   clip["total_ms"] = total.totalMs;
   clip["total_ms_ci_low"] = total.interval ? nlohmann::json(total.interval->low) : nlohmann::json();
   clip["total_ms_ci_high"] = total.interval ? nlohmann::json(total.interval->high) : nlohmann::json();
@@ -257,8 +226,8 @@ nlohmann::json traceClip(const TraceCommand& c, uint64_t& overflowsTotal) {
 
   nlohmann::json j;
   j["input"] = rc.input;
-  j["update"] = c.update;
-  j["update_repeats"] = c.updateRepeats;
+  j["update"] = rc.update;
+  j["update_repeats"] = rc.updateRepeats;
   j["workload"] = workloadName(s.workload);
   j["any_hit"] = s.tracer.anyHit;
   j["seed"] = c.seed;
@@ -308,7 +277,7 @@ int runTraceClip(const TraceCommand& c) {
                   f["upload_ms"].get<double>(), f["ms"].get<double>(), f["sah_cost"].get<double>(),
                   f["ray_cost"].get<double>());
     std::printf("%s, %s over %s: %d frames, %.2f ms in all (update %.2f + upload %.2f + trace %.2f)\n",
-                c.render.input.c_str(), c.update.c_str(), c.render.builder.c_str(), j["clip"]["frames"].get<int>(),
+                c.render.input.c_str(), c.render.update.c_str(), c.render.builder.c_str(), j["clip"]["frames"].get<int>(),
                 j["clip"]["total_ms"].get<double>(), j["clip"]["update_ms_total"].get<double>(),
                 j["clip"]["upload_ms_total"].get<double>(), j["clip"]["trace_ms_total"].get<double>());
   }

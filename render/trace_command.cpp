@@ -50,17 +50,8 @@ void addTraceOptions(CLI::App& app, TraceCommand& c, RenderCliText& text) {
                  "a timed sample lasts at least this long: shorter dispatches (a GPU) are repeated back to back after an "
                  "untimed one and averaged (-1 = 10 ms on a GPU, 0 on a software renderer)")
       ->check(CLI::Range(-1.0, 10000.0));
-  app.add_option("--update", c.update,
-                 "trace an animated scene's clip frame by frame, the tree kept up to date by this strategy: rebuild | refit | "
-                 "refit+rebuild:K | refit+rebuild:sah>R | refit+rotate (docs/animation.md)");
-  app.add_option("--update-repeats", c.updateRepeats,
-                 "with --update: timed updates per frame, by as many copies of the strategy, each from its own previous frame")
-      ->check(CLI::Range(1, 64));
-  app.add_option("--clip-frames", c.clipFrames, "with --update: trace at most this many of the clip's frames (0 = all)")
-      ->check(CLI::Range(0, 1 << 20));
-  app.add_option("--clip-step", c.clipStep, "with --update: trace every this-th frame of the clip (0, S, 2S, ...)")
-      ->check(CLI::Range(1, 1 << 20));
-  app.add_flag("--epo", c.epo, "with --update: each frame's EPO (a pass over the tree per frame)");
+  addClipOptions(app, rc);
+  app.add_flag("--epo", rc.epo, "with --update: each frame's EPO (a pass over the tree per frame)");
   app.add_option("--eye", text.eye, "camera position x,y,z");
   app.add_option("--target", text.target, "camera target x,y,z");
   app.add_option("--up", text.up, "camera up x,y,z");
@@ -83,7 +74,7 @@ TraceCommand parseTraceArgs(const std::vector<std::string>& args) {
 }
 
 int runTrace(const TraceCommand& c) {
-  if (!c.update.empty()) return runTraceClip(c);
+  if (!c.render.update.empty()) return runTraceClip(c);
   const RenderCommand& rc = c.render;
   const TraceSetup s = setupTrace(c);
   for (const std::string& w : s.setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';

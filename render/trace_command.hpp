@@ -32,14 +32,6 @@ struct TraceCommand {
   // one, as many times as the warm-up's shortest time says, and the sample is their mean.
   // < 0: kAutoMinSampleMs (render/trace_run.hpp) on a GPU, 0 (one dispatch a sample) on a software renderer.
   double minSampleMs = -1.0;
-  // An animated scene's clip traced frame by frame (render/trace_clip.hpp): the tree kept up to date
-  // by this update strategy (builders/update.hpp spec; "" = a static trace of frame 0).
-  std::string update;
-  int updateRepeats = 1;  // timed updates per frame, each by its own copy of the strategy
-  bool epo = false;       // per-frame EPO (seconds per frame on large meshes)
-  // A shorter clip: frames 0, clipStep, 2 clipStep, ... of the scene's clip, at most clipFrames of
-  // them (0 = as many as the clip has).
-  int clipFrames = 0, clipStep = 1;
 };
 
 void addTraceOptions(CLI::App& app, TraceCommand& cmd, RenderCliText& text);

@@ -114,7 +114,7 @@ json traceGroup(const GroupSpec& spec) {
     try {
       if (!item.error.empty()) throw InputError(item.error);
       r->cmd = parseTraceArgs(item.args);
-      if (!r->cmd.update.empty()) {
+      if (!r->cmd.render.update.empty()) {
         // A clip (`trace --update`) is its own measured unit: its frames are timed in order, in a GL
         // context of its own made and dropped here, before the group's; it is not interleaved with
         // the group's runs.

@@ -121,6 +121,31 @@ TEST(DynamicTrace, ShortenedClipTakesEveryStepthFrame) {
   EXPECT_EQ(k["frames"].size(), 2u);
 }
 
+TEST(DynamicRender, RefitOfAStillClipKeepsTheTreeAndMatchesAStaticRender) {
+  const std::string scene = clipScene("still_render.toml", 3);
+  const clitest::Result a = run("render " + scene + " --json --frames 1 --warmup 0 --update refit");
+  const clitest::Result b = run("render " + scene + " --json --frames 1 --warmup 0");
+  ASSERT_EQ(a.code, 0) << a.err;
+  ASSERT_EQ(b.code, 0) << b.err;
+  const json clip = json::parse(a.out), still = json::parse(b.out);
+  ASSERT_EQ(clip["frames"].size(), 3u);
+  for (const json& f : clip["frames"]) {
+    SCOPED_TRACE("frame " + std::to_string(f["frame"].get<int>()));
+    EXPECT_EQ(f["tree_hash"], still["tree_hash"]);
+    EXPECT_EQ(f["ray_cost"], still["ray_cost"]);
+    EXPECT_EQ(f["node_visits_per_ray"], still["node_visits_per_ray"]);
+    for (const char* key : {"update_ms", "upload_ms", "ms", "sah_cost", "rebuilt"}) EXPECT_TRUE(f.contains(key)) << key;
+  }
+  EXPECT_NEAR(clip["clip"]["total_ms"].get<double>(),
+              clip["clip"]["update_ms_total"].get<double>() + clip["clip"]["upload_ms_total"].get<double>() +
+                  clip["clip"]["trace_ms_total"].get<double>(),
+              1e-9 * clip["clip"]["total_ms"].get<double>());
+  const std::string still2 = writeTemp("static_render.toml", kView + kTerrain).string();
+  const clitest::Result r = run("render " + still2 + " --update refit --frames 1 --warmup 0");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--update"), std::string::npos) << r.err;
+}
+
 TEST(DynamicTrace, StaticSceneAndBadSpecAreRefused) {
   const std::string still = writeTemp("static.toml", kView + kTerrain).string();
   clitest::Result r = run("trace " + still + " --update refit --frames 1 --warmup 0");
