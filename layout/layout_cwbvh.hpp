@@ -8,7 +8,11 @@
 // Streams: uvec4 texels (RGBA32UI) as v1 (layout/layout.hpp), same storage kinds (tbo, tex2d).
 //
 // NODE stream: 5 texels (80 bytes) per node of the wide tree, node i at texels 5i .. 5i + 4, node 0 =
-// the root. A node holds its k children (1 <= k <= 8) in slots 0 .. k - 1 (no empty slot in between):
+// the root. A node holds its k children (1 <= k <= 8) in 8 slots, placed by OCTANT (the paper's section
+// 3.2): slot s holds the child that rays of octant s (bit a of s set: the direction's component a is
+// negative, a = x, y, z) should meet first, chosen by cwbvhAssignSlots below; a kernel that visits the
+// slots in the order s XOR octant (kernel_cwbvh_groups.glsl) walks the children roughly near to far.
+// The 8 - k other slots are EMPTY: meta 0, q bytes 0 (kernels skip them by their meta).
 //   texel 5i+0 = (p.x, p.y, p.z, ex | ey << 8 | ez << 16 | k << 24)
 //       p: float bits of the node's box min, the origin of the quantisation grid. e: biased exponent
 //       per axis, 1..254: the grid step is scale = 2^(e - 127) = uintBitsToFloat(e << 23), a normal
@@ -20,7 +24,7 @@
 //       meta[c] = 1..127: child c is a leaf of that many triangles. The leaf children's triangles are
 //                 consecutive in slot order from TRIANGLE-stream index triBase: leaf child c starts at
 //                 triBase + the counts of the leaf children in slots below c. (0 is never stored for a
-//                 child; slots k .. 7 hold 0.) A leaf of more than kCwbvhMaxLeaf triangles is refused by
+//                 child; an empty slot holds 0.) A leaf of more than kCwbvhMaxLeaf triangles is refused by
 //                 the packer (build with a smaller --leaf-size).
 //   texels 5i+2 .. 5i+4 = 48 quantised bytes, six arrays of 8 (one byte a slot): qlo.x, qlo.y, qlo.z,
 //       qhi.x, qhi.y, qhi.z, in that order; byte j of the 48 in uint j / 4 of the three texels, bits
@@ -52,6 +56,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -69,6 +74,13 @@ constexpr uint32_t kCwbvhMaxLeaf = 127;  // the largest leaf count a meta byte h
 // Throws std::runtime_error as packBvh does, and for a leaf of more than kCwbvhMaxLeaf triangles.
 PackedBvh packCwbvh(const Bvh& bvh, const TriangleSoup& soup);
 
+// The slot assignment (Ylitie, Karras & Laine 2017, section 3.2): the cost of child c in slot s is
+// dot(centroid_c - parentCentroid, d_s), d_s octant s's diagonal direction (component a = -1 where bit
+// a of s is set, else +1), low when rays of octant s meet c early; pairs are taken greedily, cheapest
+// first (ties: lower child, then lower slot). Returns, per slot, the child's index in `centroids` or -1
+// for an empty slot. Throws std::invalid_argument for 0 or more than 8 centroids.
+std::array<int, 8> cwbvhAssignSlots(const std::vector<glm::vec3>& centroids, glm::vec3 parentCentroid);
+
 // The decoding of one coordinate: p + q * scale in float (the decoder's arithmetic, also the packer's).
 inline float cwbvhDecode(float p, uint32_t q, float scale) { return p + float(q) * scale; }
 
@@ -76,10 +88,10 @@ inline float cwbvhDecode(float p, uint32_t q, float scale) { return p + float(q)
 struct CwbvhNode {
   glm::vec3 origin, scale;           // p and 2^(e - 127) per axis
   glm::uvec3 exponent;               // e per axis
-  uint32_t children = 0;             // k
+  uint32_t children = 0;             // k (the occupied slots: meta != 0)
   uint32_t childBase = 0, triBase = 0;
-  std::array<uint32_t, 8> meta{};    // kCwbvhMetaInner or a leaf's triangle count; 0 past k
-  std::array<glm::vec3, 8> bmin{}, bmax{};  // decoded child boxes (slots < k)
+  std::array<uint32_t, 8> meta{};    // kCwbvhMetaInner or a leaf's triangle count; 0 for an empty slot
+  std::array<glm::vec3, 8> bmin{}, bmax{};  // decoded child boxes (empty slots: p)
   std::array<glm::uvec3, 8> qlo{}, qhi{};
   bool isInner(uint32_t c) const { return meta[c] == kCwbvhMetaInner; }
   // An inner child's node index, or a leaf child's first triangle (TRIANGLE-stream index).

@@ -1,13 +1,15 @@
 // packCwbvh: any builder's Bvh -> layout cwbvh (layout/layout_cwbvh.hpp). It goes through v1's packer
 // and the collapse to width 8 (layout/collapse_v1.hpp), quantises each wide node's child boxes
-// conservatively on the node's grid (Ylitie, Karras & Laine 2017, section 3.1: p, e, qlo, qhi), and
-// re-orders v1's raw triangles so that each node's leaf triangles are consecutive.
+// conservatively on the node's grid (Ylitie, Karras & Laine 2017, section 3.1: p, e, qlo, qhi), places
+// the children in the 8 slots by octant (section 3.2; cwbvhAssignSlots), and re-orders v1's raw
+// triangles so that each node's leaf triangles are consecutive in slot order.
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "layout/collapse_v1.hpp"
 #include "layout/layout_cwbvh.hpp"
@@ -65,6 +67,35 @@ uint32_t getByte(const glm::uvec4* q, uint32_t j) { return (q[j / 16][(j / 4) % 
 
 }  // namespace
 
+std::array<int, 8> cwbvhAssignSlots(const std::vector<glm::vec3>& centroids, glm::vec3 parentCentroid) {
+  if (centroids.empty() || centroids.size() > kCwbvhWidth)
+    throw std::invalid_argument("cwbvhAssignSlots: " + std::to_string(centroids.size()) + " children (1 to 8)");
+  struct Pair {
+    double cost;
+    int child, slot;
+  };
+  std::vector<Pair> pairs;
+  for (int c = 0; c < int(centroids.size()); ++c)
+    for (int s = 0; s < int(kCwbvhWidth); ++s) {
+      double cost = 0.0;  // dot(centroid - parent centroid, octant s's diagonal direction)
+      for (int a = 0; a < 3; ++a)
+        cost += (double(centroids[size_t(c)][a]) - double(parentCentroid[a])) * ((s >> a) & 1 ? -1.0 : 1.0);
+      pairs.push_back({cost, c, s});
+    }
+  // Greedy: the cheapest remaining (child, slot) pair first; ties by child, then slot, so the result is
+  // deterministic. (A NaN cost compares false both ways; the centroids of finite boxes are finite.)
+  std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.cost < y.cost; });
+  std::array<int, 8> childOf;
+  childOf.fill(-1);
+  std::vector<bool> placed(centroids.size(), false);
+  for (const Pair& pr : pairs) {
+    if (placed[size_t(pr.child)] || childOf[size_t(pr.slot)] >= 0) continue;
+    childOf[size_t(pr.slot)] = pr.child;
+    placed[size_t(pr.child)] = true;
+  }
+  return childOf;
+}
+
 PackedBvh packCwbvh(const Bvh& bvh, const TriangleSoup& soup) {
   CollapsedV1 collapsed = collapseThroughV1(bvh, soup, kCwbvhWidth);
   const Bvh& binary = collapsed.binary;
@@ -104,9 +135,15 @@ PackedBvh packCwbvh(const Bvh& bvh, const TriangleSoup& soup) {
     if (inner > 0) childBase = nextNode, nextNode += inner;
     texels[0] = {bits(p.x), bits(p.y), bits(p.z), e.x | e.y << 8 | e.z << 16 | k << 24};
     texels[1] = {childBase, triBase, 0u, 0u};
+    // Slot s gets the child that rays of octant s meet first (cwbvhAssignSlots); empty slots keep
+    // meta 0 and q bytes 0.
+    std::vector<glm::vec3> centroids;
+    for (const WideChild& ch : n.children) centroids.push_back(binary.nodes[ch.binaryNode].bounds.center());
+    const std::array<int, 8> childOf = cwbvhAssignSlots(centroids, frame.center());
     uint32_t rank = 0;
-    for (uint32_t c = 0; c < k; ++c) {
-      const WideChild& ch = n.children[c];
+    for (uint32_t c = 0; c < kCwbvhWidth; ++c) {
+      if (childOf[c] < 0) continue;
+      const WideChild& ch = n.children[size_t(childOf[c])];
       uint32_t meta = kCwbvhMetaInner;
       if (ch.leaf) {
         meta = collapsed.refs[ch.binaryNode];
@@ -133,8 +170,8 @@ PackedBvh packCwbvh(const Bvh& bvh, const TriangleSoup& soup) {
       }
     }
     maxDepth = std::max(maxDepth, depth[w] + 1);
-    for (uint32_t c = k; c-- > 0;)  // first inner child on top: walked first, its subtree next to it
-      if (!n.children[c].leaf) stack.push_back(n.children[c].wideNode);
+    for (uint32_t c = kCwbvhWidth; c-- > 0;)  // first inner child on top: walked first, its subtree next to it
+      if (childOf[c] >= 0 && !n.children[size_t(childOf[c])].leaf) stack.push_back(n.children[size_t(childOf[c])].wideNode);
   }
   if (out.triangles.size() != v1Triangles.size())
     throw std::logic_error("packCwbvh: the leaves do not cover v1's triangle stream once (a packer bug)");

@@ -136,6 +136,7 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   if (o.countStats) d << "#define COUNT_STATS 1\n";
   if (o.primaryIdOut) d << "#define PRIMARY_ID_OUT 1\n";
   if (o.robust.offset == OriginOffset::Ulp) d << "#define RAY_OFFSET_ULP 1\n";
+  if (o.robust.box == BoxTest::Robust) d << "#define BVH_BOX_ROBUST 1\n";  // kernels may pick their box test by it
   if (o.reinhard) d << "#define TONEMAP_REINHARD 1\n";
   for (int k = 0; k < 6; ++k)
     if (uber || f.kinds[k]) d << "#define " << kKindDefines[k] << " 1\n";
@@ -198,6 +199,7 @@ AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Ro
   checkTriangleFormat(triangles, robust);
   std::ostringstream d;
   d << "#version 450 core\n#define BVH_STACK_SIZE " << bvhStackSize << "\n";
+  if (robust.box == BoxTest::Robust) d << "#define BVH_BOX_ROBUST 1\n";  // kernels may pick their box test by it
   if (anyHit) d << "#define ANY_HIT 1\n";
   if (countStats) d << "#define COUNT_STATS 1\n";
   Assembler a;

@@ -194,15 +194,15 @@ inline void expectBruteForceHits(const PackedBvh& packed, const KernelInfo& k, R
 }
 
 // The hard-case suite (datasets/hard_cases.hpp: shared edges and vertices, slab planes, far and scaled
-// copies) in watertight mode, on a sah-binned tree packed in `layout` and walked by its default
-// kernel: no ray that must hit leaks, and every ray is answered as v1's stack-ordered answers it on the
+// copies) in watertight mode, on a sah-binned tree packed in `layout` and walked by `kernel` (""
+// = the layout's default): no ray that must hit leaks, and every ray is answered as v1's stack-ordered answers it on the
 // same tree (same hit or miss; t within nearlyEqual: where a ray meets a shared edge, the two
 // triangles' rounded t can differ by an ulp, and which one a walk keeps depends on its visit order,
 // since a box entered beyond the first t found is culled). Returns how many rays must hit.
-inline size_t expectHardCasesAnsweredAsV1(const std::string& layout) {
+inline size_t expectHardCasesAnsweredAsV1(const std::string& layout, const std::string& kernel = "") {
   size_t mustHit = 0;
   for (const hard::HardCase& hc : hard::makeHardCases()) {
-    SCOPED_TRACE(hc.name + " / " + layout);
+    SCOPED_TRACE(hc.name + " / " + layout + " / " + findKernel(layout, kernel).name);
     Mesh mesh;
     mesh.positions = hc.positions;
     mesh.triangles = hc.triangles;
@@ -212,7 +212,7 @@ inline size_t expectHardCasesAnsweredAsV1(const std::string& layout) {
     const Bvh bvh = build("sah-binned", soup);
     const PackedBvh v1 = packBvh(bvh, soup), packed = findLayout(layout).pack(bvh, soup);
     const glsl::Storage reference(v1), s(packed);
-    const KernelInfo& k = findKernel(layout, "");
+    const KernelInfo& k = findKernel(layout, kernel);
     int failures = 0;
     for (size_t i = 0; i < hc.rays.size() && failures < 3; ++i) {
       const hard::HardRay& r = hc.rays[i];

@@ -73,36 +73,38 @@ TEST_P(GpuTraversal, HitIdsAndCountsEqualTheMirror) {
 }
 
 // Box tests per pixel (main.glsl's o_boxTests, render --json's box_tests_per_ray) on every layout's
-// default kernel: the GLSL frame's counts equal the mirror's pixel for pixel in the primid view (no
+// kernels: the GLSL frame's counts equal the mirror's pixel for pixel in the primid view (no
 // secondary rays, so no offset rounding to tell the two apart), and a wide node's visit tests several
 // boxes (cwbvh, bvh4, bvh8: box tests > visits, where v1 tests at most one box per visit).
 TEST(GpuLayouts, BoxTestsPerPixelEqualTheMirrorOnEveryLayout) {
   BVHLAB_REQUIRE_DATASETS();
   Scene scene = loadMeshScene(sourceDir() / "datasets/cache/meshes/bunny00.off");
   for (const LayoutInfo& l : layouts()) {
-    SCOPED_TRACE(l.name);
     const std::unique_ptr<PreparedScene> p = prepareScene(Scene(scene), "sah-binned", BuildOptions{}, l.name);
-    ShaderOptions o;
-    o.layout = l.name;
-    o.kernel = l.defaultKernel;
-    o.bvhStackSize = stackSizeFor(p->packed);
-    o.countStats = true;
-    o.view = View::PrimId;
-    const FrameOptions f = smallFrame(p->scene, 64, 36);
-    const Rendered gpu = renderGpu(*p, o, f);
-    const ReferenceImage cpu = renderReference(p->scene, p->data, p->packed, o, f);
-    ASSERT_EQ(gpu.boxTests.size(), cpu.boxTests.size());
-    size_t differ = 0;
-    uint64_t boxes = 0, visits = 0;
-    for (size_t i = 0; i < gpu.boxTests.size(); ++i) {
-      differ += gpu.boxTests[i] != cpu.boxTests[i];
-      boxes += gpu.boxTests[i];
-      visits += gpu.stats[i].x;
-    }
-    EXPECT_EQ(differ, 0u);
-    EXPECT_GT(boxes, 0u);
-    if (l.name == "bvh4" || l.name == "bvh8" || l.name == "cwbvh") {
-      EXPECT_GT(boxes, 2 * visits);
+    for (const KernelInfo& k : kernelsFor(l.name)) {  // every kernel of the layout
+      SCOPED_TRACE(l.name + " / " + k.name);
+      ShaderOptions o;
+      o.layout = l.name;
+      o.kernel = k.name;
+      o.bvhStackSize = stackSizeFor(p->packed);
+      o.countStats = true;
+      o.view = View::PrimId;
+      const FrameOptions f = smallFrame(p->scene, 64, 36);
+      const Rendered gpu = renderGpu(*p, o, f);
+      const ReferenceImage cpu = renderReference(p->scene, p->data, p->packed, o, f);
+      ASSERT_EQ(gpu.boxTests.size(), cpu.boxTests.size());
+      size_t differ = 0;
+      uint64_t boxes = 0, visits = 0;
+      for (size_t i = 0; i < gpu.boxTests.size(); ++i) {
+        differ += gpu.boxTests[i] != cpu.boxTests[i];
+        boxes += gpu.boxTests[i];
+        visits += gpu.stats[i].x;
+      }
+      EXPECT_EQ(differ, 0u);
+      EXPECT_GT(boxes, 0u);
+      if (l.name == "bvh4" || l.name == "bvh8" || l.name == "cwbvh") {
+        EXPECT_GT(boxes, 2 * visits);
+      }
     }
   }
 }

@@ -5,7 +5,9 @@
 // bytes a node, every builder x robustness pair against brute force, the hard-case suite, and the GLSL
 // kernel against its C++ mirror per ray (answer, visits, triangle tests, box tests).
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <random>
 #include <stdexcept>
@@ -20,6 +22,7 @@
 #include "layout/triangle_formats.hpp"
 #include "layout_test_util.hpp"
 #include "shaders/assemble.hpp"
+#include "traversal/kernel_cwbvh_groups.hpp"
 #include "traversal/kernels.hpp"
 #include "traversal/layout_cwbvh.hpp"
 #include "require.hpp"
@@ -143,9 +146,23 @@ void checkPacked(const Bvh& bvh, const TriangleSoup& soup) {
         EXPECT_LT(cwbvhDecode(n.origin[a], 255, n.scale[a] * 0.5f), frame.max[a]) << "a finer grid would have done";
       }
     }
+    // Slots by octant: the packer's assignment of these children (cwbvhAssignSlots), each child once;
+    // an empty slot holds meta 0 and q bytes 0.
+    std::vector<glm::vec3> centroids;
+    for (const WideChild& ch : w.children) centroids.push_back(c.binary.nodes[ch.binaryNode].bounds.center());
+    const std::array<int, 8> childOf = cwbvhAssignSlots(centroids, frame.center());
+    std::vector<int> slotted(w.children.size(), 0);
     uint32_t rank = 0, offset = 0;
-    for (uint32_t s = 0; s < n.children; ++s) {
-      const WideChild& ch = w.children[s];
+    for (uint32_t s = 0; s < 8; ++s) {
+      if (childOf[s] < 0) {
+        EXPECT_EQ(n.meta[s], 0u) << "an empty slot holds meta 0";
+        EXPECT_EQ(n.qlo[s], glm::uvec3(0u));
+        EXPECT_EQ(n.qhi[s], glm::uvec3(0u));
+        continue;
+      }
+      ASSERT_LT(size_t(childOf[s]), w.children.size());
+      slotted[size_t(childOf[s])]++;
+      const WideChild& ch = w.children[size_t(childOf[s])];
       const Aabb& exact = c.binary.nodes[ch.binaryNode].bounds;
       glsl::vec3 mirrorMin, mirrorMax;
       glsl::cwbvhChildBox(mirror, s, mirrorMin, mirrorMax);
@@ -188,7 +205,7 @@ void checkPacked(const Bvh& bvh, const TriangleSoup& soup) {
       }
       maxDepth = std::max(maxDepth, it.depth + 1);
     }
-    for (uint32_t s = n.children; s < 8; ++s) EXPECT_EQ(n.meta[s], 0u) << "unused slots hold 0";
+    EXPECT_EQ(std::count(slotted.begin(), slotted.end(), 1), long(w.children.size())) << "every child in one slot";
   }
   ASSERT_EQ(failures, 0);
   EXPECT_EQ(std::count(reached.begin(), reached.end(), 1), long(nodes)) << "every node reached once";
@@ -327,10 +344,11 @@ TEST(CwbvhKernels, NearestFirstCutsTheWork) {
             0.8 * double(closestTriangleTests(packBvh(bvh, m.soup), "stack-unordered", rays)));
 }
 
-// The hard-case suite in watertight mode: no ray that must hit leaks, and every ray is answered as
-// v1's stack-ordered answers it on the same tree (expectHardCasesAnsweredAsV1, layout_test_util.hpp).
+// The hard-case suite in watertight mode, every cwbvh kernel: no ray that must hit leaks, and every ray
+// is answered as v1's stack-ordered answers it on the same tree (expectHardCasesAnsweredAsV1,
+// layout_test_util.hpp).
 TEST(CwbvhKernels, HardCasesLeakNothingInWatertightMode) {
-  EXPECT_GT(expectHardCasesAnsweredAsV1(kLayoutCwbvh), 100u);
+  for (const KernelInfo& k : kernelsFor(kLayoutCwbvh)) EXPECT_GT(expectHardCasesAnsweredAsV1(kLayoutCwbvh, k.name), 100u);
 }
 
 // The GLSL kernel gives its C++ mirror's answer and counters per ray (visits, triangle tests, box
@@ -374,6 +392,104 @@ TEST(CwbvhKernelsGlsl, EqualTheMirrorPerRay) {
             EXPECT_GT(found, cs.rays.size() / 10) << "too few hits for the comparison to mean much";
           }
         }
+}
+
+// The slot order cwbvh-groups takes a group's bits in: the slots s ^ octant for s = 0, 1, ..., 7
+// (findMSB over bits slot ^ (7 - octant): traversal/kernel_cwbvh_groups.hpp's helpers).
+std::vector<uint32_t> groupsSlotOrder(const std::array<int, 8>& childOf, glm::vec3 dir) {
+  namespace g = glsl::cwbvh_groups;
+  const uint32_t octInv = 7u - g::cwbvhOctant(glsl::rayInverseDirection(dir));
+  uint32_t mask = 0;
+  for (uint32_t s = 0; s < 8; ++s)
+    if (childOf[s] >= 0) mask |= 1u << g::cwbvhHitBit(s, octInv);
+  std::vector<uint32_t> order;
+  while (mask != 0) {
+    const uint32_t bit = uint32_t(glm::findMSB(mask));
+    mask &= ~(1u << bit);
+    order.push_back(g::cwbvhSlotOfBit(bit, octInv));
+  }
+  return order;
+}
+
+// Two children spread along x: every ray with +x direction (whatever its y, z signs) takes the one at
+// lower x first, every ray with -x direction the other; eight children at the cube's corners: each
+// octant's ray takes first the corner it meets first (the one opposite its direction).
+TEST(CwbvhGroups, SlotsByOctantGiveNearToFarOrder) {
+  const std::array<int, 8> pair = cwbvhAssignSlots({{-1.0f, 0.0f, 0.0f}, {1.0f, 0.0f, 0.0f}}, glm::vec3(0.0f));
+  for (uint32_t o = 0; o < 8; ++o) {
+    const glm::vec3 dir((o & 1) ? -1.0f : 1.0f, (o & 2) ? -0.5f : 0.5f, (o & 4) ? -0.25f : 0.25f);
+    const std::vector<uint32_t> order = groupsSlotOrder(pair, dir);
+    ASSERT_EQ(order.size(), 2u);
+    const std::vector<int> expected = dir.x > 0.0f ? std::vector<int>{0, 1} : std::vector<int>{1, 0};
+    EXPECT_EQ(pair[order[0]], expected[0]) << "octant " << o;
+    EXPECT_EQ(pair[order[1]], expected[1]) << "octant " << o;
+  }
+  std::vector<glm::vec3> corners;
+  for (int i = 0; i < 8; ++i) corners.push_back({(i & 1) ? 1.0f : -1.0f, (i & 2) ? 1.0f : -1.0f, (i & 4) ? 1.0f : -1.0f});
+  const std::array<int, 8> cube = cwbvhAssignSlots(corners, glm::vec3(0.0f));
+  for (uint32_t o = 0; o < 8; ++o) {
+    const glm::vec3 dir((o & 1) ? -1.0f : 1.0f, (o & 2) ? -1.0f : 1.0f, (o & 4) ? -1.0f : 1.0f);
+    const glm::vec3 first = corners[size_t(cube[groupsSlotOrder(cube, dir).front()])];
+    EXPECT_EQ(first, -dir) << "octant " << o;
+  }
+  EXPECT_THROW(cwbvhAssignSlots({}, glm::vec3(0.0f)), std::invalid_argument);
+}
+
+// Through the kernel: eight clusters of four walls along x (one leaf each, all in the root node); a
+// ray along +x meets every wall, and the first leaf it takes (by octant) is the nearest, whose hit
+// culls every other leaf: exactly 4 triangle tests. Along -x the same from the other end. Fast and
+// watertight tests (the plane test with two axes parallel to the ray, and the decoded boxes).
+TEST(CwbvhGroups, ARayAlongXTakesTheNearestLeafFirst) {
+  Mesh m;
+  for (int c = 0; c < 8; ++c)
+    for (int w = 0; w < 4; ++w) {
+      const float x = 2.0f * float(c) + 0.1f * float(w);
+      const uint32_t b = uint32_t(m.positions.size());
+      m.positions.push_back({x, 0.0f, 0.0f});
+      m.positions.push_back({x, 1.0f, 0.0f});
+      m.positions.push_back({x, 0.0f, 1.0f});
+      m.triangles.push_back({b, b + 1, b + 2});
+    }
+  MeshSceneOptions mo;
+  mo.groundPlane = false;
+  const TriangleSoup soup = gatherTriangles(makeMeshScene(m, mo));
+  // A balanced binary tree over the eight clusters, made by hand (a builder may split a cluster).
+  Bvh bvh;
+  const std::vector<Aabb> boxes = triangleBoxes(soup);
+  const std::function<uint32_t(uint32_t, uint32_t)> make = [&](uint32_t lo, uint32_t hi) {  // clusters lo..hi-1
+    const uint32_t index = uint32_t(bvh.nodes.size());
+    bvh.nodes.emplace_back();
+    BvhNode n;
+    if (hi - lo == 1) {
+      n.first = 4 * lo;
+      n.count = 4;
+    } else {
+      n.left = make(lo, (lo + hi) / 2);
+      n.right = make((lo + hi) / 2, hi);
+    }
+    for (uint32_t t = 4 * lo; t < 4 * hi; ++t) n.bounds.grow(boxes[t]);
+    bvh.nodes[index] = n;
+    return index;
+  };
+  for (uint32_t t = 0; t < 32; ++t) bvh.primIndices.push_back(t);
+  make(0, 8);
+  const PackedBvh packed = packCwbvh(bvh, soup);
+  const CwbvhNode root = unpackCwbvhNode(packed, 0);
+  ASSERT_EQ(root.children, 8u) << "the premise: the root holds the eight clusters";
+  for (uint32_t s = 0; s < 8; ++s) ASSERT_EQ(root.meta[s], 4u) << "the premise: one leaf of four walls per slot";
+  const KernelInfo& k = findKernel("cwbvh", "cwbvh-groups");
+  for (Robustness robust : {Robustness::Fast, Robustness::Watertight})
+    for (float sign : {1.0f, -1.0f}) {
+      SCOPED_TRACE(std::string(robustnessName(robust)) + (sign > 0.0f ? " +x" : " -x"));
+      const glsl::Ray ray{{sign > 0.0f ? -1.0f : 20.0f, 0.25f, 0.25f}, {sign, 0.0f, 0.0f}};
+      glsl::Counters c;
+      glsl::MeshHit hit;
+      ASSERT_TRUE(k.closest(robust)(packed, ray, 0.0f, 1e30f, hit, c));
+      EXPECT_FLOAT_EQ(hit.t, sign > 0.0f ? 1.0f : 20.0f - 14.3f);
+      EXPECT_EQ(c.triTests, 4u) << "only the nearest leaf tested";
+      EXPECT_EQ(c.nodeVisits, 1u);
+      EXPECT_EQ(c.boxTests, 9u) << "the root grid and eight slots";
+    }
 }
 
 // A kernel of another layout is refused, naming cwbvh's kernel; cwbvh's default kernel is its own.

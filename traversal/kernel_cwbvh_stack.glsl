@@ -64,8 +64,9 @@ bool traverseCwbvh(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit
       float nearEnter = 0.0;
       bool met = false;
       uint innerRank = 0u, triOffset = 0u;  // the next inner child's rank, the next leaf's first triangle
-      for (uint i = 0u; i < node.k; ++i) {
+      for (uint i = 0u; i < 8u; ++i) {  // the 8 slots; an empty one (meta 0) is skipped untested
         uint meta = cwbvhMeta(node, i);
+        if (meta == 0u) continue;
         uint childLink, childCount;
         if (meta == kCwbvhMetaInner) {
           childLink = node.childBase + innerRank;

@@ -49,8 +49,9 @@ inline bool traverseCwbvh(const Storage& s, Ray ray, float tMin, float tMax, boo
       float nearEnter = 0.0f;
       bool met = false;
       uint innerRank = 0u, triOffset = 0u;
-      for (uint i = 0u; i < node.k; ++i) {
+      for (uint i = 0u; i < 8u; ++i) {  // the 8 slots; an empty one (meta 0) is skipped untested
         uint meta = cwbvhMeta(node, i);
+        if (meta == 0u) continue;
         uint childLink, childCount;
         if (meta == kCwbvhMetaInner) {
           childLink = node.childBase + innerRank;

@@ -7,6 +7,7 @@
 
 #include "layout/layouts.hpp"
 #include "traversal/kernel_bvh2cb_stack.hpp"
+#include "traversal/kernel_cwbvh_groups.hpp"
 #include "traversal/kernel_cwbvh_stack.hpp"
 #include "traversal/kernel_stack_ordered.hpp"
 #include "traversal/kernel_stack_unordered.hpp"
@@ -71,6 +72,9 @@ const std::vector<KernelInfo>& cwbvhKernels() {
       {"cwbvh-stack-ordered",
        "explicit stack: every child box of a compressed 8-wide node decoded and tested, hits pushed nearest on top",
        "kernel_cwbvh_stack.glsl", "cwbvh", BVHLAB_KERNEL_MIRRORS(glsl::cwbvh_stack)},
+      {"cwbvh-groups",
+       "Ylitie et al. 2017: node groups by octant order (findMSB), lazy triangle groups, quantised plane tests",
+       "kernel_cwbvh_groups.glsl", "cwbvh", BVHLAB_KERNEL_MIRRORS(glsl::cwbvh_groups)},
   };
   return table;
 }
