@@ -84,8 +84,8 @@ def section_dynamic(page, data):
     page.p("Runs on the <code>updates</code> axis trace an animated scene's clip frame by frame, the tree kept up to "
            "date by the strategy (docs/animation.md). <i>Total</i> is the sum over the traced frames of the median "
            "update, upload (pack + GL re-upload) and trace times, with a bootstrap 95% interval (each frame's samples "
-           "resampled). A clip is measured on its own, not interleaved with the other strategies' clips: compare "
-           "totals by their intervals. Ray cost is node visits + triangle tests per ray (Ct = Ci = 1).")
+           "resampled). The clips of a group are stepped in lockstep (<code>interleaved_with</code>): frame f of "
+           "every strategy before frame f + 1 of any. Ray cost is node visits + triangle tests per ray (Ct = Ci = 1).")
     for scene in data.values([r for r, _ in rows], "scene"):
         runs = [(r, rec) for r, rec in rows if label(r, "scene") == scene]
         runs.sort(key=lambda x: num(x[1]["clip"].get("total_ms")) or float("inf"))

@@ -84,134 +84,129 @@ ClipTotal clipTotal(std::span<const ClipFrameSamples> frames, uint64_t seed) {
   return t;
 }
 
-nlohmann::json traceClip(const TraceCommand& c, uint64_t& overflowsTotal) {
+TraceClip::TraceClip(const TraceCommand& command) : c(command) {
   const RenderCommand& rc = c.render;
-  TraceSetup s;
   s.workload = parseWorkload(c.rays);
   if (rc.frames < 1 || rc.warmup < 0) throw std::invalid_argument("--frames must be >= 1 and --warmup >= 0");
   s.setup = setupRender(rc);
   for (const std::string& w : s.setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';
-  const ClipPlan plan = planClip(rc, s.setup.scene);
-  const int sceneFrames = plan.sceneFrames, frameCount = plan.count;
-  ClipUpdater updater(rc, s.setup.build);
-  const LayoutInfo& packer = findLayout(s.setup.shader.layout);
-  const std::string triangleFormat = findTriangleFormat(s.setup.shader.triangles).name;
+  plan = planClip(rc, s.setup.scene);
+  updater = std::make_unique<ClipUpdater>(rc, s.setup.build);
+  packer = &findLayout(s.setup.shader.layout);
+  triangleFormat = findTriangleFormat(s.setup.shader.triangles).name;
   s.tracer.kernel = s.setup.shader.kernel;
   s.tracer.storage = s.setup.shader.storage;
   s.tracer.robust = s.setup.shader.robust;
   s.tracer.anyHit = isAnyHit(s.workload);
-  const CostModel cost = updater.cost();
-  Scene scene = std::move(s.setup.scene);  // frame 0 as loaded; setFrame moves it on
+  cost = updater->cost();
+  scene = std::move(s.setup.scene);  // frame 0 as loaded; setFrame moves it on
+  samples.resize(size_t(plan.count));
+}
 
-  std::unique_ptr<GlContext> ctx = createContext(s.setup.backend);
-  std::unique_ptr<GlRayTracer> gl;
-  const double minSampleMs = resolveMinSampleMs(c.minSampleMs, ctx->renderer());
-  int dispatches = 0;  // set from frame 0's warm-up
-  std::vector<ClipFrameSamples> samples(static_cast<size_t>(frameCount));
-  nlohmann::json frameList = nlohmann::json::array();
-  overflowsTotal = 0;
-  uint64_t mismatchesTotal = 0;
-  size_t triangles = 0;
-  std::string kernelName;
-  for (int f = 0; f < frameCount; ++f) {
-    const int sceneFrame = plan.sceneFrame(f);
-    if (f > 0) setFrame(scene, sceneFrame);
-    // The frame's scene as a yardstick sees it (no tree: the strategy keeps that).
-    auto frame = std::make_shared<PreparedScene>();
-    frame->scene = scene;
-    frame->soup = gatherTriangles(frame->scene);
-    frame->cost = cost;
-    const TriangleSoup& soup = frame->soup;
-    if (soup.size() == 0) throw InputError(rc.input + ": no triangles to trace rays against");
-    triangles = soup.size();
-    TraceSetup fs = s;
-    fs.prepared = frame;
-    TraceYardstick y(c, fs);
-    y.trace();  // the answers to compare with (untimed)
+void TraceClip::step(int f, const std::string& renderer) {
+  const RenderCommand& rc = c.render;
+  const double minSampleMs = resolveMinSampleMs(c.minSampleMs, renderer);
+  const int sceneFrame = plan.sceneFrame(f);
+  if (f > 0) setFrame(scene, sceneFrame);
+  // The frame's scene as a yardstick sees it (no tree: the strategy keeps that).
+  auto frame = std::make_shared<PreparedScene>();
+  frame->scene = scene;
+  frame->soup = gatherTriangles(frame->scene);
+  frame->cost = cost;
+  const TriangleSoup& soup = frame->soup;
+  if (soup.size() == 0) throw InputError(rc.input + ": no triangles to trace rays against");
+  triangles = soup.size();
+  TraceSetup fs = s;
+  fs.prepared = frame;
+  TraceYardstick y(c, fs);
+  y.trace();  // the answers to compare with (untimed)
 
-    // The update: every copy of the strategy once, each timed.
-    ClipFrameSamples& sm = samples[size_t(f)];
-    const ClipUpdater::Step step = updater.update(soup);
-    sm.update = step.ms;
-    const bool rebuilt = step.rebuilt, agree = step.agree;
-    const double sah0 = step.sah;
-    const Bvh& tree = updater.tree();
+  // The update: every copy of the strategy once, each timed.
+  ClipFrameSamples& sm = samples[size_t(f)];
+  const ClipUpdater::Step step = updater->update(soup);
+  sm.update = step.ms;
+  const bool rebuilt = step.rebuilt, agree = step.agree;
+  const double sah0 = step.sah;
+  const Bvh& tree = updater->tree();
 
-    // Pack (CPU) and re-upload (GL), timed together as upload_ms; the re-upload repeated as often as
-    // the update is, the pack once.
-    auto start = Clock::now();
-    PackedBvh packed = packer.pack(tree, soup);
-    packTriangles(packed, soup, triangleFormat);
-    const double packMs = msSince(start);
-    bool recompiled = false;
-    if (!gl || stackSizeFor(packed) > gl->stackSize()) {  // a deeper tree needs a longer stack: new programs
-      gl = std::make_unique<GlRayTracer>(packed, s.tracer);
-      recompiled = true;
-    }
-    std::vector<double> glUpload;
-    for (int k = 0; k < rc.updateRepeats; ++k) {
-      glFinish();
-      start = Clock::now();
-      gl->setTree(packed);
-      glFinish();
-      glUpload.push_back(msSince(start));
-      sm.upload.push_back(packMs + glUpload.back());
-    }
-    gl->setRays(y.rays().rays);
-
-    // The trace: warm-up (untimed), then --frames timed passes.
-    double shortest = std::numeric_limits<double>::infinity();
-    const int warm = rc.warmup + (minSampleMs > 0.0 && dispatches == 0 ? 1 : 0);
-    for (int i = 0; i < warm; ++i) shortest = std::min(shortest, gl->trace());
-    if (dispatches == 0) dispatches = dispatchesPerSample(minSampleMs, shortest);
-    for (int i = 0; i < rc.frames; ++i) sm.trace.push_back(gl->trace(dispatches));
-    std::vector<BatchHit> hits;
-    const std::vector<glm::uvec4> counts = gl->traceCounted(&hits);
-    uint64_t visits = 0, tests = 0, boxTests = 0, overflows = 0, found = 0;
-    for (const glm::uvec4& k : counts) {
-      visits += k.x;
-      tests += k.y;
-      boxTests += k.w;
-      overflows += k.z != 0u;
-    }
-    for (const BatchHit& h : hits) found += h.hit;
-    const HitAgreement agreement = compareHits(hits, y.hits(), y.anyHit());
-    overflowsTotal += overflows;
-    mismatchesTotal += agreement.mismatches;
-    const double n = double(std::max<size_t>(1, y.rays().rays.size()));
-
-    nlohmann::json j;
-    j["frame"] = sceneFrame;
-    j["rebuilt"] = rebuilt;
-    j["rotations"] = updater.rotations();
-    putTimes(j, "update_ms", sm.update);
-    putTimes(j, "upload_ms", sm.upload);
-    j["pack_ms"] = packMs;
-    j["gl_upload_ms_all"] = glUpload;
-    putTimes(j, "ms", sm.trace);
-    j["sah_cost"] = sah0;
-    if (rc.epo) j["epo"] = endPointOverlap(tree, soup.v0, soup.v1, soup.v2, cost);
-    j["node_visits_per_ray"] = double(visits) / n;
-    j["triangle_tests_per_ray"] = double(tests) / n;
-    j["box_tests_per_ray"] = double(boxTests) / n;
-    j["ray_cost"] = cost.traversalCost * double(visits) / n + cost.intersectionCost * double(tests) / n;
-    j["rays"] = y.rays().rays.size();
-    j["hits"] = found;
-    j["hit_mismatches"] = agreement.mismatches;
-    j["hit_ties"] = agreement.ties;
-    j["stack_overflow_rays"] = overflows;
-    j["tree_hash"] = packedTreeHash(packed);
-    j["nodes"] = tree.nodes.size();
-    j["programs_compiled"] = recompiled;
-    j["repeats_agree"] = agree;  // every copy of the strategy rebuilt alike and reached the same SAH
-    frameList.push_back(std::move(j));
+  // Pack (CPU) and re-upload (GL), timed together as upload_ms; the re-upload repeated as often as
+  // the update is, the pack once.
+  auto start = Clock::now();
+  PackedBvh packed = packer->pack(tree, soup);
+  packTriangles(packed, soup, triangleFormat);
+  const double packMs = msSince(start);
+  bool recompiled = false;
+  if (!gl || stackSizeFor(packed) > gl->stackSize()) {  // a deeper tree needs a longer stack: new programs
+    gl = std::make_unique<GlRayTracer>(packed, s.tracer);
+    recompiled = true;
   }
+  std::vector<double> glUpload;
+  for (int k = 0; k < rc.updateRepeats; ++k) {
+    glFinish();
+    start = Clock::now();
+    gl->setTree(packed);
+    glFinish();
+    glUpload.push_back(msSince(start));
+    sm.upload.push_back(packMs + glUpload.back());
+  }
+  gl->setRays(y.rays().rays);
 
+  // The trace: warm-up (untimed), then --frames timed passes.
+  double shortest = std::numeric_limits<double>::infinity();
+  const int warm = rc.warmup + (minSampleMs > 0.0 && dispatches == 0 ? 1 : 0);
+  for (int i = 0; i < warm; ++i) shortest = std::min(shortest, gl->trace());
+  if (dispatches == 0) dispatches = dispatchesPerSample(minSampleMs, shortest);
+  for (int i = 0; i < rc.frames; ++i) sm.trace.push_back(gl->trace(dispatches));
+  std::vector<BatchHit> hits;
+  const std::vector<glm::uvec4> counts = gl->traceCounted(&hits);
+  uint64_t visits = 0, tests = 0, boxTests = 0, overflows = 0, found = 0;
+  for (const glm::uvec4& k : counts) {
+    visits += k.x;
+    tests += k.y;
+    boxTests += k.w;
+    overflows += k.z != 0u;
+  }
+  for (const BatchHit& h : hits) found += h.hit;
+  const HitAgreement agreement = compareHits(hits, y.hits(), y.anyHit());
+  overflowsTotal += overflows;
+  mismatchesTotal += agreement.mismatches;
+  const double n = double(std::max<size_t>(1, y.rays().rays.size()));
+
+  nlohmann::json j;
+  j["frame"] = sceneFrame;
+  j["rebuilt"] = rebuilt;
+  j["rotations"] = updater->rotations();
+  putTimes(j, "update_ms", sm.update);
+  putTimes(j, "upload_ms", sm.upload);
+  j["pack_ms"] = packMs;
+  j["gl_upload_ms_all"] = glUpload;
+  putTimes(j, "ms", sm.trace);
+  j["sah_cost"] = sah0;
+  if (rc.epo) j["epo"] = endPointOverlap(tree, soup.v0, soup.v1, soup.v2, cost);
+  j["node_visits_per_ray"] = double(visits) / n;
+  j["triangle_tests_per_ray"] = double(tests) / n;
+  j["box_tests_per_ray"] = double(boxTests) / n;
+  j["ray_cost"] = cost.traversalCost * double(visits) / n + cost.intersectionCost * double(tests) / n;
+  j["rays"] = y.rays().rays.size();
+  j["hits"] = found;
+  j["hit_mismatches"] = agreement.mismatches;
+  j["hit_ties"] = agreement.ties;
+  j["stack_overflow_rays"] = overflows;
+  j["tree_hash"] = packedTreeHash(packed);
+  j["nodes"] = tree.nodes.size();
+  j["programs_compiled"] = recompiled;
+  j["repeats_agree"] = agree;  // every copy of the strategy rebuilt alike and reached the same SAH
+  frameList.push_back(std::move(j));
+}
+
+nlohmann::json TraceClip::result(const std::string& renderer, uint64_t& overflows) const {
+  const RenderCommand& rc = c.render;
+  overflows = overflowsTotal;
   const ClipTotal total = clipTotal(samples);
   nlohmann::json clip;
-  clip["frames"] = frameCount;
+  clip["frames"] = plan.count;
   clip["fps"] = clipFps(scene);
-  clip["scene_frames"] = sceneFrames;
+  clip["scene_frames"] = plan.sceneFrames;
   clip["step"] = plan.step;
   clip["total_ms"] = total.totalMs;
   clip["total_ms_ci_low"] = total.interval ? nlohmann::json(total.interval->low) : nlohmann::json();
@@ -232,7 +227,7 @@ nlohmann::json traceClip(const TraceCommand& c, uint64_t& overflowsTotal) {
   j["any_hit"] = s.tracer.anyHit;
   j["seed"] = c.seed;
   j["builder"] = rc.builder;
-  j["layout"] = packer.name;
+  j["layout"] = packer->name;
   j["triangle_format"] = triangleFormat;
   j["kernel"] = s.tracer.kernel;
   j["storage"] = storageName(s.tracer.storage);
@@ -257,12 +252,48 @@ nlohmann::json traceClip(const TraceCommand& c, uint64_t& overflowsTotal) {
   j["sah_cost"] = sahMean;
   j["ray_cost"] = rayCostMean;
   j["hit_mismatches"] = mismatchesTotal;
-  j["frames"] = std::move(frameList);
+  j["frames"] = frameList;
   j["clip"] = clip;
   j["backend"] = backendName(s.setup.backend);
-  j["renderer"] = ctx->renderer();
-  j["gpu"] = !isSoftwareRenderer(ctx->renderer());
+  j["renderer"] = renderer;
+  j["gpu"] = !isSoftwareRenderer(renderer);
   return j;
+}
+
+
+nlohmann::json traceClip(const TraceCommand& c, uint64_t& overflows) {
+  TraceClip clip(c);
+  std::unique_ptr<GlContext> ctx = createContext(clip.backend());
+  for (int f = 0; f < clip.frames(); ++f) clip.step(f, ctx->renderer());
+  nlohmann::json j = clip.result(ctx->renderer(), overflows);
+  j["interleaved_with"] = 0;
+  clip.release();
+  return j;
+}
+
+std::vector<nlohmann::json> traceClipsInterleaved(std::vector<std::unique_ptr<TraceClip>>& clips,
+                                                  std::vector<uint64_t>& overflows) {
+  std::vector<nlohmann::json> out;
+  overflows.assign(clips.size(), 0);
+  if (clips.empty()) return out;
+  std::unique_ptr<GlContext> ctx = createContext(clips.front()->backend());
+  const std::string renderer = ctx->renderer();
+  int longest = 0;
+  for (const auto& clip : clips) longest = std::max(longest, clip->frames());
+  std::mt19937_64 order(0x636c6970735f6f72ull);
+  std::vector<size_t> slots(clips.size());
+  for (int f = 0; f < longest; ++f) {
+    for (size_t k = 0; k < slots.size(); ++k) slots[k] = k;
+    shuffleRound(slots, order);
+    for (size_t k : slots)
+      if (f < clips[k]->frames()) clips[k]->step(f, renderer);
+  }
+  for (size_t k = 0; k < clips.size(); ++k) {
+    out.push_back(clips[k]->result(renderer, overflows[k]));
+    out.back()["interleaved_with"] = clips.size() - 1;
+  }
+  for (auto& clip : clips) clip->release();
+  return out;
 }
 
 int runTraceClip(const TraceCommand& c) {

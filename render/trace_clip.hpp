@@ -24,14 +24,21 @@
 // bound over dozens of frames gives none).
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <optional>
+#include <string>
 #include <span>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "layout/layouts.hpp"
+#include "render/clip_update.hpp"
+#include "render/gl_context.hpp"
 #include "render/frame_stats.hpp"
+#include "render/ray_tracer_gl.hpp"
 #include "render/trace_command.hpp"
+#include "render/trace_run.hpp"
 
 namespace bvhlab {
 
@@ -49,6 +56,47 @@ struct ClipTotal {
   std::optional<Interval> interval;
 };
 ClipTotal clipTotal(std::span<const ClipFrameSamples> frames, uint64_t seed = 0x636c6970u);
+
+// One clip run, a frame at a time: set up on the CPU at construction (the scene loaded, the spec
+// and the clip checked; throws as runTraceClip), then step(f) for f in [0, frames()) in order with a
+// GL context current (the same one for every step), then result().
+class TraceClip {
+ public:
+  explicit TraceClip(const TraceCommand& c);
+  int frames() const { return plan.count; }
+  Backend backend() const { return s.setup.backend; }
+  // The clip's f-th frame: update, pack + upload, warm-up and timed traces, the counted pass.
+  // renderer: the current context's (it sets the sample length, resolveMinSampleMs).
+  void step(int f, const std::string& renderer);
+  // The object `trace --json --update` prints; `overflows` as traceClip's.
+  nlohmann::json result(const std::string& renderer, uint64_t& overflows) const;
+  // Frees the GL objects (before the context goes).
+  void release() { gl.reset(); }
+
+ private:
+  TraceCommand c;
+  TraceSetup s;
+  ClipPlan plan;
+  std::unique_ptr<ClipUpdater> updater;
+  const LayoutInfo* packer = nullptr;
+  std::string triangleFormat;
+  CostModel cost;
+  Scene scene;
+  std::unique_ptr<GlRayTracer> gl;
+  int dispatches = 0;  // set from frame 0's warm-up
+  std::vector<ClipFrameSamples> samples;
+  nlohmann::json frameList = nlohmann::json::array();
+  uint64_t overflowsTotal = 0, mismatchesTotal = 0;
+  size_t triangles = 0;
+};
+
+// Several clips stepped in lockstep in one GL context (`measure` groups of clip runs): frame f of
+// every clip, in an order drawn per frame (fixed seed), before frame f + 1 of any, so load that drifts
+// over the run reaches every clip's frame f alike and per-frame times pair up across clips. Clips of
+// different lengths step while they have frames. Returns each clip's result (as traceClip's) with
+// "interleaved_with": the number of other clips stepped beside it; `overflows` per clip.
+std::vector<nlohmann::json> traceClipsInterleaved(std::vector<std::unique_ptr<TraceClip>>& clips,
+                                                  std::vector<uint64_t>& overflows);
 
 // Runs the clip (c.update set) in a GL context of its own and returns the object `trace --json
 // --update` prints; `overflows`: rays whose traversal stack overflowed, over every frame (the caller

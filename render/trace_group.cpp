@@ -104,7 +104,9 @@ json traceGroup(const GroupSpec& spec) {
   std::map<std::string, Scene> scenes;
   std::map<std::string, std::shared_ptr<const PreparedScene>> trees;  // runs with one treeKey share it
   json deferred = json::object();
-  json clips = json::object();  // runs with --update: measured on their own (traceClip)
+  json clips = json::object();  // runs with --update: their clips' results
+  std::vector<std::unique_ptr<TraceClip>> clipRuns;
+  std::vector<std::string> clipKeys;
   const double fraction = groupMemoryFraction();
   const double budget = fraction * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
   uint64_t uploads = 0;  // GL bytes the runs set up so far will upload (tree and rays)
@@ -115,17 +117,10 @@ json traceGroup(const GroupSpec& spec) {
       if (!item.error.empty()) throw InputError(item.error);
       r->cmd = parseTraceArgs(item.args);
       if (!r->cmd.render.update.empty()) {
-        // A clip (`trace --update`) is its own measured unit: its frames are timed in order, in a GL
-        // context of its own made and dropped here, before the group's; it is not interleaved with
-        // the group's runs.
-        uint64_t overflows = 0;
-        json j = traceClip(r->cmd, overflows);
-        j["session"] = g.session;
-        j["program"] = nullptr;
-        if (overflows > 0)
-          clips[r->key] = {{"error", "traversal stack overflowed on " + std::to_string(overflows) + " rays"}, {"result", j}};
-        else
-          clips[r->key] = std::move(j);
+        // A clip (`trace --update`): set up here, traced below with the group's other clips in
+        // lockstep, frame by frame, in a GL context of their own (traceClipsInterleaved).
+        clipRuns.push_back(std::make_unique<TraceClip>(r->cmd));
+        clipKeys.push_back(r->key);
         continue;
       }
       auto scene = scenes.find(r->cmd.render.input);
@@ -164,6 +159,25 @@ json traceGroup(const GroupSpec& spec) {
       r->error = ex.what();
     }
     runs.push_back(std::move(r));
+  }
+  if (!clipRuns.empty()) {
+    std::vector<uint64_t> overflows;
+    std::vector<json> results;
+    try {
+      results = traceClipsInterleaved(clipRuns, overflows);
+    } catch (const std::exception& ex) {
+      for (const std::string& key : clipKeys) clips[key] = {{"error", ex.what()}};
+    }
+    for (size_t k = 0; k < results.size(); ++k) {
+      results[k]["session"] = g.session;
+      results[k]["program"] = nullptr;
+      if (overflows[k] > 0)
+        clips[clipKeys[k]] = {{"error", "traversal stack overflowed on " + std::to_string(overflows[k]) + " rays"},
+                              {"result", results[k]}};
+      else
+        clips[clipKeys[k]] = std::move(results[k]);
+    }
+    clipRuns.clear();
   }
   scenes.clear();  // every tree holds its own copy
   trees.clear();   // the runs hold theirs

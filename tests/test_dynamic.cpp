@@ -3,6 +3,7 @@
 // patch (2000 triangles), 32x32 primary rays, a few frames.
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -144,6 +145,41 @@ TEST(DynamicRender, RefitOfAStillClipKeepsTheTreeAndMatchesAStaticRender) {
   const clitest::Result r = run("render " + still2 + " --update refit --frames 1 --warmup 0");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("--update"), std::string::npos) << r.err;
+}
+
+// A measure group of clip runs steps them in lockstep in one context: each clip's clock-free results
+// equal its own `trace --update`'s, a static run beside them is traced as before, and a clip that
+// cannot be set up fails alone.
+TEST(DynamicTrace, AGroupInterleavesItsClipsFrameByFrame) {
+  const std::string scene =
+      clipScene("group.toml", 4, "kind = \"explode\"\nspeed = 3\njitter = 0.5\nspeed_jitter = 0.8\nseed = 3\n");
+  const std::vector<std::string> common = {scene, "--json", "--rays", "primary", "--frames", "1", "--warmup", "0"};
+  auto args = [&](std::vector<std::string> more) {
+    std::vector<std::string> a = common;
+    a.insert(a.end(), more.begin(), more.end());
+    return a;
+  };
+  const json spec = {{"session", "s"}, {"min_frames", 1}, {"max_frames", 1}, {"aa_control", false}, {"command", "trace"},
+                     {"runs", {{{"key", "refit"}, {"args", args({"--update", "refit"})}},
+                               {{"key", "rebuild"}, {"args", args({"--update", "rebuild"})}},
+                               {{"key", "bad"}, {"args", args({"--update", "refit+rebuild:0"})}},
+                               {{"key", "static"}, {"args", args({})}}}}};
+  const clitest::Result r = run("measure " + writeTemp("group.json", spec.dump()).string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json out = json::parse(r.out)["runs"];
+  EXPECT_NE(out["bad"]["error"].get<std::string>().find("--update"), std::string::npos) << out["bad"];
+  EXPECT_TRUE(out["static"].contains("frame_ms_all")) << out["static"];
+  for (const char* key : {"refit", "rebuild"}) {
+    SCOPED_TRACE(key);
+    ASSERT_TRUE(out[key].contains("frames")) << out[key];
+    EXPECT_EQ(out[key]["interleaved_with"], 1);
+    const json solo = traceJson(scene + " --rays primary --update " + key);
+    ASSERT_EQ(out[key]["frames"].size(), solo["frames"].size());
+    for (size_t f = 0; f < solo["frames"].size(); ++f) {
+      EXPECT_EQ(out[key]["frames"][f]["tree_hash"], solo["frames"][f]["tree_hash"]);
+      EXPECT_EQ(out[key]["frames"][f]["ray_cost"], solo["frames"][f]["ray_cost"]);
+    }
+  }
 }
 
 TEST(DynamicTrace, StaticSceneAndBadSpecAreRefused) {

@@ -343,8 +343,8 @@ def cpu_dynamic():
     r0 = runs[0]
     lines += ["", "Each row is one clip traced frame by frame (docs/animation.md): the traced frames' update, upload "
               "(pack + GL re-upload) and trace medians summed; the interval is the bootstrap over each frame's "
-              "samples. Clips were measured one after another, not interleaved: compare totals by their "
-              f"intervals. {r0.get('workload')} rays, {r0.get('kernel')} kernel, leaf size {r0.get('leaf_size')}; "
+              "samples. The clips of a scene ran in lockstep in one process (frame f of every strategy, in a shuffled "
+              f"order, before frame f + 1 of any). {r0.get('workload')} rays, {r0.get('kernel')} kernel, leaf size {r0.get('leaf_size')}; "
               "ray cost = node visits + triangle tests per ray, from the kernel's counters. Per-frame values: "
               f"`{rel(result_path(DYN, 'runs'))}/KEY.json` (the run's `trace --json` object)."]
     return lines + provenance([(cpath, rows)], src, commands(DYN, src))
