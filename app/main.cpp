@@ -15,6 +15,7 @@
 #include "experiments/findings_command.hpp"
 #include "experiments/provenance.hpp"
 #include "experiments/runner.hpp"
+#include "builders/gpu/gpu_builders.hpp"
 #include "layout/layout.hpp"
 #include "layout/layouts.hpp"
 #include "layout/triangle_formats.hpp"
@@ -40,6 +41,7 @@ struct BuildCommand {
   std::string mortonGrid = "cube";
   float sbvhAlpha = 1e-5f, sbvhBudget = 2.0f;
   bool json = false;
+  int gpuBuilds = 11;  // GPU builders with --json: GL-timed builds after a warm-up
 };
 
 int buildCommand(const BuildCommand& c) {
@@ -102,6 +104,17 @@ int buildCommand(const BuildCommand& c) {
                         {"tree_hash", packedTreeHash(packed)},
                         {"prims_per_leaf_mean", stats.primsPerLeafMean},
                         {"prims_per_leaf_max", stats.primsPerLeafMax}};
+    if (findBuilder(c.builder).gpu) {  // GL timer queries per phase over repeated builds
+      const GpuBuildTiming t = timeGpuBuild(c.builder, BuildInput{boxes, centroids, soup.v0, soup.v1, soup.v2},
+                                            options, size_t(std::max(c.gpuBuilds, 1)));
+      nlohmann::json total = {{"median", t.medianMs}, {"builds", t.builds}};
+      if (t.totalMs) total["low"] = t.totalMs->low, total["high"] = t.totalMs->high;
+      j["gpu_build_ms"] = total;
+      nlohmann::json phases = nlohmann::json::object();
+      for (const auto& [phase, ms] : t.phaseMedianMs) phases[phase] = ms;
+      j["gpu_phases_ms"] = phases;
+      j["gpu_renderer"] = t.renderer;
+    }
     std::cout << j.dump() << std::endl;
   } else {
     std::printf("%s%s on %s: %zu triangles (%zu references), %zu nodes, %zu leaves, depth %u, SAH %.3f, EPO %.3f, "
@@ -146,6 +159,7 @@ int reportParseError(CLI::App& app, const CLI::ParseError& e, int argc, char** a
 }  // namespace
 
 int main(int argc, char** argv) {
+  registerGpuBuilders();  // lbvh-gpu beside the CPU builders, wherever a builder name is accepted
   CLI::App app{"bvhlab: a testbed for BVH construction strategies in a GLSL Whitted ray tracer"};
   app.require_subcommand(1);
 
@@ -187,6 +201,8 @@ int main(int argc, char** argv) {
   build->add_option("--morton-grid", bc.mortonGrid,
                     "ploc, lbvh: the Morton codes' grid: cube (one cell size on every axis) | axes (each axis over its own extent)");
   build->add_flag("--json", bc.json, "print JSON");
+  build->add_option("--gpu-builds", bc.gpuBuilds, "GPU builders with --json: GL-timed builds after a warm-up (median and interval)")
+      ->check(CLI::Range(1, 1000));
 
   RunOptions ro;
   std::string config, outDir, shard, binary;
@@ -324,7 +340,8 @@ int main(int argc, char** argv) {
     if (hardCmd->parsed()) return runHardCases(hc);
     if (build->parsed()) return buildCommand(bc);
     if (listBuilders->parsed()) {
-      for (const BuilderInfo& b : builders()) std::printf("%-12s %s\n", b.name.c_str(), b.description.c_str());
+      for (const BuilderInfo& b : builders())
+        std::printf("%-12s %-3s %s\n", b.name.c_str(), b.gpu ? "gpu" : "cpu", b.description.c_str());
       return 0;
     }
     if (listKernels->parsed()) {

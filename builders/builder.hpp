@@ -17,9 +17,14 @@ struct BuilderInfo {
   bool usesBins = false, usesSbvhAlpha = false, usesPlocRadius = false;
   uint32_t leafSizeCap = kMaxLeafSize;
   bool usesMortonSizeBits = false;  // builds Morton codes (builders/morton.hpp): reads mortonSizeBits and mortonGrid
+  bool gpu = false;  // builds in GL compute shaders (builders/gpu/gpu_builders.hpp registers these)
 };
 
 const std::vector<BuilderInfo>& builders();
+// Adds a builder to builders() (a library above this one registers its builders at start-up, so
+// this library needs none of theirs: the GPU builders, builders/gpu/gpu_builders.hpp). Throws
+// std::invalid_argument when the name is taken.
+void registerBuilder(BuilderInfo info);
 // Throws std::invalid_argument naming the valid builders when `name` is unknown.
 const BuilderInfo& findBuilder(const std::string& name);
 

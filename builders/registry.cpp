@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "builders/builder.hpp"
 #include "builders/reinsert.hpp"
@@ -24,8 +25,10 @@ Bvh buildPloc(const BuildInput&, const BuildOptions&);
 Bvh buildEmbreeBvh(const BuildInput&, const BuildOptions&);
 Bvh buildEmbreeLowBvh(const BuildInput&, const BuildOptions&);
 
-const std::vector<BuilderInfo>& builders() {
-  static const std::vector<BuilderInfo> table = {
+namespace {
+
+std::vector<BuilderInfo>& table() {
+  static std::vector<BuilderInfo> table = {
       {"median", "complete binary tree, object-median splits on the longest axis, full leaves",
        buildMedianBvh},
       {"sah-binned", "binned SAH (options.bins bins per axis, 64 by default), median fallback", buildSahBinnedBvh,
@@ -45,6 +48,16 @@ const std::vector<BuilderInfo>& builders() {
        kEmbreeMaxLeafSize},
   };
   return table;
+}
+
+}  // namespace
+
+const std::vector<BuilderInfo>& builders() { return table(); }
+
+void registerBuilder(BuilderInfo info) {
+  for (const BuilderInfo& b : table())
+    if (b.name == info.name) throw std::invalid_argument("builder '" + info.name + "' is registered already");
+  table().push_back(std::move(info));
 }
 
 const BuilderInfo& findBuilder(const std::string& name) {

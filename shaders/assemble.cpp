@@ -7,6 +7,7 @@
 #include "layout/layouts.hpp"
 #include "layout/triangle_formats.hpp"
 #include "traversal/kernels.hpp"
+#include "traversal/two_level.hpp"
 
 namespace bvhlab {
 
@@ -114,10 +115,38 @@ const char* kKindModules[6] = {"prim_sphere.glsl", "prim_box.glsl", "prim_cylind
                                "prim_cone.glsl", "prim_torus.glsl", "prim_plane.glsl"};
 const char* kKindDefines[6] = {"HAS_SPHERE", "HAS_BOX", "HAS_CYLINDER", "HAS_CONE", "HAS_TORUS", "HAS_PLANE"};
 
+// The kernel's module: once for a flat tree; for a two-level tree (traversal/two_level.glsl) twice
+// around two_level.glsl, as the BLAS walk and as the TLAS walk with its counters renamed.
+void appendKernel(Assembler& a, const std::string& layout, const std::string& kernel, bool twoLevel) {
+  const std::string& file = findKernel(layout, kernel).glslFile;
+  if (!twoLevel) {
+    a.module(file);
+    return;
+  }
+  a.raw("<blas walk>", "#define KERNEL_WALK blasWalk\n#define KERNEL_LEAF_TEST testTriangle\n");
+  a.module(file);
+  a.raw("<end of blas walk>", "#undef KERNEL_WALK\n#undef KERNEL_LEAF_TEST\n");
+  a.module("two_level.glsl");
+  a.raw("<tlas walk>",
+        "#define KERNEL_WALK tlasWalk\n#define KERNEL_LEAF_TEST testInstance\n#define g_nodeVisits g_tlasNodeVisits\n"
+        "#define g_boxTests g_tlasBoxTests\n#define g_triTests g_instanceTests\n");
+  a.module(file);
+  a.raw("<end of tlas walk>",
+        "#undef KERNEL_WALK\n#undef KERNEL_LEAF_TEST\n#undef g_nodeVisits\n#undef g_boxTests\n#undef g_triTests\n");
+}
+
 }  // namespace
+
+void checkTwoLevel(const std::string& layout, const std::string& kernel) {
+  if (!twoLevelLayoutSupported(findLayout(layout).name))
+    throw std::invalid_argument("layout '" + layout + "' has no two-level trees (layouts with them: v1, bvh2-cb)");
+  const std::string& name = findKernel(layout, kernel).name;
+  if (!hasTwoLevelWalk(name)) twoLevelMirror(name, Robustness::Fast);  // throws, naming the kernels with one
+}
 
 AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   checkTriangleFormat(o.triangles, o.robust);
+  if (o.twoLevel) checkTwoLevel(o.layout, o.kernel);
   const bool uber = o.uber;
   std::ostringstream d;
   d << "#version 450 core\n";
@@ -135,6 +164,7 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   if (uber) d << "#define UBER 1\n";
   if (o.countStats) d << "#define COUNT_STATS 1\n";
   if (o.primaryIdOut) d << "#define PRIMARY_ID_OUT 1\n";
+  if (o.twoLevel) d << "#define TWO_LEVEL 1\n";
   if (o.robust.offset == OriginOffset::Ulp) d << "#define RAY_OFFSET_ULP 1\n";
   if (o.robust.box == BoxTest::Robust) d << "#define BVH_BOX_ROBUST 1\n";  // kernels may pick their box test by it
   if (o.reinhard) d << "#define TONEMAP_REINHARD 1\n";
@@ -172,7 +202,7 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
     a.module(o.robust.box == BoxTest::Robust ? "ray_box_robust.glsl" : "ray_box.glsl");
     a.module(o.robust.triangle == TriangleTest::Watertight ? "ray_triangle_watertight.glsl" : "ray_triangle.glsl");
     a.module(findTriangleFormat(o.triangles).glslModule);  // testTriangle and the triangle accessors
-    a.module(findKernel(o.layout, o.kernel).glslFile);
+    appendKernel(a, o.layout, o.kernel, o.twoLevel);
   }
   for (int k = 0; k < 6; ++k)
     if (uber || f.kinds[k]) a.module(kKindModules[k]);
@@ -192,16 +222,17 @@ AssembledShader assembleTracer(const SceneFeatures& f, const ShaderOptions& o) {
   return s;
 }
 
-AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
-                                  bool anyHit, bool countStats, const std::string& layout,
-                                  const std::string& triangles) {
-  const std::string& kernelFile = findKernel(layout, kernel).glslFile;  // a mismatch fails before any GLSL
+AssembledShader assembleTraversal(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
+                                  const std::string& defines, const std::string& layout, const std::string& triangles,
+                                  bool twoLevel) {
+  findKernel(layout, kernel);  // a mismatch fails before any GLSL
   checkTriangleFormat(triangles, robust);
+  if (twoLevel) checkTwoLevel(layout, kernel);
   std::ostringstream d;
   d << "#version 450 core\n#define BVH_STACK_SIZE " << bvhStackSize << "\n";
   if (robust.box == BoxTest::Robust) d << "#define BVH_BOX_ROBUST 1\n";  // kernels may pick their box test by it
-  if (anyHit) d << "#define ANY_HIT 1\n";
-  if (countStats) d << "#define COUNT_STATS 1\n";
+  d << defines;
+  if (twoLevel) d << "#define TWO_LEVEL 1\n";
   Assembler a;
   a.raw("<defines>", d.str());
   a.module("common.glsl");
@@ -210,9 +241,24 @@ AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Ro
   a.module(robust.box == BoxTest::Robust ? "ray_box_robust.glsl" : "ray_box.glsl");
   a.module(robust.triangle == TriangleTest::Watertight ? "ray_triangle_watertight.glsl" : "ray_triangle.glsl");
   a.module(findTriangleFormat(triangles).glslModule);
-  a.module(kernelFile);
-  a.module("trace_rays.glsl");
+  appendKernel(a, layout, kernel, twoLevel);
   return a.take();
+}
+
+AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
+                                  bool anyHit, bool countStats, const std::string& layout,
+                                  const std::string& triangles, bool twoLevel) {
+  std::string defines;
+  if (anyHit) defines += "#define ANY_HIT 1\n";
+  if (countStats) defines += "#define COUNT_STATS 1\n";
+  AssembledShader s = assembleTraversal(kernel, storage, robust, bvhStackSize, defines, layout, triangles, twoLevel);
+  s.modules.push_back(ShaderModule{"trace_rays.glsl", s.modules.back().firstLine + s.modules.back().lineCount,
+                                   0});
+  const std::string& text = glslModule("trace_rays.glsl");
+  s.modules.back().lineCount = countLines(text);
+  s.source += text;
+  if (!text.empty() && text.back() != '\n') s.source += '\n';
+  return s;
 }
 
 AssembledShader assembleModule(const std::string& defines, const std::string& module) {

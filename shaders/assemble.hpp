@@ -51,6 +51,10 @@ struct ShaderOptions {
   std::string kernel = "stack-ordered";  // must walk `layout` (traversal/kernels.hpp findKernel(layout, name))
   std::string layout = "v1";             // the packed tree's layout (layout/layouts.hpp): its accessor modules
   std::string triangles = "raw";         // the packed tree's triangle format (layout/triangle_formats.hpp)
+  // A two-level tree (layout/pack_two_level.hpp; traversal/two_level.glsl): the kernel assembled as its
+  // BLAS and TLAS walks. traceClosest then leaves the hit's instance record in g_instance; shading in
+  // world space needs instanceNormalToWorld(g_instance, n) on the object-space normal.
+  bool twoLevel = false;
   Storage storage = Storage::Tbo;
   int bvhStackSize = 64;  // from the packed tree depth (see traversal/kernels.hpp)
   bool countStats = false;
@@ -109,9 +113,20 @@ AssembledShader assembleTracer(const SceneFeatures& features, const ShaderOption
 // does not walk `layout` is refused (std::invalid_argument naming the layout's kernels).
 // A triangle format that cannot run the robustness variant's triangle test is refused likewise
 // (checkTriangleFormat).
+// twoLevel: over a two-level tree (layout/pack_two_level.hpp); refused (std::invalid_argument) for a
+// layout or kernel without a two-level walk (checkTwoLevel).
 AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
                                   bool anyHit, bool countStats, const std::string& layout = "v1",
-                                  const std::string& triangles = "raw");
+                                  const std::string& triangles = "raw", bool twoLevel = false);
+// The traversal alone (defines, common.glsl, storage, layout, ray tests, triangle format, kernel;
+// for a two-level tree the kernel twice around two_level.glsl): traceClosest and traceAny, for a
+// caller's own main (the ray tracer's trace_rays.glsl, tests). `defines`: extra #define lines.
+AssembledShader assembleTraversal(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
+                                  const std::string& defines, const std::string& layout = "v1",
+                                  const std::string& triangles = "raw", bool twoLevel = false);
+// Throws std::invalid_argument unless `layout` packs two-level trees and `kernel` (walking it; "" =
+// the layout's default) has a two-level walk, naming the valid ones.
+void checkTwoLevel(const std::string& layout, const std::string& kernel);
 // A single-module full-screen pass (e.g. SMAA): `#version 450 core` + `defines` + the module.
 AssembledShader assembleModule(const std::string& defines, const std::string& module);
 std::string fullscreenVertexShader();

@@ -1,7 +1,8 @@
 // trace_rays.glsl — `bvhlab trace`: one compute invocation per ray of a buffer, through the chosen
 // traversal kernel (closest hit, or any hit with ANY_HIT), no shading. Rays and results live in shader
 // storage buffers (layouts: traversal/ray_batch.hpp). C++ side: render/ray_tracer_gl.hpp.
-//   result i = (found, original triangle id, floatBits(t), 0)   [any hit: (found, 0, 0, 0)]
+//   result i = (found, original triangle id, floatBits(t), instance id)   [any hit: (found, 0, 0, 0)]
+//   (instance id: a two-level tree's (traversal/two_level.glsl), 0 for a flat tree or a miss)
 //   counts i = (node visits, triangle tests, stack overflow, box tests)  [COUNT_STATS only]
 
 layout(local_size_x = 64) in;
@@ -25,7 +26,11 @@ void main() {
   bool found = traceClosest(ray, tMin, tMax, hit);
   uint primitive = 0u, material, mesh;
   if (found) loadTriangleIds(hit.tri, primitive, material, mesh);
-  results[i] = uvec4(found ? 1u : 0u, primitive, floatBitsToUint(found ? hit.t : tMax), 0u);
+  uint instance = 0u;
+#ifdef TWO_LEVEL
+  if (found) instance = instanceId(g_instance);
+#endif
+  results[i] = uvec4(found ? 1u : 0u, primitive, floatBitsToUint(found ? hit.t : tMax), instance);
 #endif
 #ifdef COUNT_STATS
   counts[i] = uvec4(g_nodeVisits, g_triTests, g_stackOverflow ? 1u : 0u, g_boxTests);

@@ -30,7 +30,16 @@
 // 0.77x the time on the bunny's primary rays and 0.80x on its diffuse ones with this shape
 // (the runs are in the git history of docs/layouts.md). The walk, and so every counter, is the same in both shapes.
 
-bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
+// Two-level trees (traversal/two_level.glsl) assemble this file twice, with KERNEL_WALK naming the
+// walk (blasWalk, tlasWalk) and KERNEL_LEAF_TEST the test of its leaves' primitives (testTriangle,
+// testInstance); alone it is the flat kernel, under the names below. `root` is the node the walk
+// starts at: 0 for a flat tree (a constant the compiler folds), a BLAS's or the TLAS's root otherwise.
+#ifndef KERNEL_WALK
+#define KERNEL_WALK traverseBvh2cb
+#define KERNEL_LEAF_TEST testTriangle
+#endif
+
+bool KERNEL_WALK(Ray ray, int root, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
   vec3 invDir = rayInverseDirection(ray.dir);
   uint stackLink[BVH_STACK_SIZE];
@@ -38,7 +47,7 @@ bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hi
   float stackEnter[BVH_STACK_SIZE];
   int sp = 0;
 
-  uint link = 0u;  // the current entry: the root record
+  uint link = uint(root);  // the current entry: the root record
   uint count = kBvh2cbInner;
   while (true) {
     // Inner loop: fetch the record, test both children, go on with the nearer one that the ray meets
@@ -77,7 +86,7 @@ bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hi
       float t;
       vec2 bary;
       g_triTests++;
-      if (testTriangle(ray, tri, tMin, hit.t, t, bary)) {
+      if (KERNEL_LEAF_TEST(ray, tri, tMin, hit.t, t, bary)) {
         hit = MeshHit(t, tri, bary);
         if (anyHit) return true;
       }
@@ -91,13 +100,15 @@ bool traverseBvh2cb(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hi
   return hit.tri >= 0;
 }
 
+#ifndef TWO_LEVEL  // two_level.glsl defines the entry points of a two-level tree
 // Closest hit with tMin < t < tMax; hit.tri = -1 and hit.t = tMax when there is none.
 bool traceClosest(Ray ray, float tMin, float tMax, out MeshHit hit) {
-  return traverseBvh2cb(ray, tMin, tMax, false, hit);
+  return KERNEL_WALK(ray, 0, tMin, tMax, false, hit);
 }
 
 // Any hit with tMin < t < tMax (shadow rays): the same walk, stopped at the first hit.
 bool traceAny(Ray ray, float tMin, float tMax) {
   MeshHit hit;
-  return traverseBvh2cb(ray, tMin, tMax, true, hit);
+  return KERNEL_WALK(ray, 0, tMin, tMax, true, hit);
 }
+#endif

@@ -2,6 +2,7 @@
 // bvh2-cb; stack bound, NaN handling and counter definitions are documented there).
 #pragma once
 #include "traversal/intersectors.hpp"
+#include "traversal/leaf_test.hpp"
 #include "traversal/layout_bvh2cb.hpp"
 
 namespace bvhlab::glsl::bvh2cb_stack {
@@ -15,9 +16,11 @@ namespace bvhlab::glsl::bvh2cb_stack {
 constexpr uint kNodeBytes = bvhlab::kBvh2cbRecordTexels * kTexelBytes;
 constexpr uint kStackEntryBytes = uint(2 * sizeof(uint) + sizeof(float));
 
-template <class Tests>
-inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
-                           Counters& c) {
+// root: the node the walk starts at (GLSL's `root`: 0 for a flat tree); leaf: the test of the leaves'
+// primitives (GLSL's KERNEL_LEAF_TEST: traversal/leaf_test.hpp).
+template <class Tests, class Leaf>
+inline bool traverseBvh2cb(const Storage& s, Ray ray, int root, float tMin, float tMax, bool anyHit, MeshHit& hit,
+                           Counters& c, const Leaf& leaf) {
   hit = MeshHit{tMax, -1, vec2(0.0f)};
   vec3 invDir = Tests::rayInverseDirection(ray.dir);
   StackArray<uint> stackLink(s.stackSize);
@@ -25,7 +28,7 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
   StackArray<float> stackEnter(s.stackSize);
   int sp = 0;
 
-  uint link = 0u;
+  uint link = uint(root);
   uint count = kBvh2cbInner;
   while (true) {
     while (count == kBvh2cbInner) {
@@ -62,8 +65,8 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
       float t;
       vec2 bary;
       c.triTests++;
-      c.triangleBytes += triangleTestBytes(s);
-      if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
+      c.triangleBytes += leaf.bytes();
+      if (leaf.test(ray, tri, tMin, hit.t, t, bary)) {
         hit = MeshHit{t, tri, bary};
         if (anyHit) return true;
       }
@@ -83,13 +86,13 @@ inline bool traverseBvh2cb(const Storage& s, Ray ray, float tMin, float tMax, bo
 
 template <class Tests = FastTests>
 inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
-  return traverseBvh2cb<Tests>(s, ray, tMin, tMax, false, hit, c);
+  return traverseBvh2cb<Tests>(s, ray, 0, tMin, tMax, false, hit, c, TriangleLeaf<Tests>{s});
 }
 
 template <class Tests = FastTests>
 inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
   MeshHit hit;
-  return traverseBvh2cb<Tests>(s, ray, tMin, tMax, true, hit, c);
+  return traverseBvh2cb<Tests>(s, ray, 0, tMin, tMax, true, hit, c, TriangleLeaf<Tests>{s});
 }
 
 }  // namespace bvhlab::glsl::bvh2cb_stack

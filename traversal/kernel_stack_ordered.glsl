@@ -17,14 +17,23 @@
 // as kernel_bvh2cb_stack.glsl and for its reason; the walk and its counters are those of the one-loop
 // if-else form it replaced (0.70x its time on the bunny's primary rays, 0.73x on diffuse ones).
 
-bool traverseOrdered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
+// Two-level trees (traversal/two_level.glsl) assemble this file twice, with KERNEL_WALK naming the
+// walk (blasWalk, tlasWalk) and KERNEL_LEAF_TEST the test of its leaves' primitives (testTriangle,
+// testInstance); alone it is the flat kernel, under the names below. `root` is the node the walk
+// starts at: 0 for a flat tree (a constant the compiler folds), a BLAS's or the TLAS's root otherwise.
+#ifndef KERNEL_WALK
+#define KERNEL_WALK traverseOrdered
+#define KERNEL_LEAF_TEST testTriangle
+#endif
+
+bool KERNEL_WALK(Ray ray, int root, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
   vec3 invDir = rayInverseDirection(ray.dir);
   int stackNode[BVH_STACK_SIZE];
   float stackEnter[BVH_STACK_SIZE];
   int sp = 0;
 
-  int node = 0;
+  int node = root;
   vec3 bmin, bmax;
   uint a, escape, count;
   float tEnter;
@@ -75,7 +84,7 @@ bool traverseOrdered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit h
       float t;
       vec2 bary;
       g_triTests++;
-      if (testTriangle(ray, tri, tMin, hit.t, t, bary)) {
+      if (KERNEL_LEAF_TEST(ray, tri, tMin, hit.t, t, bary)) {
         hit = MeshHit(t, tri, bary);
         if (anyHit) return true;
       }
@@ -90,13 +99,15 @@ bool traverseOrdered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit h
   return hit.tri >= 0;
 }
 
+#ifndef TWO_LEVEL  // two_level.glsl defines the entry points of a two-level tree
 // Closest hit with tMin < t < tMax; hit.tri = -1 and hit.t = tMax when there is none.
 bool traceClosest(Ray ray, float tMin, float tMax, out MeshHit hit) {
-  return traverseOrdered(ray, tMin, tMax, false, hit);
+  return KERNEL_WALK(ray, 0, tMin, tMax, false, hit);
 }
 
 // Any hit with tMin < t < tMax (shadow rays): the same walk, stopped at the first hit.
 bool traceAny(Ray ray, float tMin, float tMax) {
   MeshHit hit;
-  return traverseOrdered(ray, tMin, tMax, true, hit);
+  return KERNEL_WALK(ray, 0, tMin, tMax, true, hit);
 }
+#endif

@@ -3,6 +3,7 @@
 #pragma once
 #include "traversal/layout.hpp"
 #include "traversal/intersectors.hpp"
+#include "traversal/leaf_test.hpp"
 
 namespace bvhlab::glsl::stack_ordered {
 
@@ -16,16 +17,18 @@ namespace bvhlab::glsl::stack_ordered {
 constexpr uint kNodeBytes = bvhlab::kNodeTexels * kTexelBytes;
 constexpr uint kStackEntryBytes = uint(sizeof(int) + sizeof(float));
 
-template <class Tests>
-inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
-                            Counters& c) {
+// root: the node the walk starts at (GLSL's `root`: 0 for a flat tree); leaf: the test of the leaves'
+// primitives (GLSL's KERNEL_LEAF_TEST: traversal/leaf_test.hpp).
+template <class Tests, class Leaf>
+inline bool traverseOrdered(const Storage& s, Ray ray, int root, float tMin, float tMax, bool anyHit, MeshHit& hit,
+                            Counters& c, const Leaf& leaf) {
   hit = MeshHit{tMax, -1, vec2(0.0f)};
   vec3 invDir = Tests::rayInverseDirection(ray.dir);
   StackArray<int> stackNode(s.stackSize);
   StackArray<float> stackEnter(s.stackSize);
   int sp = 0;
 
-  int node = 0;
+  int node = root;
   vec3 bmin, bmax;
   uint a, escape, count;
   float tEnter;
@@ -80,8 +83,8 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
       float t;
       vec2 bary;
       c.triTests++;
-      c.triangleBytes += triangleTestBytes(s);
-      if (Tests::testTriangle(s, ray, tri, tMin, hit.t, t, bary)) {
+      c.triangleBytes += leaf.bytes();
+      if (leaf.test(ray, tri, tMin, hit.t, t, bary)) {
         hit = MeshHit{t, tri, bary};
         if (anyHit) return true;
       }
@@ -102,13 +105,13 @@ inline bool traverseOrdered(const Storage& s, Ray ray, float tMin, float tMax, b
 
 template <class Tests = FastTests>
 inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
-  return traverseOrdered<Tests>(s, ray, tMin, tMax, false, hit, c);
+  return traverseOrdered<Tests>(s, ray, 0, tMin, tMax, false, hit, c, TriangleLeaf<Tests>{s});
 }
 
 template <class Tests = FastTests>
 inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
   MeshHit hit;
-  return traverseOrdered<Tests>(s, ray, tMin, tMax, true, hit, c);
+  return traverseOrdered<Tests>(s, ray, 0, tMin, tMax, true, hit, c, TriangleLeaf<Tests>{s});
 }
 
 }  // namespace bvhlab::glsl::stack_ordered

@@ -15,12 +15,21 @@
 // box is tested, so a node pushed and later popped counts twice. g_triTests += 1 per
 // testTriangle call; g_boxTests += 1 per intersectAabb call.
 
-bool traverseUnordered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
+// Two-level trees (traversal/two_level.glsl) assemble this file twice, with KERNEL_WALK naming the
+// walk (blasWalk, tlasWalk) and KERNEL_LEAF_TEST the test of its leaves' primitives (testTriangle,
+// testInstance); alone it is the flat kernel, under the names below. `root` is the node the walk
+// starts at: 0 for a flat tree (a constant the compiler folds), a BLAS's or the TLAS's root otherwise.
+#ifndef KERNEL_WALK
+#define KERNEL_WALK traverseUnordered
+#define KERNEL_LEAF_TEST testTriangle
+#endif
+
+bool KERNEL_WALK(Ray ray, int root, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
   vec3 invDir = rayInverseDirection(ray.dir);
   int stack[BVH_STACK_SIZE];
   int sp = 0;
-  stack[sp++] = 0;
+  stack[sp++] = root;
   while (sp > 0) {
     int node = stack[--sp];
     vec3 bmin, bmax;
@@ -33,7 +42,7 @@ bool traverseUnordered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit
         float t;
         vec2 bary;
         g_triTests++;
-        if (testTriangle(ray, tri, tMin, hit.t, t, bary)) {
+        if (KERNEL_LEAF_TEST(ray, tri, tMin, hit.t, t, bary)) {
           hit = MeshHit(t, tri, bary);
           if (anyHit) return true;
         }
@@ -58,13 +67,15 @@ bool traverseUnordered(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit
   return hit.tri >= 0;
 }
 
+#ifndef TWO_LEVEL  // two_level.glsl defines the entry points of a two-level tree
 // Closest hit with tMin < t < tMax; hit.tri = -1 and hit.t = tMax when there is none.
 bool traceClosest(Ray ray, float tMin, float tMax, out MeshHit hit) {
-  return traverseUnordered(ray, tMin, tMax, false, hit);
+  return KERNEL_WALK(ray, 0, tMin, tMax, false, hit);
 }
 
 // Any hit with tMin < t < tMax (shadow rays): the same walk, stopped at the first hit.
 bool traceAny(Ray ray, float tMin, float tMax) {
   MeshHit hit;
-  return traverseUnordered(ray, tMin, tMax, true, hit);
+  return KERNEL_WALK(ray, 0, tMin, tMax, true, hit);
 }
+#endif

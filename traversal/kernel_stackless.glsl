@@ -14,10 +14,19 @@
 // branch of a loop body under a mask, so a triangle test inside the box-step loop is paid by every
 // step). The walk and its counters are those of the one-loop form it replaced.
 
-bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
+// Two-level trees (traversal/two_level.glsl) assemble this file twice, with KERNEL_WALK naming the
+// walk (blasWalk, tlasWalk) and KERNEL_LEAF_TEST the test of its leaves' primitives (testTriangle,
+// testInstance); alone it is the flat kernel, under the names below. `root` is the node the walk
+// starts at: 0 for a flat tree (a constant the compiler folds), a BLAS's or the TLAS's root otherwise.
+#ifndef KERNEL_WALK
+#define KERNEL_WALK traverseStackless
+#define KERNEL_LEAF_TEST testTriangle
+#endif
+
+bool KERNEL_WALK(Ray ray, int root, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
   vec3 invDir = rayInverseDirection(ray.dir);
-  uint node = 0u;
+  uint node = uint(root);
   while (true) {
     uint a, escape, count;
     // Box steps: follow child and escape links until a leaf whose box the ray meets, or the end.
@@ -47,7 +56,7 @@ bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit
       float t;
       vec2 bary;
       g_triTests++;
-      if (testTriangle(ray, tri, tMin, hit.t, t, bary)) {
+      if (KERNEL_LEAF_TEST(ray, tri, tMin, hit.t, t, bary)) {
         hit = MeshHit(t, tri, bary);
         if (anyHit) return true;
       }
@@ -57,13 +66,15 @@ bool traverseStackless(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit
   return hit.tri >= 0;
 }
 
+#ifndef TWO_LEVEL  // two_level.glsl defines the entry points of a two-level tree
 // Closest hit with tMin < t < tMax; hit.tri = -1 and hit.t = tMax when there is none.
 bool traceClosest(Ray ray, float tMin, float tMax, out MeshHit hit) {
-  return traverseStackless(ray, tMin, tMax, false, hit);
+  return KERNEL_WALK(ray, 0, tMin, tMax, false, hit);
 }
 
 // Any hit with tMin < t < tMax (shadow rays): the same walk, stopped at the first hit.
 bool traceAny(Ray ray, float tMin, float tMax) {
   MeshHit hit;
-  return traverseStackless(ray, tMin, tMax, true, hit);
+  return KERNEL_WALK(ray, 0, tMin, tMax, true, hit);
 }
+#endif

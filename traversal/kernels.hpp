@@ -2,7 +2,8 @@
 // traceClosest and traceAny over the modules storage_*.glsl, its layout's accessor modules
 // (layout/layouts.hpp: layout.glsl for v1), ray_box.glsl, ray_triangle.glsl) plus its C++ mirror
 // (kernel_*.hpp). Each kernel walks one layout (KernelInfo::layout). Adding a kernel = those two
-// files and one line in kernels.cpp, in its layout's table.
+// files and one line in kernels.cpp, in its layout's table. Over a two-level tree the same kernel file
+// is the BLAS and the TLAS walk (traversal/two_level.glsl; the kernels with one: two_level.hpp).
 #pragma once
 #include <array>
 #include <cstdint>

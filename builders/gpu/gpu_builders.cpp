@@ -1,0 +1,123 @@
+// The GPU builders' registration, context handling and timing (builders/gpu/gpu_builders.hpp).
+#include "builders/gpu/gpu_builders.hpp"
+
+#include <array>
+#include <cstdlib>
+#include <memory>
+#include <stdexcept>
+
+#include <glad/gl.h>
+#include <GL/osmesa.h>
+#include <EGL/egl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include "builders/builder.hpp"
+#include "builders/gpu/gpu_lbvh.hpp"
+#include "render/gl_context.hpp"
+
+namespace bvhlab {
+
+namespace {
+
+// A current GL context for the duration of a build: the caller's (its program and storage-buffer
+// bindings put back afterwards) or a headless one of our own.
+class BuildContext {
+ public:
+  BuildContext() {
+    // OSMesa and EGL: the headless contexts (render/gl_context.hpp); GLFW: the viewer's window.
+    if (OSMesaGetCurrentContext() == nullptr && eglGetCurrentContext() == EGL_NO_CONTEXT &&
+        glfwGetCurrentContext() == nullptr) {
+      const char* env = std::getenv("BVHLAB_GPU_BUILD_BACKEND");
+      own_ = createContext(env && *env ? parseBackend(env) : Backend::OSMesa);
+      return;
+    }
+    glGetIntegerv(GL_CURRENT_PROGRAM, &program_);
+    glGetIntegerv(GL_SHADER_STORAGE_BUFFER_BINDING, &generic_);
+    for (GLuint i = 0; i < bindings_.size(); ++i) {
+      glGetIntegeri_v(GL_SHADER_STORAGE_BUFFER_BINDING, i, &bindings_[i].buffer);
+      glGetInteger64i_v(GL_SHADER_STORAGE_BUFFER_START, i, &bindings_[i].start);
+      glGetInteger64i_v(GL_SHADER_STORAGE_BUFFER_SIZE, i, &bindings_[i].size);
+    }
+  }
+  ~BuildContext() {
+    if (own_) return;
+    glUseProgram(glIsProgram(GLuint(program_)) ? GLuint(program_) : 0);  // a deleted one was current until now
+    for (GLuint i = 0; i < bindings_.size(); ++i) {
+      const Binding& b = bindings_[i];
+      const GLuint buffer = GLuint(b.buffer);
+      GLint64 bytes = 0;
+      if (buffer != 0 && glIsBuffer(buffer)) glGetNamedBufferParameteri64v(buffer, GL_BUFFER_SIZE, &bytes);
+      if (bytes == 0)  // none, deleted since, or empty: nothing to put back
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+      else if (b.size > 0 && b.start + b.size <= bytes)  // a range (glBindBufferRange)
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, i, buffer, GLintptr(b.start), GLsizeiptr(b.size));
+      else
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, buffer);
+    }
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, glIsBuffer(GLuint(generic_)) ? GLuint(generic_) : 0);
+  }
+  BuildContext(const BuildContext&) = delete;
+  BuildContext& operator=(const BuildContext&) = delete;
+
+ private:
+  struct Binding {
+    GLint buffer = 0;
+    GLint64 start = 0, size = 0;
+  };
+  std::unique_ptr<GlContext> own_;
+  GLint program_ = 0, generic_ = 0;
+  std::array<Binding, 6> bindings_{};  // the slots the passes bind (0..5)
+};
+
+}  // namespace
+
+Bvh buildLbvhGpu(const BuildInput& input, const BuildOptions& options) {
+  BuildContext context;
+  return gpubuild::GpuLbvh().build(input, options);
+}
+
+void registerGpuBuilders() {
+  static const bool once = [] {
+    BuilderInfo info{"lbvh-gpu",
+                     "lbvh's tree built in GLSL compute shaders (Morton codes, radix sort, Karras radix tree, fit, "
+                     "SAH collapse); a GL 4.5 context (made when none is current)",
+                     buildLbvhGpu,
+                     false,
+                     false,
+                     false,
+                     kMaxLeafSize,
+                     /*usesMortonSizeBits=*/true};
+    info.gpu = true;
+    registerBuilder(std::move(info));
+    return true;
+  }();
+  (void)once;
+}
+
+GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input, const BuildOptions& options,
+                            size_t builds) {
+  if (!findBuilder(builder).gpu) throw std::invalid_argument(builder + " does not build on the GPU");
+  validateBuildInput(input, options);
+  BuildContext context;
+  GpuBuildTiming timing;
+  timing.renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  const gpubuild::GpuLbvh lbvh;
+  gpubuild::GpuPhaseTimes times;
+  lbvh.build(input, options, &times);  // warm-up: the driver compiles at the first dispatch
+  std::vector<double> totals;
+  std::vector<std::vector<double>> phases;
+  for (size_t k = 0; k < builds; ++k) {
+    lbvh.build(input, options, &times);
+    totals.push_back(times.totalMs());
+    phases.resize(times.phases.size());
+    for (size_t p = 0; p < times.phases.size(); ++p) phases[p].push_back(times.phases[p].second);
+  }
+  timing.builds = builds;
+  timing.totalMs = medianInterval(totals);
+  timing.medianMs = medianOf(totals);
+  for (size_t p = 0; p < phases.size(); ++p) timing.phaseMedianMs.emplace_back(times.phases[p].first, medianOf(phases[p]));
+  return timing;
+}
+
+}  // namespace bvhlab

@@ -1,0 +1,42 @@
+// The GPU builders' place in the builder registry (builders/builder.hpp) and their timing. The CPU
+// builders' library has no GL in it: this library (after render, which makes GL contexts) adds the
+// GPU builders to the registry at run time, and every program that should offer them calls
+// registerGpuBuilders() first (the bvhlab app does, before it parses a command).
+//
+// A GPU builder builds in the current GL context (render, trace, measure: the renderer's; view: the
+// window's). When no context is current (build, or a run before any rendering) it makes a headless
+// one for the build: OSMesa, or EGL when BVHLAB_GPU_BUILD_BACKEND=egl (the path to a GPU). In a
+// context it did not make it restores the program and shader storage bindings it changed.
+#pragma once
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "builders/bvh.hpp"
+#include "render/frame_stats.hpp"
+
+namespace bvhlab {
+
+// Adds lbvh-gpu to builders() (once; later calls do nothing).
+void registerGpuBuilders();
+
+// The registry's entry for lbvh-gpu: gpubuild::GpuLbvh in the current or a headless context.
+Bvh buildLbvhGpu(const BuildInput& input, const BuildOptions& options);
+
+// A GPU builder's GL-timed build: `builds` builds after one untimed warm-up (the driver compiles the
+// shaders at the first dispatch), the median total with its order-statistic interval
+// (render/frame_stats.hpp; none below kMinValuesForInterval builds) and each phase's median.
+struct GpuBuildTiming {
+  std::optional<Interval> totalMs;
+  double medianMs = 0.0;
+  std::vector<std::pair<std::string, double>> phaseMedianMs;
+  size_t builds = 0;
+  std::string renderer;  // GL_RENDERER of the context that built
+};
+// Throws std::invalid_argument when `builder` is not a GPU builder.
+GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input, const BuildOptions& options,
+                            size_t builds);
+
+}  // namespace bvhlab

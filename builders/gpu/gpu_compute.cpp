@@ -1,0 +1,69 @@
+// The GL glue of the GPU builders (builders/gpu/gpu_compute.hpp).
+#include "builders/gpu/gpu_compute.hpp"
+
+#include <stdexcept>
+
+#include "render/gl_context.hpp"
+#include "shaders/assemble.hpp"
+
+namespace bvhlab::gpubuild {
+
+ComputeProgram::ComputeProgram(const std::string& module) : module_(module) {
+  const auto& sources = glslSources();
+  const auto found = sources.find(module);
+  if (found == sources.end()) throw std::runtime_error("GPU builder: no embedded GLSL module " + module);
+  const std::string source = "#version 450\n" + found->second;
+  GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
+  const char* text = source.c_str();
+  glShaderSource(shader, 1, &text, nullptr);
+  glCompileShader(shader);
+  GLint ok = 0;
+  char log[4096] = {};
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
+    glDeleteShader(shader);
+    throw std::runtime_error("GPU builder: " + module + " does not compile: " + log);
+  }
+  program_ = glCreateProgram();
+  glAttachShader(program_, shader);
+  glLinkProgram(program_);
+  glDeleteShader(shader);
+  glGetProgramiv(program_, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    glGetProgramInfoLog(program_, sizeof log, nullptr, log);
+    glDeleteProgram(program_);
+    throw std::runtime_error("GPU builder: " + module + " does not link: " + log);
+  }
+}
+
+ComputeProgram::~ComputeProgram() { glDeleteProgram(program_); }
+
+void ComputeProgram::set(const char* name, uint32_t v) const { glProgramUniform1ui(program_, glGetUniformLocation(program_, name), v); }
+void ComputeProgram::set(const char* name, int32_t v) const { glProgramUniform1i(program_, glGetUniformLocation(program_, name), v); }
+void ComputeProgram::set(const char* name, float v) const { glProgramUniform1f(program_, glGetUniformLocation(program_, name), v); }
+
+void ComputeProgram::dispatch(uint32_t groups, const char* pass) const {
+  glUseProgram(program_);
+  glDispatchCompute(groups, 1, 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  checkGl(pass);
+}
+
+GpuLimits queryGpuLimits() {
+  GLint64 block = 0;
+  glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
+  GLint groups = 0;
+  glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0, &groups);
+  checkGl("GPU builder: querying GL_MAX_SHADER_STORAGE_BLOCK_SIZE and GL_MAX_COMPUTE_WORK_GROUP_COUNT");
+  return {uint64_t(block), uint32_t(groups)};
+}
+
+GLuint makeStorageBuffer(uint64_t bytes, const void* data) {
+  GLuint buffer = 0;
+  glCreateBuffers(1, &buffer);
+  glNamedBufferData(buffer, GLsizeiptr(bytes < 4 ? 4 : bytes), data, GL_DYNAMIC_COPY);
+  return buffer;
+}
+
+}  // namespace bvhlab::gpubuild

@@ -1,0 +1,215 @@
+// lbvh-gpu's passes and download (builders/gpu/gpu_lbvh.hpp).
+#include "builders/gpu/gpu_lbvh.hpp"
+
+#include <array>
+#include <stdexcept>
+#include <string>
+
+#include "datasets/scene.hpp"  // InputError
+#include "render/gl_context.hpp"
+
+namespace bvhlab::gpubuild {
+
+namespace {
+
+constexpr uint32_t kGroup = 256;  // local_size_x of the per-primitive and per-node passes
+static_assert(sizeof(Aabb) == 24 && sizeof(glm::vec3) == 12, "boxes and centroids are uploaded as they lie");
+
+uint32_t groupsFor(uint64_t items) { return uint32_t((items + kGroup - 1) / kGroup); }
+
+template <class T>
+std::vector<T> download(GLuint buffer, size_t count) {
+  std::vector<T> out(count);
+  if (count) glGetNamedBufferSubData(buffer, 0, GLsizeiptr(count * sizeof(T)), out.data());
+  return out;
+}
+
+// The buffers of one build, deleted with it; the storage-buffer slots the passes bound are cleared
+// first, so that no binding names a deleted buffer afterwards.
+struct Buffers {
+  std::array<GLuint, 15> ids{};
+  ~Buffers() {
+    for (GLuint slot = 0; slot < 6; ++slot) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, 0);
+    glDeleteBuffers(GLsizei(ids.size()), ids.data());
+  }
+};
+
+}  // namespace
+
+double GpuPhaseTimes::totalMs() const {
+  double sum = 0.0;
+  for (const auto& [name, ms] : phases) sum += ms;
+  return sum;
+}
+
+GpuLbvh::GpuLbvh(std::optional<GpuLimits> limits)
+    : limits_(limits ? *limits : queryGpuLimits()),
+      bounds_("gpubuild_bounds.glsl"),
+      grid_("gpubuild_grid.glsl"),
+      morton_("gpubuild_morton.glsl"),
+      labels_("gpubuild_labels.glsl"),
+      hierarchy_("gpubuild_hierarchy.glsl"),
+      fit_("gpubuild_fit.glsl"),
+      collapse_("gpubuild_collapse.glsl") {}
+
+void GpuLbvh::checkLimits(size_t n) const {
+  const uint64_t nodes = 2 * uint64_t(n) - 1;
+  // The largest storage buffers a build binds, by what they hold.
+  const std::pair<const char*, uint64_t> buffers[] = {
+      {"node boxes", nodes * 24},       {"primitive boxes", uint64_t(n) * 24},
+      {"node costs", nodes * 8},        {"node counts", nodes * 8},
+      {"sort keys", uint64_t(n) * 12},  {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}};
+  for (const auto& [what, bytes] : buffers)
+    if (bytes > limits_.maxStorageBlockBytes)
+      throw InputError("lbvh-gpu: " + std::to_string(n) + " primitives need a " + std::to_string(bytes) +
+                       "-byte shader storage buffer (" + what + "); GL_MAX_SHADER_STORAGE_BLOCK_SIZE is " +
+                       std::to_string(limits_.maxStorageBlockBytes) + " bytes here");
+  if (groupsFor(n) > limits_.maxWorkGroupsX || uint64_t(n) > uint64_t(limits_.maxWorkGroupsX) * kGroup)
+    throw InputError("lbvh-gpu: " + std::to_string(n) + " primitives need " + std::to_string(groupsFor(n)) +
+                     " workgroups of " + std::to_string(kGroup) + " in one dispatch; GL_MAX_COMPUTE_WORK_GROUP_COUNT "
+                     "(x) is " + std::to_string(limits_.maxWorkGroupsX) + " here");
+}
+
+Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times) const {
+  if (options.mortonSizeBits != 0)
+    throw std::invalid_argument("lbvh-gpu: --morton-size-bits " + std::to_string(options.mortonSizeBits) +
+                                " is not supported on the GPU (only 0: plain position codes)");
+  const size_t count = input.boxes.size();
+  checkLimits(count);
+  if (times) times->phases.clear();
+  const uint32_t n = uint32_t(count);
+  if (n == 1) {  // lbvh's tree of one primitive: one leaf; nothing to sort or link
+    Bvh bvh;
+    bvh.nodes.resize(1);
+    bvh.nodes[0].bounds = input.boxes[0];
+    bvh.nodes[0].count = 1;
+    bvh.primIndices = {0};
+    return bvh;
+  }
+  const uint32_t inner = n - 1, nodes = 2 * n - 1;
+
+  enum { kBoxes, kCentroids, kBoundKeys, kGrid, kKeys, kScratch, kCounts, kLabels, kChildren, kParents, kNodeBoxes,
+         kInfo, kCosts, kFitCounters, kCollapseCounters };
+  Buffers b;
+  b.ids[kBoxes] = makeStorageBuffer(uint64_t(n) * 24, input.boxes.data());
+  b.ids[kCentroids] = makeStorageBuffer(uint64_t(n) * 12, input.centroids.data());
+  const uint32_t initialKeys[6] = {~0u, ~0u, ~0u, 0u, 0u, 0u};  // min keys from the top, max from the bottom
+  b.ids[kBoundKeys] = makeStorageBuffer(sizeof initialKeys, initialKeys);
+  b.ids[kGrid] = makeStorageBuffer(6 * 4);
+  b.ids[kKeys] = makeStorageBuffer(uint64_t(n) * 12);
+  b.ids[kScratch] = makeStorageBuffer(uint64_t(n) * 12);
+  b.ids[kCounts] = makeStorageBuffer(GpuRadixSort::countBytes(n));
+  b.ids[kLabels] = makeStorageBuffer(uint64_t(n) * 4);
+  b.ids[kChildren] = makeStorageBuffer(uint64_t(inner) * 8);
+  b.ids[kParents] = makeStorageBuffer(uint64_t(nodes) * 4);
+  const uint32_t noParent = ~0u;
+  glNamedBufferSubData(b.ids[kParents], 0, 4, &noParent);  // the root's; the hierarchy writes the others
+  b.ids[kNodeBoxes] = makeStorageBuffer(uint64_t(nodes) * 24);
+  b.ids[kInfo] = makeStorageBuffer(uint64_t(nodes) * 8);
+  b.ids[kCosts] = makeStorageBuffer(uint64_t(nodes) * 8);
+  const uint32_t zero = 0;
+  for (int counters : {kFitCounters, kCollapseCounters}) {
+    b.ids[counters] = makeStorageBuffer(uint64_t(inner) * 4);
+    glClearNamedBufferData(b.ids[counters], GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  }
+  checkGl("lbvh-gpu: uploading the input");
+
+  struct Queries {  // deleted on every way out, a GL error's exception included
+    GLuint ids[6];
+    Queries() { glGenQueries(6, ids); }
+    ~Queries() { glDeleteQueries(6, ids); }
+  } timestamps;
+  const GLuint* queries = timestamps.ids;
+  // A timestamp after each phase, each followed by glFlush: llvmpipe takes a timestamp when it runs
+  // its command queue, not where the query was issued (without the flush, measured here: the
+  // collapse phase read 0.04 ms and the fit phase took its time); on a GPU the flush only submits.
+  auto stamp = [&](int k) {
+    glQueryCounter(queries[k], GL_TIMESTAMP);
+    glFlush();
+  };
+  auto bind = [&](std::initializer_list<int> which) {
+    GLuint slot = 0;
+    for (int w : which) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot++, b.ids[w]);
+  };
+
+  stamp(0);
+  // morton
+  bind({kCentroids, kBoundKeys});
+  bounds_.set("u_count", n);
+  bounds_.dispatch(groupsFor(n), "lbvh-gpu morton: centroid bounds (gpubuild_bounds.glsl)");
+  bind({kBoundKeys, kGrid});
+  grid_.set("u_cube", int32_t(options.mortonGrid == MortonGrid::Cube));
+  grid_.dispatch(1, "lbvh-gpu morton: grid (gpubuild_grid.glsl)");
+  bind({kCentroids, kGrid, kKeys});
+  morton_.set("u_count", n);
+  morton_.dispatch(groupsFor(n), "lbvh-gpu morton: codes (gpubuild_morton.glsl)");
+  stamp(1);
+  // sort
+  sort_.sort(b.ids[kKeys], b.ids[kScratch], b.ids[kCounts], n);
+  stamp(2);
+  // hierarchy
+  bind({kKeys, kLabels});
+  labels_.set("u_count", n);
+  labels_.dispatch(groupsFor(n), "lbvh-gpu hierarchy: equal-code labels (gpubuild_labels.glsl)");
+  bind({kKeys, kLabels, kChildren, kParents});
+  hierarchy_.set("u_count", n);
+  hierarchy_.dispatch(groupsFor(inner), "lbvh-gpu hierarchy: radix tree (gpubuild_hierarchy.glsl)");
+  stamp(3);
+  // fit
+  bind({kBoxes, kKeys, kChildren, kParents, kNodeBoxes, kFitCounters});
+  fit_.set("u_count", n);
+  fit_.dispatch(groupsFor(n), "lbvh-gpu fit: boxes bottom-up (gpubuild_fit.glsl)");
+  stamp(4);
+  // collapse
+  bind({kChildren, kParents, kNodeBoxes, kInfo, kCosts, kCollapseCounters});
+  collapse_.set("u_count", n);
+  collapse_.set("u_maxLeaf", options.maxLeafSize);
+  collapse_.set("u_ct", options.cost.traversalCost);
+  collapse_.set("u_ci", options.cost.intersectionCost);
+  collapse_.dispatch(groupsFor(n), "lbvh-gpu collapse: SAH leaf collapse (gpubuild_collapse.glsl)");
+  stamp(5);
+  checkGl("lbvh-gpu: timer queries");
+
+  if (times) {
+    static const char* const kPhases[] = {"morton", "sort", "hierarchy", "fit", "collapse"};
+    GLuint64 stamps[6];
+    for (int q = 0; q < 6; ++q) glGetQueryObjectui64v(queries[q], GL_QUERY_RESULT, &stamps[q]);
+    for (int p = 0; p < 5; ++p) times->phases.emplace_back(kPhases[p], double(stamps[p + 1] - stamps[p]) * 1e-6);
+  }
+
+  // Download (untimed) and the depth-first emission of builders/collapse.hpp's emitCollapsed: an
+  // emitted inner node's children take the slots base, base + 1, then the left child's descendants,
+  // then the right's; primitives in leaf order, which is the sorted order (a subtree is a range).
+  const std::vector<GpuKey> keys = download<GpuKey>(b.ids[kKeys], n);
+  const std::vector<uint32_t> children = download<uint32_t>(b.ids[kChildren], 2 * size_t(inner));
+  const std::vector<Aabb> boxes = download<Aabb>(b.ids[kNodeBoxes], nodes);
+  const std::vector<uint32_t> info = download<uint32_t>(b.ids[kInfo], 2 * size_t(nodes));  // count, inner
+  checkGl("lbvh-gpu: download");
+  Bvh bvh;
+  bvh.nodes.resize(1 + 2 * size_t(info[1]));
+  bvh.primIndices.resize(n);
+  for (uint32_t k = 0; k < n; ++k) bvh.primIndices[k] = keys[k].id;
+  struct Item {
+    uint32_t node, slot, base, prim;
+  };
+  std::vector<Item> stack{{0, 0, 1, 0}};
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    BvhNode& out = bvh.nodes[it.slot];
+    out.bounds = boxes[it.node];
+    if (info[2 * it.node + 1] == 0) {  // one leaf (a full-tree leaf, or a collapsed subtree)
+      out.first = it.prim;
+      out.count = info[2 * it.node];
+      continue;
+    }
+    const uint32_t l = children[2 * it.node], r = children[2 * it.node + 1];
+    out.left = it.base;
+    out.right = it.base + 1;
+    stack.push_back({r, it.base + 1, it.base + 2 + 2 * info[2 * l + 1], it.prim + info[2 * l]});
+    stack.push_back({l, it.base, it.base + 2, it.prim});
+  }
+  return bvh;
+}
+
+}  // namespace bvhlab::gpubuild

@@ -1,0 +1,49 @@
+// lbvh-gpu: the CPU lbvh's tree (builders/lbvh.cpp), built by GLSL compute passes in the current GL
+// context. Phases (each timed by GL timestamp queries):
+//   morton     centroid bounds (atomics), the grid (one invocation, the CPU's float rounding), codes
+//   sort       stable radix sort by (code, index) (builders/gpu/gpu_radix_sort.hpp)
+//   hierarchy  labels for equal-code runs and Karras's radix tree (gpubuild_labels/hierarchy.glsl)
+//   fit        boxes bottom-up with atomic counters
+//   collapse   the SAH leaf collapse's counts, inner-node counts and costs, bottom-up likewise
+// The download (outside the timed phases) reads the Karras tree and the collapse's results back and
+// emits the collapsed tree in the depth-first order builders/collapse.hpp emits: the same Bvh, node
+// for node, as `lbvh` (so the same tree_hash).
+#pragma once
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "builders/bvh.hpp"
+#include "builders/gpu/gpu_compute.hpp"
+#include "builders/gpu/gpu_radix_sort.hpp"
+
+namespace bvhlab::gpubuild {
+
+// Milliseconds per phase of one build, in the order above; empty when nothing ran on the GPU (one
+// primitive).
+struct GpuPhaseTimes {
+  std::vector<std::pair<std::string, double>> phases;
+  double totalMs() const;
+};
+
+class GpuLbvh {
+ public:
+  // Compiles the passes in the current context; `limits` replaces the implementation's (tests).
+  explicit GpuLbvh(std::optional<GpuLimits> limits = std::nullopt);
+
+  // Throws InputError naming GL_MAX_SHADER_STORAGE_BLOCK_SIZE or GL_MAX_COMPUTE_WORK_GROUP_COUNT when
+  // the input needs more than the limits allow (before any GL work), std::invalid_argument for Morton
+  // size bits (not implemented on the GPU), std::runtime_error naming the pass for a GL error.
+  Bvh build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times = nullptr) const;
+
+  // The check build() makes first.
+  void checkLimits(size_t primitives) const;
+
+ private:
+  GpuLimits limits_;
+  ComputeProgram bounds_, grid_, morton_, labels_, hierarchy_, fit_, collapse_;
+  GpuRadixSort sort_;
+};
+
+}  // namespace bvhlab::gpubuild

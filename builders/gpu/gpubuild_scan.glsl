@@ -1,0 +1,29 @@
+// Exclusive prefix sum of u_count uints in place, in one workgroup: each invocation sums its
+// contiguous segment, the 256 sums are scanned in shared memory (Hillis-Steele), then each invocation
+// writes its segment's running sums. Used for the radix sort's digit counts (256 x blocks entries).
+layout(local_size_x = 256) in;
+layout(std430, binding = 0) buffer Values { uint values[]; };
+uniform uint u_count;
+
+shared uint s_sum[256];
+
+void main() {
+  uint t = gl_LocalInvocationID.x;
+  uint per = (u_count + 255u) / 256u, begin = min(t * per, u_count), end = min(begin + per, u_count);
+  uint sum = 0u;
+  for (uint i = begin; i < end; ++i) sum += values[i];
+  s_sum[t] = sum;
+  barrier();
+  for (uint step = 1u; step < 256u; step <<= 1u) {
+    uint add = t >= step ? s_sum[t - step] : 0u;
+    barrier();
+    s_sum[t] += add;
+    barrier();
+  }
+  uint running = s_sum[t] - sum;  // exclusive
+  for (uint i = begin; i < end; ++i) {
+    uint v = values[i];
+    values[i] = running;
+    running += v;
+  }
+}
