@@ -283,13 +283,20 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         else if (tk == "ao_radius") {
           out.aoRadius = r.number(tv, key);
           if (!(out.aoRadius > 0.0 && out.aoRadius <= 1.0)) r.fail(tv.source(), key, "must be in (0, 1]");
+        } else if (tk == "clip_frames") {
+          out.clipFrames = int(r.integer(tv, key, 0, 1 << 20));
+        } else if (tk == "clip_step") {
+          out.clipStep = int(r.integer(tv, key, 1, 1 << 20));
+        } else if (tk == "update_repeats") {
+          out.updateRepeats = int(r.integer(tv, key, 1, 64));
         } else if (tk == "embree_threads") {
           out.embreeThreads = int(r.integer(tv, key, 0, 256));
         } else if (tk == "min_sample_ms") {
           out.minSampleMs = r.number(tv, key);
           if (!(out.minSampleMs >= 0.0 && out.minSampleMs <= 10000.0)) r.fail(tv.source(), key, "must be in [0, 10000] ms");
         } else {
-          r.fail(tk.source(), key, "unknown key; [trace] has count, seed, ao_radius, embree_threads, min_sample_ms");
+          r.fail(tk.source(), key, "unknown key; [trace] has count, seed, ao_radius, embree_threads, min_sample_ms, clip_frames, "
+                              "clip_step, update_repeats");
         }
       }
     } else if (section == "findings") {
@@ -396,6 +403,12 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
     if (cameraPathNode)
       r.fail(cameraPathNode->source(), "render.camera_path", "a camera path times frames; the rays axis traces a workload");
   }
+
+  // A run on the `updates` axis traces a clip (`bvhlab trace --update`): it needs a workload.
+  for (const Sweep& s : sweeps)
+    if (s.axes.count("update") && !s.axes.count("workload"))
+      r.fail(root.source(), s.name == "main" ? "axes.updates" : "sweep '" + s.name + "'.updates",
+             "updates traces an animated scene's clip: it needs the rays axis too (e.g. rays = [\"primary\"])");
 
   // A camera path sets the camera of every frame: a scene's own camera override would be ignored.
   if (cameraPathNode)

@@ -65,6 +65,9 @@ struct RunRender {
   // to one thread too (env LP_NUM_THREADS = "1"), each side runs on one core: the yardstick that holds
   // on a machine whose two virtual CPUs sometimes share a physical core (docs/layouts.md).
   int embreeThreads = 0;
+  // Runs on the `updates` axis (`trace --update`): frames 0, clipStep, 2 clipStep, ... of the scene's
+  // clip, at most clipFrames of them (0 = all), each update timed updateRepeats times.
+  int clipFrames = 0, clipStep = 1, updateRepeats = 1;
   // A timed sample of a GLSL trace lasts at least this long (`trace --min-sample-ms`): shorter
   // dispatches (a GPU) are repeated back to back after one untimed one, and the sample is their mean.
   // < 0: the tracer's default (10 ms on a GPU, 0 on a software renderer).

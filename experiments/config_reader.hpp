@@ -12,6 +12,7 @@
 #include <toml++/toml.h>
 
 #include "builders/builder.hpp"
+#include "builders/update.hpp"
 #include "datasets/scene.hpp"  // InputError
 #include "experiments/config.hpp"
 #include "experiments/generated_scenes.hpp"
@@ -123,6 +124,16 @@ class ConfigReader {
     const std::string_view a = axis.singular;
     if (a == "scene") return sceneValue(node, key);
     if (a == "builder") return builderValue(node, key);
+    if (a == "update") {
+      // An update strategy's spec (builders/update.hpp); the run traces the scene's clip with it.
+      const std::string spec = string(node, key);
+      try {
+        parseUpdateSpec(spec);
+      } catch (const std::invalid_argument& e) {
+        fail(node.source(), key, e.what());
+      }
+      return {spec, spec, {}};
+    }
     if (a == "kernel") {
       // "default": the run's layout's default kernel (experiments/config.cpp pairs them).
       std::vector<std::string> valid = names_.kernels;

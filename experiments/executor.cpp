@@ -77,6 +77,9 @@ std::vector<std::string> traceCommandLine(const fs::path& binary, const RunSpec&
   if (r.programCopies > 1) argv.insert(argv.end(), {"--program-copies", std::to_string(r.programCopies)});
   if (r.embreeThreads > 0) argv.insert(argv.end(), {"--embree-threads", std::to_string(r.embreeThreads)});
   if (r.minSampleMs >= 0.0) argv.insert(argv.end(), {"--min-sample-ms", number(r.minSampleMs)});
+  if (spec.axis("update"))  // a clip: how much of it, and the update's repeats
+    argv.insert(argv.end(), {"--clip-frames", std::to_string(r.clipFrames), "--clip-step", std::to_string(r.clipStep),
+                             "--update-repeats", std::to_string(r.updateRepeats)});
   for (const char* key : {"eye", "target", "up"})
     if (scene.value.contains(key)) argv.insert(argv.end(), {std::string("--") + key, vec3Flag(scene.value[key])});
   if (scene.value.contains("fov")) argv.insert(argv.end(), {"--fov", number(scene.value["fov"].get<double>())});

@@ -26,7 +26,8 @@ const std::vector<std::string>& findingDesignAxes() {
 
 const std::vector<std::string>& findingKnobAxes() {
   static const std::vector<std::string> axes = {"depth",     "storage", "aa",   "robust",
-                                                "branching", "view",    "uber", "smaa_edges", "texture_lod"};
+                                                "branching", "view",    "uber", "smaa_edges", "texture_lod",
+                                                "update"};
   return axes;
 }
 

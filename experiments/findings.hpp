@@ -35,7 +35,7 @@ namespace bvhlab {
 // A kernel walks one layout, so along `layout` the context leaves the kernel free: each layout at its
 // first kernel in config order.
 const std::vector<std::string>& findingDesignAxes();  // builder, layout, triangle_format, kernel, leaf_size
-const std::vector<std::string>& findingKnobAxes();    // depth, storage, aa, robust, branching, view, uber, smaa_edges, texture_lod
+const std::vector<std::string>& findingKnobAxes();    // depth, storage, aa, robust, branching, view, uber, smaa_edges, texture_lod, update
 
 // The level at which adjusted p-values are called.
 constexpr double kFindingsAlpha = 0.05;

@@ -25,6 +25,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 # The sibling modules (experiments/report_*.py); report_data exits with a hint when matplotlib is missing.
 from report_data import Data  # noqa: E402
+from report_dynamic import section_dynamic  # noqa: E402
 from report_findings import section_findings  # noqa: E402
 from report_html import CSS, Page, section_plot  # noqa: E402
 from report_plots import (Styles, builder_costs, pareto_plot, ratio_plot, scatter_visits_vs_sah,  # noqa: E402
@@ -81,6 +82,7 @@ def build(root):
     pareto_table(body, data, fronts)
     section_rays(body, data)
     section_layouts(body, data)
+    section_dynamic(body, data)
     section_antialiasing(body, data)
     section_images(body, data)
     section_builder_table(body, data)

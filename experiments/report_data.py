@@ -27,7 +27,7 @@ except ImportError as e:  # pragma: no cover - depends on the machine
     sys.exit(3)
 
 AXES = ["scene", "builder", "layout", "triangle_format", "kernel", "leaf_size", "depth", "storage", "aa", "robust", "branching", "view",
-        "uber", "smaa_edges", "texture_lod", "workload"]
+        "uber", "smaa_edges", "texture_lod", "workload", "update"]
 NUMERIC_AXES = {"leaf_size", "depth"}
 # The axes that choose a tree and how it is walked: a builder's "best configuration" ranges over these,
 # the others (depth, aa, robust, ...) are held at one setting shared by every builder.

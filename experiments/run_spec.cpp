@@ -38,6 +38,9 @@ const std::vector<AxisInfo>& experimentAxes() {
       {"texture_lod", "texture_lod", "--texture-lod"},
       // A ray workload: the run traces it (`bvhlab trace --rays`) instead of rendering frames.
       {"rays", "workload", "--rays"},
+      // An update strategy (builders/update.hpp): the run traces an animated scene's clip frame by
+      // frame (`bvhlab trace --update`, docs/animation.md); needs the rays axis.
+      {"updates", "update", "--update"},
   };
   return axes;
 }
@@ -86,6 +89,9 @@ json RunRender::groupJson() const {
   g["ao_radius"] = aoRadius;
   g["embree_threads"] = embreeThreads;
   g["min_sample_ms"] = minSampleMs;
+  g["clip_frames"] = clipFrames;
+  g["clip_step"] = clipStep;
+  g["update_repeats"] = updateRepeats;
   return g;
 }
 
@@ -116,6 +122,8 @@ json RunSpec::keyJson() const {
     // Only when set: the keys of configs without it stay as they were.
     if (render.embreeThreads != 0) key["trace"]["embree_threads"] = render.embreeThreads;
     if (render.minSampleMs >= 0.0) key["trace"]["min_sample_ms"] = render.minSampleMs;
+    if (axis("update"))
+      key["trace"]["clip"] = {{"frames", render.clipFrames}, {"step", render.clipStep}, {"update_repeats", render.updateRepeats}};
   }
   return key;
 }
@@ -166,6 +174,9 @@ RunSpec RunSpec::fromJson(const json& j) {
   s.render.aoRadius = r.value("ao_radius", s.render.aoRadius);
   s.render.embreeThreads = r.value("embree_threads", s.render.embreeThreads);
   s.render.minSampleMs = r.value("min_sample_ms", s.render.minSampleMs);
+  s.render.clipFrames = r.value("clip_frames", s.render.clipFrames);
+  s.render.clipStep = r.value("clip_step", s.render.clipStep);
+  s.render.updateRepeats = r.value("update_repeats", s.render.updateRepeats);
   s.render.cameraPath = r.value("camera_path", "");
   s.render.cameraPathHash = r.value("camera_path_hash", "");
   s.render.cameraPathFile = r.value("camera_path_file", "");

@@ -142,7 +142,7 @@ const std::vector<std::string>& resultColumns() {
       "key", "index", "status", "sweeps", "reference_only", "reference_key",
       // axes (the config's value, else what the renderer reports it used)
       "scene", "scene_file", "builder", "bins", "layout", "triangle_format", "kernel", "leaf_size", "depth", "storage", "aa", "robust",
-      "branching", "view", "uber", "texture_lod", "workload",
+      "branching", "view", "uber", "texture_lod", "workload", "update",
       // render settings
       "width", "height", "frames", "warmup", "backend",
       // measurements
@@ -169,7 +169,8 @@ namespace {
 
 // The axes the renderer reports back (render JSON key = row column).
 const char* const kReportedAxes[] = {"builder", "layout", "triangle_format", "kernel", "leaf_size", "depth", "storage", "aa",
-                                     "robust",  "branching", "view", "uber", "texture_lod", "workload"};
+                                     "robust",  "branching", "view", "uber", "texture_lod", "workload",
+                                     "update"};
 
 json flattenRecord(const json& record) {
   json row = json::object();

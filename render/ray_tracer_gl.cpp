@@ -2,6 +2,8 @@
 
 #include <bit>
 #include <chrono>
+#include <stdexcept>
+#include <string>
 
 #include <glad/gl.h>
 
@@ -31,8 +33,9 @@ std::vector<BatchHit> decode(const std::vector<glm::uvec4>& raw, bool anyHit, co
 
 }  // namespace
 
-GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& options) : options_(options) {
-  const int stack = stackSizeFor(packed);
+GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& options)
+    : options_(options), layout_(packed.layout), triangleFormat_(packed.triangleFormat), stack_(stackSizeFor(packed)) {
+  const int stack = stack_;
   const std::string& layout = packed.layout;
   timed_ = compileComputeProgram(
       assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, false, layout,
@@ -40,10 +43,7 @@ GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& option
   counted_ = compileComputeProgram(
       assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, true, layout,
                         packed.triangleFormat));
-  streams_[0] = uploadBvhStream(packed.nodes, options.storage, "node", &streamBuffers_[0]);
-  streams_[1] = uploadBvhStream(packed.triangles, options.storage, "triangle", &streamBuffers_[1]);
-  streams_[2] = uploadBvhStream(packed.attributes, options.storage, "attribute", &streamBuffers_[2]);
-  streams_[3] = uploadBvhStream(packed.vertices, options.storage, "vertex", &streamBuffers_[3]);  // indexed only
+  upload(packed);
   const char* names[4] = {"u_nodes", "u_triangles", "u_attributes", "u_vertices"};
   for (GLuint program : {timed_, counted_}) {
     glUseProgram(program);
@@ -53,6 +53,25 @@ GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& option
   glCreateBuffers(1, &resultBuffer_);
   glCreateBuffers(1, &countBuffer_);
   checkGl("GlRayTracer setup");
+}
+
+void GlRayTracer::upload(const PackedBvh& packed) {
+  streams_[0] = uploadBvhStream(packed.nodes, options_.storage, "node", &streamBuffers_[0]);
+  streams_[1] = uploadBvhStream(packed.triangles, options_.storage, "triangle", &streamBuffers_[1]);
+  streams_[2] = uploadBvhStream(packed.attributes, options_.storage, "attribute", &streamBuffers_[2]);
+  streams_[3] = uploadBvhStream(packed.vertices, options_.storage, "vertex", &streamBuffers_[3]);  // indexed only
+}
+
+void GlRayTracer::setTree(const PackedBvh& packed) {
+  if (packed.layout != layout_ || packed.triangleFormat != triangleFormat_ || stackSizeFor(packed) > stack_)
+    throw std::invalid_argument("GlRayTracer::setTree: the tree needs another program (layout " + packed.layout +
+                                ", triangles " + packed.triangleFormat + ", stack " +
+                                std::to_string(stackSizeFor(packed)) + " > " + std::to_string(stack_) + ")");
+  glDeleteTextures(4, streams_);
+  glDeleteBuffers(4, streamBuffers_);
+  for (int k = 0; k < 4; ++k) streams_[k] = streamBuffers_[k] = 0;
+  upload(packed);
+  checkGl("re-uploading the tree");
 }
 
 GlRayTracer::~GlRayTracer() {

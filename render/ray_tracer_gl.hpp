@@ -31,6 +31,12 @@ class GlRayTracer {
   GlRayTracer& operator=(const GlRayTracer&) = delete;
 
   void setRays(const std::vector<BatchRay>& rays);
+  // Replaces the tree's streams with `packed`'s (an animated clip's next frame): the old buffers and
+  // textures are deleted and the new ones uploaded as the constructor does. The programs stay: the
+  // tree must have the constructor's layout and triangle format and need no deeper stack than
+  // stackSize() (std::invalid_argument otherwise; build a new tracer then). Not waited for.
+  void setTree(const PackedBvh& packed);
+  int stackSize() const { return stack_; }
   // One dispatch over every ray, waited for (glFinish); returns wall-clock ms. With dispatches > 1
   // (a GPU, where one dispatch is shorter than its clock's ramp-up and glFinish's round trip): one
   // untimed dispatch waited for, then `dispatches` back to back (a barrier between, so they do not
@@ -46,7 +52,10 @@ class GlRayTracer {
   void issue(unsigned program);  // binds the program and buffers, dispatches (not waited for)
   unsigned groups() const;       // work groups of one dispatch
   double dispatch(unsigned program);
+  void upload(const PackedBvh& packed);
   RayTracerOptions options_;
+  std::string layout_, triangleFormat_;
+  int stack_ = 0;
   unsigned timed_ = 0, counted_ = 0;
   unsigned streams_[4] = {0, 0, 0, 0}, streamBuffers_[4] = {0, 0, 0, 0};  // node, triangle, attribute, vertex
   unsigned rayBuffer_ = 0, resultBuffer_ = 0, countBuffer_ = 0;

@@ -27,6 +27,19 @@ CLI::Validator notADirectory(const std::string& expected) {
       "", "not-a-directory");
 }
 
+void addClipOptions(CLI::App& app, RenderCommand& rc) {
+  app.add_option("--update", rc.update,
+                 "an animated scene's clip frame by frame, the tree kept up to date by this strategy: rebuild | refit | "
+                 "refit+rebuild:K | refit+rebuild:sah>R | refit+rotate (docs/animation.md)");
+  app.add_option("--update-repeats", rc.updateRepeats,
+                 "with --update: timed updates per frame, by as many copies of the strategy, each from its own previous frame")
+      ->check(CLI::Range(1, 64));
+  app.add_option("--clip-frames", rc.clipFrames, "with --update: at most this many of the clip's frames (0 = all)")
+      ->check(CLI::Range(0, 1 << 20));
+  app.add_option("--clip-step", rc.clipStep, "with --update: every this-th frame of the clip (0, S, 2S, ...)")
+      ->check(CLI::Range(1, 1 << 20));
+}
+
 void addTreeOptions(CLI::App& app, RenderCommand& rc) {
   app.add_option("--builder", rc.builder, "BVH builder (see `bvhlab builders`)");
   app.add_option("--layout", rc.layout, "texture layout of the tree (see `bvhlab layouts`)");
@@ -66,6 +79,7 @@ void addRenderOptions(CLI::App& app, RenderCommand& rc, RenderCliText& text) {
   app.add_option("--visits-out", rc.visitsOutput, "also write the node-visit heatmap here");
   app.add_flag("--uber", rc.uber, "compile every module in (no specialisation)");
   addTreeOptions(app, rc);
+  addClipOptions(app, rc);
   app.add_option("--branching", rc.branching, "full (both Fresnel branches) | report (Algorithm 1)");
   app.add_option("--eye", text.eye, "camera position x,y,z");
   app.add_option("--target", text.target, "camera target x,y,z");

@@ -23,6 +23,8 @@ CLI::Validator notADirectory(const std::string& expected);
 
 // The options that choose and walk the tree (builder and its knobs, layout, kernel, leaf size, storage),
 // shared by `render` and `trace`.
+// --update, --update-repeats, --clip-frames, --clip-step: an animated scene's clip, frame by frame.
+void addClipOptions(CLI::App& app, RenderCommand& rc);
 void addTreeOptions(CLI::App& app, RenderCommand& cmd);
 
 // Adds every `render` option to `app`, writing into `cmd` and `text`.

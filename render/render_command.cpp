@@ -5,12 +5,14 @@
 #include <nlohmann/json.hpp>
 
 #include "render/exit_status.hpp"
+#include "render/render_clip.hpp"
 #include "render/render_job.hpp"
 #include "shaders/tracer.hpp"
 
 namespace bvhlab {
 
 int runRender(const RenderCommand& cmd) {
+  if (!cmd.update.empty()) return runRenderClip(cmd);
   RenderSetup setup = setupRender(cmd);
   for (const std::string& w : setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';
   std::shared_ptr<const PreparedScene> prepared = prepareScene(std::move(setup.scene), cmd.builder, setup.build, setup.shader.layout,

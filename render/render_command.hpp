@@ -45,6 +45,14 @@ struct RenderCommand {
   // A recorded camera path (render/fly_camera.hpp): warm-up and timed frame i use pose i mod N, the
   // saved image and the statistics pose 0. Excludes --eye/--target/--up/--fov.
   std::string cameraPath;
+  // An animated scene's clip, frame by frame (render/render_clip.hpp, render/trace_clip.hpp): the
+  // tree kept up to date by this update strategy (builders/update.hpp spec; "" = frame 0 only).
+  std::string update;
+  int updateRepeats = 1;  // timed updates per frame, each by its own copy of the strategy
+  bool epo = false;       // trace --update: per-frame EPO (seconds per frame on large meshes)
+  // A shorter clip: frames 0, clipStep, 2 clipStep, ... of the scene's clip, at most clipFrames of
+  // them (0 = as many as the clip has).
+  int clipFrames = 0, clipStep = 1;
 };
 
 // Runs it; prints the JSON object on stdout when asked. Returns the process exit code.

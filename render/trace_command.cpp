@@ -15,6 +15,7 @@
 #include "render/frame_stats.hpp"
 #include "render/gl_context.hpp"
 #include "render/ray_tracer_gl.hpp"
+#include "render/trace_clip.hpp"
 #include "render/trace_run.hpp"
 
 namespace bvhlab {
@@ -49,6 +50,8 @@ void addTraceOptions(CLI::App& app, TraceCommand& c, RenderCliText& text) {
                  "a timed sample lasts at least this long: shorter dispatches (a GPU) are repeated back to back after an "
                  "untimed one and averaged (-1 = 10 ms on a GPU, 0 on a software renderer)")
       ->check(CLI::Range(-1.0, 10000.0));
+  addClipOptions(app, rc);
+  app.add_flag("--epo", rc.epo, "with --update: each frame's EPO (a pass over the tree per frame)");
   app.add_option("--eye", text.eye, "camera position x,y,z");
   app.add_option("--target", text.target, "camera target x,y,z");
   app.add_option("--up", text.up, "camera up x,y,z");
@@ -71,6 +74,7 @@ TraceCommand parseTraceArgs(const std::vector<std::string>& args) {
 }
 
 int runTrace(const TraceCommand& c) {
+  if (!c.render.update.empty()) return runTraceClip(c);
   const RenderCommand& rc = c.render;
   const TraceSetup s = setupTrace(c);
   for (const std::string& w : s.setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';

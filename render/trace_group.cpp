@@ -20,6 +20,7 @@
 #include "render/frame_stats.hpp"
 #include "render/gl_context.hpp"
 #include "render/ray_tracer_gl.hpp"
+#include "render/trace_clip.hpp"
 #include "render/trace_run.hpp"
 
 namespace bvhlab {
@@ -103,6 +104,9 @@ json traceGroup(const GroupSpec& spec) {
   std::map<std::string, Scene> scenes;
   std::map<std::string, std::shared_ptr<const PreparedScene>> trees;  // runs with one treeKey share it
   json deferred = json::object();
+  json clips = json::object();  // runs with --update: their clips' results
+  std::vector<std::unique_ptr<TraceClip>> clipRuns;
+  std::vector<std::string> clipKeys;
   const double fraction = groupMemoryFraction();
   const double budget = fraction * double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
   uint64_t uploads = 0;  // GL bytes the runs set up so far will upload (tree and rays)
@@ -112,6 +116,13 @@ json traceGroup(const GroupSpec& spec) {
     try {
       if (!item.error.empty()) throw InputError(item.error);
       r->cmd = parseTraceArgs(item.args);
+      if (!r->cmd.render.update.empty()) {
+        // A clip (`trace --update`): set up here, traced below with the group's other clips in
+        // lockstep, frame by frame, in a GL context of their own (traceClipsInterleaved).
+        clipRuns.push_back(std::make_unique<TraceClip>(r->cmd));
+        clipKeys.push_back(r->key);
+        continue;
+      }
       auto scene = scenes.find(r->cmd.render.input);
       if (scene == scenes.end()) scene = scenes.emplace(r->cmd.render.input, loadInput(r->cmd.render.input)).first;
       r->setup.emplace(setupTrace(r->cmd, &scene->second, &trees));
@@ -148,6 +159,25 @@ json traceGroup(const GroupSpec& spec) {
       r->error = ex.what();
     }
     runs.push_back(std::move(r));
+  }
+  if (!clipRuns.empty()) {
+    std::vector<uint64_t> overflows;
+    std::vector<json> results;
+    try {
+      results = traceClipsInterleaved(clipRuns, overflows);
+    } catch (const std::exception& ex) {
+      for (const std::string& key : clipKeys) clips[key] = {{"error", ex.what()}};
+    }
+    for (size_t k = 0; k < results.size(); ++k) {
+      results[k]["session"] = g.session;
+      results[k]["program"] = nullptr;
+      if (overflows[k] > 0)
+        clips[clipKeys[k]] = {{"error", "traversal stack overflowed on " + std::to_string(overflows[k]) + " rays"},
+                              {"result", results[k]}};
+      else
+        clips[clipKeys[k]] = std::move(results[k]);
+    }
+    clipRuns.clear();
   }
   scenes.clear();  // every tree holds its own copy
   trees.clear();   // the runs hold theirs
@@ -325,6 +355,7 @@ json traceGroup(const GroupSpec& spec) {
   }
   for (auto& r : runs) r->copies.clear();  // before the context goes
   results.update(deferred);
+  results.update(clips);
   out["runs"] = std::move(results);
   out["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

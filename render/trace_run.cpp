@@ -12,8 +12,6 @@
 
 namespace bvhlab {
 
-namespace {
-
 // Two tracers' closest hits on different triangles at the same distance are a tie, not a mismatch:
 // rays through a shared edge or vertex, or coplanar overlapping triangles. "Same distance" allows
 // the two intersection algorithms' rounding of t: each is within a few ulps of the exact value
@@ -21,14 +19,8 @@ namespace {
 // gap between distinct surfaces the scenes have.
 constexpr double kTieRelativeT = 0x1.0p-16;
 
-struct Agreement {
-  uint64_t mismatches = 0;  // hit vs miss, or different triangles at different distances
-  uint64_t ties = 0;        // different triangles at the same distance
-  uint64_t hitMiss = 0;     // of the mismatches: one found a hit, the other none
-};
-
-Agreement compare(const std::vector<BatchHit>& a, const std::vector<BatchHit>& b, bool anyHit) {
-  Agreement r;
+HitAgreement compareHits(const std::vector<BatchHit>& a, const std::vector<BatchHit>& b, bool anyHit) {
+  HitAgreement r;
   for (size_t i = 0; i < a.size(); ++i) {
     if (a[i].hit != b[i].hit) {
       ++r.mismatches;
@@ -45,7 +37,6 @@ Agreement compare(const std::vector<BatchHit>& a, const std::vector<BatchHit>& b
   return r;
 }
 
-}  // namespace
 
 BytesFetched mirrorBytesFetched(const PackedBvh& packed, const std::string& kernel, Robustness robust, bool anyHit,
                                 const std::vector<BatchRay>& rays, size_t maxRays) {
@@ -171,7 +162,7 @@ nlohmann::json traceResult(const TraceCommand& c, const TraceSetup& s, const Tra
   const std::vector<BatchHit> glHits = gl.results();
   const std::vector<BatchHit>& embreeHits = y.hits();
   const bool anyHit = y.anyHit();
-  const Agreement agree = compare(glHits, embreeHits, anyHit);
+  const HitAgreement agree = compareHits(glHits, embreeHits, anyHit);
   const std::vector<glm::uvec4> counts = gl.traceCounted();
   uint64_t visits = 0, tests = 0, boxTests = 0, glFound = 0, embreeFound = 0;
   overflows = 0;

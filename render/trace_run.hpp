@@ -69,6 +69,15 @@ class TraceYardstick {
   std::vector<BatchHit> hits_;
 };
 
+// Two tracers' answers to the same rays, ray by ray (closest hits on different triangles at the same
+// distance, within kTieRelativeT, are ties; any-hit answers compare hit or miss only).
+struct HitAgreement {
+  uint64_t mismatches = 0;  // hit vs miss, or different triangles at different distances
+  uint64_t ties = 0;        // different triangles at the same distance
+  uint64_t hitMiss = 0;     // of the mismatches: one found a hit, the other none
+};
+HitAgreement compareHits(const std::vector<BatchHit>& a, const std::vector<BatchHit>& b, bool anyHit);
+
 // The default sample length on a GPU: 10 ms is 20 dispatches of the bunny's 1M primary rays on an
 // H200 (0.4-0.5 ms each), so the untimed leading dispatch and the one glFinish are small beside it.
 constexpr double kAutoMinSampleMs = 10.0;

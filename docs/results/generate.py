@@ -47,6 +47,7 @@ TABLES = {
     "cpu-robust-cost": tables_cpu.cpu_robust_cost,
     "cpu-sbvh-knobs": tables_cpu.cpu_sbvh_knobs,
     "cpu-texture-lod": tables_cpu.cpu_texture_lod,
+    "cpu-dynamic": tables_cpu.cpu_dynamic,
 }
 
 

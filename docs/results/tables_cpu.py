@@ -298,3 +298,53 @@ def cpu_texture_lod():
                   f"`bvhlab findings docs/results/{TL} --check` re-derives them from the per-round times in "
                   f"results.json."]
     return lines + provenance([(cpath, rows), (fpath, []), (rpath, [])], src, commands(TL, src))
+
+
+# ---- update strategies over the bench animations (experiments/configs/dynamic.toml) -----------------
+
+DYN = "dynamic"
+
+
+def cpu_dynamic():
+    """Issue 39: every update strategy over the bench animations, each clip traced frame by frame
+    (`bvhlab trace --update`): the clip's total time with its bootstrap interval and its parts, and the
+    ray cost of the first and last traced frame, from each run's record (runs/KEY.json)."""
+    cpath, rows = read_csv(DYN, "results.csv")
+    src = source(DYN)
+    runs = [r for r in rows if r.get("status") == "ok"]
+    if len(runs) != len(rows):
+        raise DataError(f"{rel(cpath)}: {len(rows) - len(runs)} runs did not finish")
+    out = []
+    scenes = list(dict.fromkeys(r.get("scene") for r in runs))
+    for s in scenes:
+        mine = []
+        for r in runs:
+            if r.get("scene") != s:
+                continue
+            rpath, rec = read_json(DYN, os.path.join("runs", r["key"] + ".json"))
+            result = rec.get("result") or {}
+            clip, frames = result.get("clip"), result.get("frames")
+            if not isinstance(clip, dict) or not isinstance(frames, list) or not frames:
+                raise DataError(f"{rel(rpath)}: no clip and frames in the run's result")
+            mine.append((r, clip, frames, rpath))
+        mine.sort(key=lambda m: num(m[1], "total_ms", m[3]))
+        for r, clip, frames, rpath in mine:
+            first, last = num(frames[0], "ray_cost", rpath), num(frames[-1], "ray_cost", rpath)
+            peak = max(num(f, "ray_cost", rpath) for f in frames)
+            out.append([str(s), f"`{r.get('update')}`", str(r.get("builder")),
+                        with_ci(num(clip, "total_ms", rpath), num(clip, "total_ms_ci_low", rpath),
+                                num(clip, "total_ms_ci_high", rpath), lambda x: f"{x:.0f}"),
+                        f"{num(clip, 'update_ms_total', rpath):.0f}", f"{num(clip, 'upload_ms_total', rpath):.0f}",
+                        f"{num(clip, 'trace_ms_total', rpath):.0f}", str(clip.get("rebuilds")),
+                        f"{first:.1f}", f"{last:.1f}", f"{last / first:.2f}", f"{peak:.1f}"])
+    header = ["scene", "update", "builder", "clip ms [95%]", "update ms", "upload ms", "trace ms", "rebuilds",
+              "ray cost, frame 0", "ray cost, last frame", "last / frame 0", "peak ray cost"]
+    lines = table(header, out)
+    r0 = runs[0]
+    lines += ["", "Each row is one clip traced frame by frame (docs/animation.md): the traced frames' update, upload "
+              "(pack + GL re-upload) and trace medians summed; the interval is the bootstrap over each frame's "
+              "samples. The clips of a scene ran in lockstep in one process (frame f of every strategy, in a shuffled "
+              f"order, before frame f + 1 of any). {r0.get('workload')} rays, {r0.get('kernel')} kernel, leaf size {r0.get('leaf_size')}; "
+              "ray cost = node visits + triangle tests per ray, from the kernel's counters. Per-frame values: "
+              f"`{rel(result_path(DYN, 'runs'))}/KEY.json` (the run's `trace --json` object)."]
+    return lines + provenance([(cpath, rows)], src, commands(DYN, src))

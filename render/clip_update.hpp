@@ -1,0 +1,46 @@
+// What `trace --update` and `render --update` share (render/trace_clip.hpp, render/render_clip.hpp):
+// the clip's frames to visit, and the update strategy's copies that keep the tree over them, each
+// update timed.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "builders/update.hpp"
+#include "datasets/scene.hpp"
+#include "layout/layout.hpp"
+#include "render/render_command.hpp"
+
+namespace bvhlab {
+
+// The frames of the scene's clip a run visits: sceneFrame(i) = i * step for i in [0, count).
+struct ClipPlan {
+  int sceneFrames = 1, count = 1, step = 1;
+  int sceneFrame(int i) const { return i * step; }
+};
+// Checks cmd.update (parseUpdateSpec; std::invalid_argument naming --update), --update-repeats,
+// --clip-frames and --clip-step, and refuses a scene whose clip has one frame (naming --update).
+ClipPlan planClip(const RenderCommand& cmd, const Scene& scene);
+
+// cmd.updateRepeats copies of the strategy cmd.update, building with cmd.builder and `build`.
+class ClipUpdater {
+ public:
+  ClipUpdater(const RenderCommand& cmd, const BuildOptions& build);
+  struct Step {
+    bool rebuilt = false;
+    bool agree = true;  // every copy rebuilt alike and reached the same SAH
+    double sah = 0.0;   // copy 0's tree, with the build's cost model
+    std::vector<double> ms;  // each copy's update, wall-clock (steady_clock)
+  };
+  // Every copy updated to the frame's triangles, each timed; copy 0's tree is the one to use.
+  Step update(const TriangleSoup& soup);
+  const Bvh& tree() const { return copies_.front()->tree(); }
+  uint32_t rotations() const { return copies_.front()->rotations(); }
+  const CostModel& cost() const { return options_.build.cost; }
+
+ private:
+  UpdateOptions options_;
+  std::vector<std::unique_ptr<UpdateStrategy>> copies_;
+};
+
+}  // namespace bvhlab
