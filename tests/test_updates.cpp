@@ -507,14 +507,15 @@ TEST(Updates, BadStrategyStringsAreRefusedNamingTheValidOnes) {
         EXPECT_NE(what.find(info.name), std::string::npos) << what;
     }
   }
-  EXPECT_NE(std::string([] {
+  // The message is copied out of the exception while it is alive (e.what() dies with it).
+  EXPECT_NE([]() -> std::string {
               try {
                 parseUpdateSpec("refit+rebuild:0");
               } catch (const std::invalid_argument& e) {
                 return e.what();
               }
-              return "";
-            }()).find(">= 1"),
+              return {};
+            }().find(">= 1"),
             std::string::npos);
   // And the good ones, with their numbers.
   EXPECT_EQ(parseUpdateSpec("refit+rebuild:8").every, 8u);
