@@ -277,6 +277,9 @@ int main(int argc, char** argv) {
   viewCmd->add_option("--screenshot", vo.screenshot, "write the last frame (without overlay) here");
   viewCmd->add_option("--record", vo.record, "record the camera path to this file (one pose per line)");
   viewCmd->add_option("--replay", vo.replay, "replay a recorded camera path");
+  viewCmd->add_option("--update", vo.update,
+                       "animated scene: the tree's update strategy while the clip plays (default rebuild; U cycles)");
+  viewCmd->add_flag("--paused", vo.paused, "animated scene: start with the clip paused (Space plays)");
   viewCmd->add_flag("--json", vo.json, "print the final state and every switch as JSON");
   viewCmd->add_flag("!--no-overlay", vo.overlay, "hide the ImGui overlay");
 

@@ -149,8 +149,8 @@ CameraPath loadCameraPath(const std::filesystem::path& path) {
 // ---- scripts ------------------------------------------------------------------
 
 const std::vector<std::string>& scriptSettings() {
-  static const std::vector<std::string> names = {"builder", "kernel", "leaf_size", "depth", "view",
-                                                 "scale",   "aa",     "robust"};
+  static const std::vector<std::string> names = {"builder", "kernel", "leaf_size", "depth",     "view",
+                                                 "scale",   "aa",     "robust",    "update", "clip_frame"};
   return names;
 }
 

@@ -62,6 +62,10 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
           throw InputError(script_->file + ":" + std::to_string(e.line) + ": " + error);
   }
   if (!o.replay.empty()) replay_ = loadCameraPath(o.replay), replaying_ = true;
+  if (o.update) {
+    if (std::string e = settingError("update", *o.update, layout_, triangles_); !e.empty())
+      throw std::invalid_argument("--update: " + e);
+  }
 
   glfw_ = std::make_unique<GlfwSession>();  // no display: say so before loading anything
   original_ = loadInput(o.input);
@@ -71,6 +75,16 @@ Viewer::Viewer(const ViewerOptions& o) : opt_(o) {
   if (o.up) original_.camera.up = *o.up;
   if (o.fov) original_.camera.fovDeg = *o.fov;
   camera_.setCamera(original_.camera);
+  setupClip();  // a static scene with --update is refused here, before a window opens
+  for (const ScriptEvent& e : script_ ? script_->events : std::vector<ScriptEvent>{}) {
+    if (e.kind != ScriptEvent::Kind::Set) continue;
+    const std::string where = script_->file + ":" + std::to_string(e.line) + ": ";
+    if (e.key == "update" && !animated())
+      throw InputError(where + "set update: " + o.input + " is not animated (no clip to update the tree over)");
+    if (e.key == "clip_frame" && *parseNumber<int>(e.value) >= clipFrames_)
+      throw InputError(where + "clip_frame " + e.value + " is past the clip (" + std::to_string(clipFrames_) +
+                       " frame" + (clipFrames_ == 1 ? "" : "s") + ")");
+  }
   builder_ = o.builder;
   view_ = o.view;
   aa_ = o.aa;
@@ -118,6 +132,7 @@ Viewer::~Viewer() {
   smaa_.reset();  // GL objects go before the context
   statsGpu_.reset();
   gpu_.reset();
+  programs_.reset();  // after the renderers that draw with its programs
   if (displayTex_) glDeleteTextures(1, &displayTex_);
   if (displayFbo_) glDeleteFramebuffers(1, &displayFbo_);
   if (imgui_) {
@@ -168,6 +183,11 @@ void Viewer::handleKey(int key, int mods) {
     case GLFW_KEY_L: cycle("leaf_size", step); break;
     case GLFW_KEY_M: cycle("aa", step); break;
     case GLFW_KEY_T: cycle("robust", step); break;
+    case GLFW_KEY_U:
+      if (animated()) cycle("update", step);
+      else status_ = "static scene: no update strategy";
+      break;
+    case GLFW_KEY_SPACE: togglePlay(); break;
     case GLFW_KEY_RIGHT_BRACKET: cycle("depth", 1); break;
     case GLFW_KEY_LEFT_BRACKET: cycle("depth", -1); break;
     case GLFW_KEY_V: cycle("view", step); break;
@@ -271,7 +291,7 @@ void Viewer::cycle(const std::string& what, int step) {
   } else {
     const std::vector<std::string> names = choices(what, layout_, triangles_);
     const std::string& cur = what == "builder" ? builder_ : what == "kernel" ? kernel_ : what == "view" ? view_
-                             : what == "aa"    ? aa_      : robust_;
+                             : what == "aa"    ? aa_      : what == "update" ? update_ : robust_;
     auto it = std::find(names.begin(), names.end(), cur);
     const int n = int(names.size()), i = it == names.end() ? 0 : int(it - names.begin());
     set(what, names[size_t(((i + step) % n + n) % n)]);
@@ -286,7 +306,11 @@ void Viewer::set(const std::string& what, const std::string& value) {
   else if (what == "view") view_ = value, needRenderer_ = true;
   else if (what == "scale") scale_ = *parseNumber<float>(value);  // ensureRenderers sees the new size
   else if (what == "robust") robust_ = value, needRenderer_ = true;
-  else if (what == "aa") {
+  else if (what == "update") update_ = value, needStrategy_ = true;  // a fresh strategy from the frame drawn next
+  else if (what == "clip_frame") {  // a jump: drawn next (not advanced past), the strategy fresh there
+    clipFrame_ = *parseNumber<int>(value), needStrategy_ = needClipFrame_ = clipJump_ = true;
+    clipClock_ = 0.0;
+  }  else if (what == "aa") {
     // SSAA lives in the tracer (recompile); SMAA is a post pass on the same traced frame.
     if (ssaaGridOf(value) != ssaaGridOf(aa_)) needRenderer_ = true;
     aa_ = value;
@@ -324,7 +348,8 @@ ShaderOptions Viewer::shaderOptions(bool countStats) const {
   so.triangles = triangles_;
   so.kernel = kernel_;
   so.reinhard = sc.settings.reinhard;
-  so.bvhStackSize = stackSizeFor(prepared_->packed);  // the layout's own bound (a wide node pushes W - 1)
+  // The layout's own bound (a wide node pushes W - 1); while a clip plays, the deepest tree's so far.
+  so.bvhStackSize = std::max(stackSizeFor(prepared_->packed), clipStack_);
   so.countStats = countStats;
   so.ssaaGrid = ssaaGridOf(aa_);
   so.robust = parseRobustness(robust_);
@@ -337,6 +362,14 @@ void Viewer::ensureRenderers() {
   glfwGetFramebufferSize(window_, &fbW, &fbH);
   const int w = std::max(1, int(std::lround(fbW * scale_))), h = std::max(1, int(std::lround(fbH * scale_)));
   if (w != renderW_ || h != renderH_) needRenderer_ = true;
+  if (animated() && (needRebuild_ || needStrategy_ || needClipFrame_)) {
+    const bool switched = needRebuild_;
+    updateClipFrame();  // the strategy (fresh after a builder or leaf-size switch) updates the tree
+    if (switched && !switches_.empty()) {
+      switches_.back()["build_ms"] = prepared_->stats.buildMs;
+      switches_.back()["sah_cost"] = prepared_->stats.sahCost;
+    }
+  }
   if (needRebuild_) {
     statsGpu_.reset();
     gpu_.reset();
@@ -362,10 +395,24 @@ void Viewer::ensureRenderers() {
     fo.height = renderH_ = h;
     fo.camera = camera_.camera();
     fo.exposure = prepared_->scene.settings.exposure;
-    gpu_ = std::make_unique<GpuRenderer>(*prepared_, shaderOptions(false), fo);
-    if (view_ == "visits") statsGpu_ = std::make_unique<GpuRenderer>(*prepared_, shaderOptions(true), fo);
+    // While a clip plays every frame makes new renderers: the programs come from the cache, so only a
+    // new shader source (a switch, a deeper tree) compiles, and only then is the next frame a first frame.
+    const size_t compiled = programs_ ? programs_->size() : 0;
+    if (uploadPending_) glFinish();
+    const auto start = Clock::now();
+    gpu_ = std::make_unique<GpuRenderer>(*prepared_, shaderOptions(false), fo, programs_.get());
+    if (view_ == "visits") statsGpu_ = std::make_unique<GpuRenderer>(*prepared_, shaderOptions(true), fo, programs_.get());
+    if (uploadPending_) {  // the clip frame's upload: its pack and the renderer's buffers, waited for
+      glFinish();
+      lastUploadMs_ = packMs_ + msSince(start);
+      recentUploadMs_.push_back(lastUploadMs_);
+      if (recentUploadMs_.size() > kRollingWindow) recentUploadMs_.pop_front();
+      clipLog_.back()["upload_ms"] = lastUploadMs_;
+      uploadPending_ = false;
+      clipFrameRendered_ = false;
+    }
     needRenderer_ = false;
-    firstFramePending_ = true;
+    firstFramePending_ = !programs_ || programs_->size() > compiled;
     statsStale_ = true;
   }
   if (!isSmaa(aa_)) {
@@ -394,6 +441,7 @@ int Viewer::run() {
       if (replayNext_ < replay_.size()) camera_.setCamera(replay_[replayNext_++].camera);
       if (replayNext_ >= replay_.size()) replaying_ = false;  // the last pose is this frame's
     }
+    if (frame_ > 0) advanceClip(dt);  // the clip's next frame, if it plays (frame 0 draws clip frame 0)
     renderFrame();
     auto presentStart = Clock::now();
     present();
@@ -448,6 +496,7 @@ int Viewer::run() {
                           {"triangle_tests_per_ray", rayStats_.testsPerRay},
                           {"camera", cameraJson(camera_.camera())},
                           {"switches", switches_}};
+    if (animated()) out.update(clipJson());
     std::cout << out.dump() << std::endl;
   }
   return rayStats_.overflows > 0 ? 3 : 0;

@@ -36,6 +36,11 @@ struct ViewerOptions {
   std::string screenshot;  // write the last frame's image here (the render, without the overlay)
   std::string record;      // record the camera path here (one pose per frame; R toggles)
   std::string replay;      // replay a recorded camera path from the first frame
+  // An animated scene (a [clip]) plays in the viewer: each clip frame the tree is kept up to date by
+  // this update strategy (builders/update.hpp spec; U cycles, script `set update SPEC`). Unset: rebuild.
+  // Refused for a static scene, as `render --update` refuses it.
+  std::optional<std::string> update;
+  bool paused = false;     // start the clip paused (Space plays / pauses)
   bool json = false;       // print the final state and every switch as one JSON object on stdout
   bool overlay = true;
 };

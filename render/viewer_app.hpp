@@ -23,8 +23,10 @@
 #include <GLFW/glfw3.h>
 #include <nlohmann/json.hpp>
 
+#include "builders/update.hpp"
 #include "render/fly_camera.hpp"
 #include "render/gpu_renderer.hpp"
+#include "render/program_cache.hpp"
 #include "render/smaa.hpp"
 #include "render/viewer.hpp"
 
@@ -38,6 +40,10 @@ inline const std::vector<std::string> kViews = {"shaded", "normal", "depth", "pr
 // The anti-aliasing modes of `bvhlab render --aa`, SMAA by preset name (render/smaa.hpp).
 inline const std::vector<std::string> kAaModes = {"none",       "smaa-low", "smaa-medium", "smaa-high",
                                                   "smaa-ultra", "ssaa4",    "ssaa16"};
+// The update strategies U cycles through while a clip plays (any spec parseUpdateSpec takes can be set
+// with --update or a script's `set update`).
+inline const std::vector<std::string> kUpdateSpecs = {"rebuild", "refit", "refit+rebuild:4", "refit+rebuild:sah>1.2",
+                                                      "refit+rotate"};
 inline const std::vector<float> kScales = {0.125f, 0.25f, 0.375f, 0.5f, 0.75f, 1.0f};
 constexpr int kMaxDepth = 16;
 constexpr int kRollingWindow = 31;      // frames in the rolling median (odd: a true middle element)
@@ -123,6 +129,15 @@ class Viewer {
   void logSwitch(const std::string& what, const std::string& value);
   ShaderOptions shaderOptions(bool countStats) const;
 
+  // clip playback (viewer_clip.cpp)
+  bool animated() const { return clipFrames_ > 1; }
+  void setupClip();                 // after the scene is loaded: clip length, strategy, program cache
+  void advanceClip(double dt);      // after a frame: the next clip frame when playing
+  void updateClipFrame();           // the tree of clipFrame_ by the strategy, packed: prepared_
+  void togglePlay();
+  void drawClipOverlay();
+  nlohmann::json clipJson() const;
+
   // frame
   void renderFrame();
   bool heatmapShown() const { return view_ == "visits" && prepared_->soup.size() > 0; }
@@ -149,6 +164,23 @@ class Viewer {
   std::string optimize_;  // ViewerOptions::optimize, applied after every rebuild
   float scale_ = 1.0f;
   bool needRebuild_ = true, needRenderer_ = true, needSmaa_ = true;
+
+  // clip playback: the strategy keeps the tree over the clip's frames; each new frame is packed and
+  // uploaded into a fresh renderer whose program comes from programs_ (compiled once per source).
+  std::string update_;  // the strategy's spec ("" for a static scene)
+  std::unique_ptr<UpdateStrategy> strategy_;
+  std::unique_ptr<ProgramCache> programs_;  // clip playback only
+  Scene clipScene_;                         // the scene at clipFrame_
+  int clipFrames_ = 1, clipFrame_ = 0, clipStack_ = 0;
+  double clipFps_ = 30.0, clipClock_ = 0.0;  // clipClock_: clip frames owed by elapsed time (interactive)
+  bool playing_ = false, needStrategy_ = true, needClipFrame_ = true;
+  bool clipJump_ = false;        // a script jumped to a clip frame: draw it before advancing
+  bool uploadPending_ = false;   // this frame's renderer creation is the clip frame's upload
+  bool clipFrameRendered_ = false;
+  double packMs_ = 0.0, lastUpdateMs_ = 0.0, lastUploadMs_ = 0.0;
+  bool lastRebuilt_ = false;
+  std::deque<double> recentUpdateMs_, recentUploadMs_;
+  nlohmann::json clipLog_ = nlohmann::json::array();  // one entry per clip frame made
 
   std::unique_ptr<PreparedScene> prepared_;
   std::unique_ptr<GpuRenderer> gpu_, statsGpu_;

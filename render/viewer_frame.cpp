@@ -24,6 +24,10 @@ void Viewer::renderFrame() {
   const Camera& cam = camera_.camera();
   gpu_->setCamera(cam);
   const double traceMs = gpu_->drawFrame();
+  if (animated() && !clipFrameRendered_) {  // the clip frame's first draw: its trace time
+    clipLog_.back()["trace_ms"] = traceMs;
+    clipFrameRendered_ = true;
+  }
   const bool heatmap = heatmapShown();
   double aaMs = 0.0;
   if (smaa_ && !heatmap) {  // timed like `bvhlab render`: the three passes, waited for
@@ -63,12 +67,16 @@ void Viewer::renderFrame() {
       fo.height = renderH_;
       fo.camera = cam;
       fo.exposure = prepared_->scene.settings.exposure;
-      statsGpu_ = std::make_unique<GpuRenderer>(*prepared_, shaderOptions(true), fo);
+      statsGpu_ = std::make_unique<GpuRenderer>(*prepared_, shaderOptions(true), fo, programs_.get());
     }
     statsGpu_->setCamera(cam);
     statsGpu_->drawFrame();
     std::vector<glm::uvec4> stats = statsGpu_->readStats();
     rayStats_ = summarize(stats);
+    if (animated() && !clipLog_.empty() && !clipLog_.back().contains("node_visits_per_ray")) {
+      clipLog_.back()["node_visits_per_ray"] = rayStats_.visitsPerRay;
+      clipLog_.back()["triangle_tests_per_ray"] = rayStats_.testsPerRay;
+    }
     if (visits) image_ = visitsHeatmap(stats, renderW_, renderH_);
     statsStale_ = false;
     lastStats_ = Clock::now();
@@ -125,6 +133,9 @@ void Viewer::present() {
   if (!pendingWindowShot_.empty()) saveWindowScreenshot(pendingWindowShot_), pendingWindowShot_.clear();
   checkGl("viewer present");
   glfwSwapBuffers(window_);
+  // Waited for here, so presenting (the overlay's draw, on llvmpipe its shader's compile when the
+  // overlay first appears) counts in the present time and not in the next frame's trace time.
+  glFinish();
 }
 
 void Viewer::drawOverlay() {
@@ -191,13 +202,14 @@ void Viewer::drawOverlay() {
     if (rayStats_.valid)
       ImGui::Text("per ray: %.1f node visits, %.1f triangle tests%s", rayStats_.visitsPerRay, rayStats_.testsPerRay,
                   rayStats_.overflows ? "  STACK OVERFLOW" : "");
+    drawClipOverlay();
     ImGui::Separator();
     const Camera& c = camera_.camera();
     ImGui::Text("eye %.3f %.3f %.3f  fov %.0f [F]  speed %.3g/s", c.eye.x, c.eye.y, c.eye.z, c.fovDeg, speed_);
     ImGui::Text("%s%s%s", recording_ ? "REC  " : "", replaying_ ? "REPLAY  " : "", status_.c_str());
     ImGui::TextDisabled("%s", glRenderer_.c_str());
     ImGui::TextDisabled("Tab mouse look, WASD/QE move, wheel speed, P shot, R rec, O replay, Ctrl+1-4 mark");
-    ImGui::TextDisabled("Shift+key cycles backwards");
+    ImGui::TextDisabled("Shift+key cycles backwards%s", animated() ? "; Space plays/pauses the clip, U strategy" : "");
     ImGui::End();
   }
   ImGui::Render();

@@ -32,6 +32,7 @@ std::vector<std::string> choices(const std::string& what, const std::string& lay
     for (const KernelInfo& k : kernelsFor(layout)) names.push_back(k.name);
   if (what == "view") names = kViews;
   if (what == "aa") names = kAaModes;
+  if (what == "update") names = kUpdateSpecs;
   if (what == "robust") {
     // Only the variants the session's triangle format can run (precomputed: no watertight test).
     const bool watertightOk = findTriangleFormat(triangles).watertight;
@@ -61,6 +62,18 @@ std::string settingError(const std::string& what, const std::string& value, cons
   if (what == "scale") {
     std::optional<float> v = parseNumber<float>(value);
     return v && *v >= 0.05f && *v <= 1.0f ? "" : "scale must be in 0.05..1";
+  }
+  if (what == "update") {  // any spec the strategies take, not only those U cycles through
+    try {
+      parseUpdateSpec(value);
+      return "";
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+  }
+  if (what == "clip_frame") {  // checked against the clip's length once the scene is loaded
+    std::optional<int> v = parseNumber<int>(value);
+    return v && *v >= 0 ? "" : "clip_frame must be a frame number >= 0";
   }
   const std::vector<std::string> names = choices(what, layout, triangles);
   if (names.empty()) return "unknown setting '" + what + "' (" + joined(scriptSettings()) + ")";

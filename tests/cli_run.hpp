@@ -33,12 +33,12 @@ struct RemoveTestDir : ::testing::Environment {
   }
 };
 
-// `bvhlab ARGS` (ARGS as a shell would split them).
-inline Result run(const std::string& args) {
+// `bvhlab ARGS` (ARGS as a shell would split them), after `prefix` (e.g. "xvfb-run -a ").
+inline Result run(const std::string& args, const std::string& prefix = "") {
   fs::path dir = testDir();
   fs::create_directories(dir);
   fs::path out = dir / "stdout", err = dir / "stderr";
-  std::string cmd = std::string(BVHLAB_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
+  std::string cmd = prefix + BVHLAB_BINARY + " " + args + " >" + out.string() + " 2>" + err.string();
   int status = std::system(cmd.c_str());
   auto slurp = [](const fs::path& p) {
     std::ifstream in(p);

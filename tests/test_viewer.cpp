@@ -68,22 +68,6 @@ fs::path cubeMesh() {
   return p;
 }
 
-// "xvfb-run -a " when there is no display, "" with one; nullopt (skip) when neither works.
-std::optional<std::string> displayPrefix() {
-  const char* d = std::getenv("DISPLAY");
-  if (d && *d) return std::string();
-  if (shell("command -v xvfb-run >/dev/null").rc == 0) return std::string("xvfb-run -a ");
-  return std::nullopt;
-}
-
-// Each reason is absent where setup.sh installed the packages: a failure under BVHLAB_REQUIRE_ALL=1.
-#define REQUIRE_VIEWER(prefix)                                                                             \
-  if (!viewerAvailable()) BVHLAB_SKIP_OR_FAIL("built without GLFW/Dear ImGui (BVHLAB_VIEWER unset in CMake)"); \
-  if (shell(std::string(BVHLAB_BINARY) + " view --help >/dev/null").rc != 0)                                \
-    BVHLAB_SKIP_OR_FAIL("this bvhlab has no `view` subcommand");                                           \
-  std::optional<std::string> prefix = displayPrefix();                                                     \
-  if (!prefix) BVHLAB_SKIP_OR_FAIL("no DISPLAY and no xvfb-run (apt-get install xvfb)")
-
 std::string view(const std::string& prefix, const std::string& args) {
   return prefix + BVHLAB_BINARY + " view " + cubeMesh().string() + " --width 96 --height 64 " + args;
 }
