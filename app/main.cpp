@@ -159,7 +159,7 @@ int reportParseError(CLI::App& app, const CLI::ParseError& e, int argc, char** a
 }  // namespace
 
 int main(int argc, char** argv) {
-  registerGpuBuilders();  // lbvh-gpu beside the CPU builders, wherever a builder name is accepted
+  registerGpuBuilders();  // lbvh-gpu and ploc-gpu beside the CPU builders, wherever a builder name is accepted
   CLI::App app{"bvhlab: a testbed for BVH construction strategies in a GLSL Whitted ray tracer"};
   app.require_subcommand(1);
 

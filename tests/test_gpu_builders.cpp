@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "builder_test_util.hpp"
+#include "gpu_builder_test_util.hpp"
 #include "cli_run.hpp"
 #include "builders/builder.hpp"
 #include "builders/test_inputs.hpp"
@@ -47,41 +48,8 @@ class GpuBuilders : public ::testing::Test {
 };
 std::unique_ptr<GlContext> GpuBuilders::context_;
 
-// The invariants every builder's tree keeps (as test_builders checks them): every node reached once,
-// every primitive in exactly one leaf, leaves of at most maxLeafSize, every box the exact union of
-// its primitives' or children's.
-void expectValidTree(const Bvh& bvh, const BuildInput& input, uint32_t maxLeafSize) {
-  const size_t n = input.boxes.size();
-  ASSERT_EQ(bvh.primIndices.size(), n);
-  ASSERT_LE(bvh.nodes.size(), 2 * n - 1);
-  std::vector<int> referenced(n, 0), reached(bvh.nodes.size(), 0);
-  std::vector<uint32_t> stack{0};
-  while (!stack.empty()) {
-    const uint32_t i = stack.back();
-    stack.pop_back();
-    ASSERT_LT(i, bvh.nodes.size());
-    ASSERT_EQ(reached[i]++, 0) << "node " << i << " reached twice";
-    const BvhNode& node = bvh.nodes[i];
-    Aabb tight;
-    if (node.isLeaf()) {
-      ASSERT_LE(node.count, maxLeafSize);
-      ASSERT_LE(size_t(node.first) + node.count, n);
-      for (uint32_t k = node.first; k < node.first + node.count; ++k) {
-        ASSERT_LT(bvh.primIndices[k], n);
-        ++referenced[bvh.primIndices[k]];
-        tight.grow(input.boxes[bvh.primIndices[k]]);
-      }
-    } else {
-      tight = bvh.nodes.at(node.left).bounds;
-      tight.grow(bvh.nodes.at(node.right).bounds);
-      stack.push_back(node.right);
-      stack.push_back(node.left);
-    }
-    ASSERT_TRUE(testing::sameBox(node.bounds, tight)) << "node " << i << "'s box is not the union below it";
-  }
-  EXPECT_EQ(std::count(reached.begin(), reached.end(), 0), 0) << "nodes unreachable from the root";
-  EXPECT_EQ(std::count(referenced.begin(), referenced.end(), 1), ptrdiff_t(n)) << "a primitive not in one leaf";
-}
+using testing::expectValidTree;
+using testing::fromMesh;
 
 // lbvh and lbvh-gpu through the registry (validation included): the same tree, and a valid one.
 void expectSameAsLbvh(const BuildInput& input, const BuildOptions& options = {}) {
@@ -91,12 +59,6 @@ void expectSameAsLbvh(const BuildInput& input, const BuildOptions& options = {})
   EXPECT_EQ(gpu.nodes.size(), cpu.nodes.size());
   EXPECT_TRUE(testing::identical(gpu, cpu)) << "lbvh-gpu's tree differs from lbvh's";
   EXPECT_EQ(sahCost(gpu, options.cost), sahCost(cpu, options.cost));
-}
-
-PrimitiveSet fromMesh(const Mesh& mesh) {
-  PrimitiveSet set;
-  for (const glm::uvec3& t : mesh.triangles) set.addTriangle(mesh.positions[t.x], mesh.positions[t.y], mesh.positions[t.z]);
-  return set;
 }
 
 TEST_F(GpuBuilders, BunnyGivesLbvhsTreeAndTreeHash) {

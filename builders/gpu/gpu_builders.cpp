@@ -14,6 +14,7 @@
 
 #include "builders/builder.hpp"
 #include "builders/gpu/gpu_lbvh.hpp"
+#include "builders/gpu/gpu_ploc.hpp"
 #include "render/gl_context.hpp"
 
 namespace bvhlab {
@@ -67,7 +68,7 @@ class BuildContext {
   };
   std::unique_ptr<GlContext> own_;
   GLint program_ = 0, generic_ = 0;
-  std::array<Binding, 6> bindings_{};  // the slots the passes bind (0..5)
+  std::array<Binding, 7> bindings_{};  // the slots the passes bind (0..6)
 };
 
 }  // namespace
@@ -75,6 +76,11 @@ class BuildContext {
 Bvh buildLbvhGpu(const BuildInput& input, const BuildOptions& options) {
   BuildContext context;
   return gpubuild::GpuLbvh().build(input, options);
+}
+
+Bvh buildPlocGpu(const BuildInput& input, const BuildOptions& options) {
+  BuildContext context;
+  return gpubuild::GpuPloc().build(input, options);
 }
 
 void registerGpuBuilders() {
@@ -90,6 +96,17 @@ void registerGpuBuilders() {
                      /*usesMortonSizeBits=*/true};
     info.gpu = true;
     registerBuilder(std::move(info));
+    BuilderInfo ploc{"ploc-gpu",
+                     "ploc's tree built in GLSL compute shaders (Morton codes, radix sort, nearest neighbours within "
+                     "+-plocRadius, mutual pairs merged, compaction by prefix scan, SAH collapse); a GL 4.5 context",
+                     buildPlocGpu,
+                     false,
+                     false,
+                     /*usesPlocRadius=*/true,
+                     kMaxLeafSize,
+                     /*usesMortonSizeBits=*/true};
+    ploc.gpu = true;
+    registerBuilder(std::move(ploc));
     return true;
   }();
   (void)once;
@@ -102,13 +119,19 @@ GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input,
   BuildContext context;
   GpuBuildTiming timing;
   timing.renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  const gpubuild::GpuLbvh lbvh;
+  std::optional<gpubuild::GpuLbvh> lbvh;
+  std::optional<gpubuild::GpuPloc> ploc;
+  if (builder == "ploc-gpu")
+    ploc.emplace();
+  else
+    lbvh.emplace();
   gpubuild::GpuPhaseTimes times;
-  lbvh.build(input, options, &times);  // warm-up: the driver compiles at the first dispatch
+  auto build = [&] { return ploc ? ploc->build(input, options, &times) : lbvh->build(input, options, &times); };
+  build();  // warm-up: the driver compiles at the first dispatch
   std::vector<double> totals;
   std::vector<std::vector<double>> phases;
   for (size_t k = 0; k < builds; ++k) {
-    lbvh.build(input, options, &times);
+    build();
     totals.push_back(times.totalMs());
     phases.resize(times.phases.size());
     for (size_t p = 0; p < times.phases.size(); ++p) phases[p].push_back(times.phases[p].second);

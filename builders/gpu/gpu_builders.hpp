@@ -19,11 +19,13 @@
 
 namespace bvhlab {
 
-// Adds lbvh-gpu to builders() (once; later calls do nothing).
+// Adds lbvh-gpu and ploc-gpu to builders() (once; later calls do nothing).
 void registerGpuBuilders();
 
 // The registry's entry for lbvh-gpu: gpubuild::GpuLbvh in the current or a headless context.
 Bvh buildLbvhGpu(const BuildInput& input, const BuildOptions& options);
+// The registry's entry for ploc-gpu: gpubuild::GpuPloc likewise.
+Bvh buildPlocGpu(const BuildInput& input, const BuildOptions& options);
 
 // A GPU builder's GL-timed build: `builds` builds after one untimed warm-up (the driver compiles the
 // shaders at the first dispatch), the median total with its order-statistic interval

@@ -4,17 +4,20 @@
 # layouts-paper-gpu.toml (every layout with every kernel, the scenes past the L2 cache), (3)
 # builders-gpu.toml, (4) layouts-gpu.toml with 8 s of rounds per group, (5) kernels-gpu.toml, (6) the
 # report scene's 1080p frames over the 9 builders with and without shared programs (docs/gpu.md, "Frame
-# groups"). Each step has a time cap (0 skips it); a
+# groups"). After (1), (1b) times the GPU builders (`build --json`, GL-timed over repeated builds) on
+# scaling_1M and scaling_10M beside the CPU builders of this host. Each step has a time cap (0 skips it); a
 # sweep stopped by its cap keeps its finished runs (resume with the same command). Results go to OUTDIR
 # as a few files (PNG, JSON, one .tgz per sweep with its results.csv, results.json, findings.json and runs/);
 # `bvhlab report DIR` makes the HTML where you unpack.
 # Run from the repository root:
-#   bash experiments/remote/gpu-run.sh BUNDLE OUTDIR [PAPER_S [BUILDERS_S [LAYOUTS_S [KERNELS_S [SHARING_S]]]]]
-# The default caps fit one 10-minute call: 360 s for step 2, 150 s for step 3, the older steps 4-6 skipped.
+#   bash experiments/remote/gpu-run.sh BUNDLE OUTDIR [PAPER_S [BUILDERS_S [LAYOUTS_S [KERNELS_S [SHARING_S [GPUBUILD_S]]]]]]
+# The default caps fit one 10-minute call: 90 s for step 1b, 270 s for step 2, 150 s for step 3, the
+# older steps 4-6 skipped. GPUBUILD_MESHES (space-separated) replaces step 1b's two scenes.
 # BUNDLE: a folder or .tar.xz from experiments/remote/bundle.py (or "installed": ./build/bvhlab as it is).
 # datasets/cache must hold the meshes and worlds (bash datasets/fetch.sh, or unpack a copy of it).
 set -u
-bundle=$1; out=$2; paper_s=${3:-360}; builders_s=${4:-150}; layouts_s=${5:-0}; kernels_s=${6:-0}; sharing_s=${7:-0}
+bundle=$1; out=$2; paper_s=${3:-270}; builders_s=${4:-150}; layouts_s=${5:-0}; kernels_s=${6:-0}; sharing_s=${7:-0}
+gpubuild_s=${8:-90}
 t0=$(date +%s); step() { echo "[gpu-run t=$(( $(date +%s) - t0 ))s] $*"; }
 mkdir -p "$out" /tmp/gpu-run
 if [ "$bundle" = installed ]; then
@@ -39,6 +42,30 @@ timeout 90 "$B" render datasets/scenes/report.toml --backend egl --width 1280 --
 head -c 600 "$out/render_report.json"; echo
 timeout 60 "$B" render datasets/scenes/report.toml --backend egl --width 1280 --height 720 --frames 5 \
   --view visits -o "$out/visits_gpu.png" --json > "$out/render_visits.json"; echo "rc=$?"
+
+# 1b: one JSON line per build into gpu-builders.jsonl: the GPU builders with --gpu-builds 11 (median and
+# interval of the GL-timed builds, phases, GL_RENDERER), the CPU builders three times each (build_ms is
+# one wall-clock build). Every command gets what is left of the step's cap; past it the rest is skipped.
+gpu_builders_step() {
+  [ "$gpubuild_s" -gt 0 ] || { step "1b. GPU builders skipped"; return; }
+  step "1b. GPU builders beside the CPU builders (at most $gpubuild_s s)"
+  local end=$(( $(date +%s) + gpubuild_s )) mesh builder k left
+  : > "$out/gpu-builders.jsonl"
+  for mesh in ${GPUBUILD_MESHES:-datasets/scenes/bench/scaling_1M.toml datasets/scenes/bench/scaling_10M.toml}; do
+    for builder in lbvh-gpu ploc-gpu lbvh ploc sah-binned embree-low; do
+      for k in 1 2 3; do
+        case $builder in *-gpu) [ "$k" -gt 1 ] && continue ;; esac
+        left=$(( end - $(date +%s) ))
+        [ "$left" -gt 0 ] || { step "1b. cap reached: $mesh $builder and the rest skipped"; return; }
+        BVHLAB_GPU_BUILD_BACKEND=${BVHLAB_GPU_BUILD_BACKEND:-egl} timeout "$left" "$B" build --mesh "$mesh" \
+          --builder "$builder" --json --gpu-builds 11 >> "$out/gpu-builders.jsonl" 2>> "$out/gpu-builders.log" \
+          || echo "$mesh $builder: rc=$?" | tee -a "$out/gpu-builders.log"
+      done
+    done
+  done
+  step "1b. $(wc -l < "$out/gpu-builders.jsonl") builds in gpu-builders.jsonl"
+}
+gpu_builders_step
 
 sweep() {  # name config seconds (0: skipped)
   [ "$3" -gt 0 ] || { step "$1 skipped"; return; }

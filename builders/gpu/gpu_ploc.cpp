@@ -1,0 +1,289 @@
+// ploc-gpu's passes and download (builders/gpu/gpu_ploc.hpp).
+#include "builders/gpu/gpu_ploc.hpp"
+
+#include <array>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "datasets/scene.hpp"  // InputError
+#include "render/gl_context.hpp"
+
+namespace bvhlab::gpubuild {
+
+namespace {
+
+constexpr uint32_t kGroup = 256;  // local_size_x of every per-primitive and per-cluster pass
+constexpr uint32_t kClusterBytes = 28;  // a cluster as the shaders store it: box (6 floats), node
+
+uint32_t groupsFor(uint64_t items) { return uint32_t((items + kGroup - 1) / kGroup); }
+
+template <class T>
+std::vector<T> download(GLuint buffer, size_t count) {
+  std::vector<T> out(count);
+  if (count) glGetNamedBufferSubData(buffer, 0, GLsizeiptr(count * sizeof(T)), out.data());
+  return out;
+}
+
+// The buffers of one build, deleted with it; the storage-buffer slots the passes bound are cleared
+// first, so that no binding names a deleted buffer afterwards.
+struct Buffers {
+  std::array<GLuint, 19> ids{};
+  ~Buffers() {
+    for (GLuint slot = 0; slot < 7; ++slot) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, 0);
+    glDeleteBuffers(GLsizei(ids.size()), ids.data());
+  }
+};
+
+// GL timestamps between the phases of one build, each followed by glFlush (llvmpipe takes a timestamp
+// when it runs its command queue: builders/gpu/gpu_lbvh.cpp). mark(phase) ends an interval of `phase`;
+// a phase met several times (the passes) sums its intervals, in the order phases first appear.
+class Stamps {
+ public:
+  Stamps() { stamp(); }
+  ~Stamps() {
+    if (!ids_.empty()) glDeleteQueries(GLsizei(ids_.size()), ids_.data());
+  }
+  Stamps(const Stamps&) = delete;
+  Stamps& operator=(const Stamps&) = delete;
+  void mark(const char* phase) {
+    phases_.push_back(phase);
+    stamp();
+  }
+  void read(GpuPhaseTimes& times) const {
+    std::vector<GLuint64> at(ids_.size());
+    for (size_t q = 0; q < ids_.size(); ++q) glGetQueryObjectui64v(ids_[q], GL_QUERY_RESULT, &at[q]);
+    std::map<std::string, size_t> index;
+    for (size_t p = 0; p < phases_.size(); ++p) {
+      const auto [it, fresh] = index.emplace(phases_[p], times.phases.size());
+      if (fresh) times.phases.emplace_back(phases_[p], 0.0);
+      times.phases[it->second].second += double(at[p + 1] - at[p]) * 1e-6;
+    }
+  }
+
+ private:
+  void stamp() {
+    GLuint id = 0;
+    glGenQueries(1, &id);
+    ids_.push_back(id);
+    glQueryCounter(id, GL_TIMESTAMP);
+    glFlush();
+  }
+  std::vector<GLuint> ids_;
+  std::vector<std::string> phases_;
+};
+
+}  // namespace
+
+GpuPloc::GpuPloc(std::optional<GpuLimits> limits)
+    : limits_(limits ? *limits : queryGpuLimits()),
+      bounds_("gpubuild_bounds.glsl"),
+      grid_("gpubuild_grid.glsl"),
+      morton_("gpubuild_morton.glsl"),
+      runs_("gpubuild_ploc_runs.glsl"),
+      clusters_("gpubuild_ploc_clusters.glsl"),
+      nn_("gpubuild_ploc_nn.glsl"),
+      count_("gpubuild_ploc_count.glsl"),
+      scan_("gpubuild_scan.glsl"),
+      merge_("gpubuild_ploc_merge.glsl"),
+      collapse_("gpubuild_collapse.glsl") {}
+
+void GpuPloc::checkLimits(size_t n) const {
+  const uint64_t nodes = 2 * uint64_t(n) - 1;
+  // The largest storage buffers a build binds, by what they hold.
+  const std::pair<const char*, uint64_t> buffers[] = {
+      {"node boxes", nodes * 24},          {"primitive boxes", uint64_t(n) * 24},
+      {"clusters", uint64_t(n) * kClusterBytes}, {"node costs", nodes * 8},
+      {"node counts", nodes * 8},          {"sort keys", uint64_t(n) * 12},
+      {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}};
+  for (const auto& [what, bytes] : buffers)
+    if (bytes > limits_.maxStorageBlockBytes)
+      throw InputError("ploc-gpu: " + std::to_string(n) + " primitives need a " + std::to_string(bytes) +
+                       "-byte shader storage buffer (" + what + "); GL_MAX_SHADER_STORAGE_BLOCK_SIZE is " +
+                       std::to_string(limits_.maxStorageBlockBytes) + " bytes here");
+  if (groupsFor(n) > limits_.maxWorkGroupsX || uint64_t(n) > uint64_t(limits_.maxWorkGroupsX) * kGroup)
+    throw InputError("ploc-gpu: " + std::to_string(n) + " primitives need " + std::to_string(groupsFor(n)) +
+                     " workgroups of " + std::to_string(kGroup) + " in one dispatch; GL_MAX_COMPUTE_WORK_GROUP_COUNT "
+                     "(x) is " + std::to_string(limits_.maxWorkGroupsX) + " here");
+}
+
+Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times) const {
+  const uint32_t radius = options.plocRadius;
+  if (radius < 1 || radius > kMaxPlocRadius)
+    throw std::invalid_argument("ploc-gpu: plocRadius " + std::to_string(radius) + " is outside 1.." +
+                                std::to_string(kMaxPlocRadius));
+  if (options.mortonSizeBits != 0)
+    throw std::invalid_argument("ploc-gpu: --morton-size-bits " + std::to_string(options.mortonSizeBits) +
+                                " is not supported on the GPU (only 0: plain position codes)");
+  if (options.plocTopDown != 0)
+    throw std::invalid_argument("ploc-gpu: --ploc-top-down " + std::to_string(options.plocTopDown) +
+                                " is not supported on the GPU (only 0: clustering up to the root)");
+  const size_t count = input.boxes.size();
+  checkLimits(count);
+  if (times) times->phases.clear();
+  const uint32_t n = uint32_t(count);
+  if (n == 1) {  // ploc's tree of one primitive: one leaf; nothing to sort or cluster
+    Bvh bvh;
+    bvh.nodes.resize(1);
+    bvh.nodes[0].bounds = input.boxes[0];
+    bvh.nodes[0].count = 1;
+    bvh.primIndices = {0};
+    return bvh;
+  }
+  const uint32_t inner = n - 1, nodes = 2 * n - 1, blocks = groupsFor(n);
+
+  enum { kBoxes, kCentroids, kBoundKeys, kGrid, kKeys, kScratch, kCounts, kNodeBoxes, kChildren, kParents, kInfo,
+         kCosts, kCollapseCounters, kClustersA, kClustersB, kNearest, kSums };
+  Buffers b;
+  b.ids[kBoxes] = makeStorageBuffer(uint64_t(n) * 24, input.boxes.data());
+  b.ids[kCentroids] = makeStorageBuffer(uint64_t(n) * 12, input.centroids.data());
+  const uint32_t initialKeys[6] = {~0u, ~0u, ~0u, 0u, 0u, 0u};  // min keys from the top, max from the bottom
+  b.ids[kBoundKeys] = makeStorageBuffer(sizeof initialKeys, initialKeys);
+  b.ids[kGrid] = makeStorageBuffer(6 * 4);
+  b.ids[kKeys] = makeStorageBuffer(uint64_t(n) * 12);
+  b.ids[kScratch] = makeStorageBuffer(uint64_t(n) * 12);
+  b.ids[kCounts] = makeStorageBuffer(GpuRadixSort::countBytes(n));
+  b.ids[kNodeBoxes] = makeStorageBuffer(uint64_t(nodes) * 24);
+  b.ids[kChildren] = makeStorageBuffer(uint64_t(inner) * 8);
+  b.ids[kParents] = makeStorageBuffer(uint64_t(nodes) * 4);
+  const uint32_t noParent = ~0u;
+  glNamedBufferSubData(b.ids[kParents], 0, 4, &noParent);  // the root's (node 0); the passes write the others
+  b.ids[kInfo] = makeStorageBuffer(uint64_t(nodes) * 8);
+  b.ids[kCosts] = makeStorageBuffer(uint64_t(nodes) * 8);
+  b.ids[kCollapseCounters] = makeStorageBuffer(uint64_t(inner) * 4);
+  const uint32_t zero = 0;
+  glClearNamedBufferData(b.ids[kCollapseCounters], GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  b.ids[kClustersA] = makeStorageBuffer(uint64_t(n) * kClusterBytes);
+  b.ids[kClustersB] = makeStorageBuffer(uint64_t(n) * kClusterBytes);
+  b.ids[kNearest] = makeStorageBuffer(uint64_t(n) * 4);
+  b.ids[kSums] = makeStorageBuffer(uint64_t(2 * blocks) * 4);
+  checkGl("ploc-gpu: uploading the input");
+
+  auto bind = [&](std::initializer_list<int> which) {
+    GLuint slot = 0;
+    for (int w : which) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot++, b.ids[w]);
+  };
+  // The scanned sums' entry `at` (the total of the entries before it): the CPU waits for the GPU.
+  auto readSum = [&](uint32_t at) {
+    uint32_t value = 0;
+    glGetNamedBufferSubData(b.ids[kSums], GLintptr(at) * 4, 4, &value);
+    checkGl("ploc-gpu: reading the cluster count back");
+    return value;
+  };
+
+  Stamps stamps;
+  // morton
+  bind({kCentroids, kBoundKeys});
+  bounds_.set("u_count", n);
+  bounds_.dispatch(groupsFor(n), "ploc-gpu morton: centroid bounds (gpubuild_bounds.glsl)");
+  bind({kBoundKeys, kGrid});
+  grid_.set("u_cube", int32_t(options.mortonGrid == MortonGrid::Cube));
+  grid_.dispatch(1, "ploc-gpu morton: grid (gpubuild_grid.glsl)");
+  bind({kCentroids, kGrid, kKeys});
+  morton_.set("u_count", n);
+  morton_.dispatch(groupsFor(n), "ploc-gpu morton: codes (gpubuild_morton.glsl)");
+  stamps.mark("morton");
+  // sort
+  sort_.sort(b.ids[kKeys], b.ids[kScratch], b.ids[kCounts], n);
+  stamps.mark("sort");
+  // clusters: leaves, runs counted, scanned, one tree per run
+  bind({kKeys, kBoxes, kNodeBoxes, kSums});
+  runs_.set("u_count", n);
+  runs_.dispatch(blocks, "ploc-gpu clusters: leaves and runs of equal codes (gpubuild_ploc_runs.glsl)");
+  bind({kSums});
+  scan_.set("u_count", 2 * blocks);
+  scan_.dispatch(1, "ploc-gpu clusters: scan (gpubuild_scan.glsl)");
+  bind({kKeys, kNodeBoxes, kChildren, kParents, kNearest, kSums, kClustersA});
+  clusters_.set("u_count", n);
+  clusters_.dispatch(blocks, "ploc-gpu clusters: a tree per run of equal codes (gpubuild_ploc_clusters.glsl)");
+  stamps.mark("clusters");
+  uint32_t m = readSum(blocks);
+  stamps.mark("readback");
+
+  // Clustering passes until one cluster is left (each merges at least one pair: builders/ploc.cpp).
+  int from = kClustersA, to = kClustersB;
+  nn_.set("u_radius", radius);
+  while (m > 1) {
+    const uint32_t groups = groupsFor(m);
+    bind({from, kNearest});
+    nn_.set("u_count", m);
+    nn_.dispatch(groups, "ploc-gpu nn: nearest neighbours (gpubuild_ploc_nn.glsl)");
+    stamps.mark("nn");
+    bind({kNearest, kSums});
+    count_.set("u_count", m);
+    count_.dispatch(groups, "ploc-gpu merge: counts (gpubuild_ploc_count.glsl)");
+    bind({kSums});
+    scan_.set("u_count", 2 * groups);
+    scan_.dispatch(1, "ploc-gpu merge: scan (gpubuild_scan.glsl)");
+    bind({from, kNearest, kSums, to, kNodeBoxes, kChildren, kParents});
+    merge_.set("u_count", m);
+    merge_.dispatch(groups, "ploc-gpu merge: merge and compact (gpubuild_ploc_merge.glsl)");
+    stamps.mark("merge");
+    const uint32_t next = readSum(groups);
+    stamps.mark("readback");
+    if (next >= m)  // a pass always merges (the smallest key in a window is mutual)
+      throw std::runtime_error("ploc-gpu merge: a pass over " + std::to_string(m) + " clusters merged none");
+    m = next;
+    std::swap(from, to);
+  }
+
+  // collapse
+  bind({kChildren, kParents, kNodeBoxes, kInfo, kCosts, kCollapseCounters});
+  collapse_.set("u_count", n);
+  collapse_.set("u_maxLeaf", options.maxLeafSize);
+  collapse_.set("u_ct", options.cost.traversalCost);
+  collapse_.set("u_ci", options.cost.intersectionCost);
+  collapse_.dispatch(groupsFor(n), "ploc-gpu collapse: SAH leaf collapse (gpubuild_collapse.glsl)");
+  stamps.mark("collapse");
+  checkGl("ploc-gpu: timer queries");
+  if (times) stamps.read(*times);
+
+  // Download (untimed) and the depth-first emission of builders/collapse.hpp's emitCollapsed: an
+  // emitted inner node's children take the slots base, base + 1, then the left child's descendants,
+  // then the right's; a leaf's primitives are its subtree's full-tree leaves, left first.
+  const std::vector<GpuKey> keys = download<GpuKey>(b.ids[kKeys], n);
+  const std::vector<uint32_t> children = download<uint32_t>(b.ids[kChildren], 2 * size_t(inner));
+  const std::vector<Aabb> boxes = download<Aabb>(b.ids[kNodeBoxes], nodes);
+  const std::vector<uint32_t> info = download<uint32_t>(b.ids[kInfo], 2 * size_t(nodes));  // count, inner
+  checkGl("ploc-gpu: download");
+  Bvh bvh;
+  bvh.nodes.resize(1 + 2 * size_t(info[1]));
+  bvh.primIndices.resize(n);
+  struct Item {
+    uint32_t node, slot, base, prim;
+  };
+  std::vector<Item> stack{{0, 0, 1, 0}};
+  std::vector<uint32_t> below;
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    BvhNode& out = bvh.nodes[it.slot];
+    out.bounds = boxes[it.node];
+    if (info[2 * it.node + 1] == 0) {  // one leaf (a full-tree leaf, or a collapsed subtree)
+      out.first = it.prim;
+      out.count = info[2 * it.node];
+      uint32_t prim = it.prim;
+      below.assign(1, it.node);
+      while (!below.empty()) {
+        const uint32_t node = below.back();
+        below.pop_back();
+        if (node >= inner) {
+          bvh.primIndices[prim++] = keys[node - inner].id;
+        } else {
+          below.push_back(children[2 * node + 1]);
+          below.push_back(children[2 * node]);
+        }
+      }
+      continue;
+    }
+    const uint32_t l = children[2 * it.node], r = children[2 * it.node + 1];
+    out.left = it.base;
+    out.right = it.base + 1;
+    stack.push_back({r, it.base + 1, it.base + 2 + 2 * info[2 * l + 1], it.prim + info[2 * l]});
+    stack.push_back({l, it.base, it.base + 2, it.prim});
+  }
+  return bvh;
+}
+
+}  // namespace bvhlab::gpubuild

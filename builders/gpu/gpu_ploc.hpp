@@ -1,0 +1,46 @@
+// ploc-gpu: the CPU ploc's tree (builders/ploc.cpp, BuildOptions::plocRadius; without plocTopDown),
+// built by GLSL compute passes in the current GL context. Phases (each timed by GL timestamp queries):
+//   morton    centroid bounds, grid and codes: lbvh-gpu's passes (gpubuild_bounds/grid/morton.glsl)
+//   sort      lbvh-gpu's stable radix sort by (code, index) (builders/gpu/gpu_radix_sort.hpp)
+//   clusters  the leaves and one balanced tree per run of equal codes (gpubuild_ploc_runs/clusters.glsl)
+//   nn        per clustering pass: every cluster's nearest neighbour within the radius (gpubuild_ploc_nn.glsl)
+//   merge     per pass: mutual pairs merge, the clusters compacted by a prefix scan
+//             (gpubuild_ploc_count.glsl, gpubuild_scan.glsl, gpubuild_ploc_merge.glsl)
+//   readback  per pass: the GPU idle while the CPU reads the pass's cluster count back (4 bytes), which
+//             decides whether another pass runs and how many workgroups it takes
+//   collapse  lbvh-gpu's SAH leaf collapse, bottom-up (gpubuild_collapse.glsl)
+// Nodes are numbered as the CPU numbers them (leaves n - 1 + sorted position, inner nodes downwards
+// from n - 2 as they are made, the root at 0), merges within a pass in order. The download (untimed)
+// reads the tree back and emits the collapsed tree as builders/collapse.hpp emits it: the same Bvh,
+// node for node, as `ploc` at the same radius (so the same tree_hash).
+#pragma once
+#include <optional>
+
+#include "builders/bvh.hpp"
+#include "builders/gpu/gpu_compute.hpp"
+#include "builders/gpu/gpu_lbvh.hpp"  // GpuPhaseTimes
+#include "builders/gpu/gpu_radix_sort.hpp"
+
+namespace bvhlab::gpubuild {
+
+class GpuPloc {
+ public:
+  // Compiles the passes in the current context; `limits` replaces the implementation's (tests).
+  explicit GpuPloc(std::optional<GpuLimits> limits = std::nullopt);
+
+  // Throws InputError naming GL_MAX_SHADER_STORAGE_BLOCK_SIZE or GL_MAX_COMPUTE_WORK_GROUP_COUNT when
+  // the input needs more than the limits allow (before any GL work), std::invalid_argument for a
+  // radius outside 1..kMaxPlocRadius and for Morton size bits or plocTopDown (not implemented on the
+  // GPU), std::runtime_error naming the pass for a GL error.
+  Bvh build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times = nullptr) const;
+
+  // The check build() makes first.
+  void checkLimits(size_t primitives) const;
+
+ private:
+  GpuLimits limits_;
+  ComputeProgram bounds_, grid_, morton_, runs_, clusters_, nn_, count_, scan_, merge_, collapse_;
+  GpuRadixSort sort_;
+};
+
+}  // namespace bvhlab::gpubuild
