@@ -278,6 +278,10 @@ nlohmann::json TraceClip::result(const std::string& renderer, uint64_t& overflow
   clip["update_ms_total"] = total.updateMs;
   clip["upload_ms_total"] = total.uploadMs;
   clip["trace_ms_total"] = total.traceMs;
+  // Per traced frame: the sum of its parts' medians (what findings pair clips over: frame f with frame f).
+  nlohmann::json frameTotals = nlohmann::json::array();
+  for (const ClipFrameSamples& f : samples) frameTotals.push_back(medianOf(f.update) + medianOf(f.upload) + medianOf(f.trace));
+  clip["frame_total_ms"] = frameTotals;
   clip["rebuilds"] = std::count_if(frameList.begin(), frameList.end(), [](const nlohmann::json& j) { return j["rebuilt"].get<bool>(); });
   clip["hit_mismatches"] = mismatchesTotal;
   clip["stack_overflow_rays"] = overflowsTotal;

@@ -72,6 +72,7 @@ class TraceClip {
  public:
   explicit TraceClip(const TraceCommand& c);
   int frames() const { return plan.count; }
+  const TraceCommand& command() const { return c; }
   Backend backend() const { return s.setup.backend; }
   // The clip's f-th frame: update, pack + upload, warm-up and timed traces, the counted pass.
   // renderer: the current context's (it sets the sample length, resolveMinSampleMs).
