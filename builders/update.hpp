@@ -12,6 +12,12 @@
 //                         made by the last rebuild (R >= 1): every frame kept without a rebuild has an
 //                         SAH <= R x that of the last rebuild
 //   refit+rotate          refit with tree rotations (Kopta et al. 2012)
+//   two-level[:OPTIONS]   a top-level tree (TLAS) rebuilt every frame over per-object trees (BLASes);
+//                         OPTIONS, comma-separated: blas=static|refit|rebuild (what happens to the BLAS
+//                         of an object whose own triangles change; default static), tlas=BUILDER (the
+//                         TLAS's builder; default UpdateOptions::builder). It keeps a tree per object,
+//                         so it runs over a scene's instances (layout/two_level_update.hpp), not over
+//                         FrameTriangles: makeUpdateStrategy refuses it.
 // Adding a strategy: one builders/update_NAME.cpp with its factory, and one line in
 // builders/update_registry.cpp.
 #pragma once
@@ -34,6 +40,8 @@ struct UpdateSpec {
   std::string text;       // the spec as given, e.g. "refit+rebuild:8"
   uint32_t every = 0;     // refit+rebuild:K: K
   double sahRatio = 0.0;  // refit+rebuild:sah>R: R
+  std::string blas = "static";  // two-level: "static", "refit" or "rebuild"
+  std::string tlasBuilder;      // two-level: the TLAS's builder ("" = UpdateOptions::builder)
 };
 
 // How a strategy builds (frame 0 and every rebuild): a registered builder and its options. The SAH
@@ -62,15 +70,19 @@ struct UpdateStrategyInfo {
   std::string name;         // as in a spec; K and R stand for the number the spec gives
   std::string description;  // one line
   std::function<std::unique_ptr<UpdateStrategy>(const UpdateSpec&, const UpdateOptions&)> make;
+  std::string options = {};  // what may follow the name (two-level's ":blas=...,tlas=..."), for messages
 };
 const std::vector<UpdateStrategyInfo>& updateStrategies();
 
 // Parses a spec string. Throws std::invalid_argument naming the valid forms for an unknown name, and
-// naming the bad number for K < 1 (or not a whole number) and R < 1 (or not a finite number).
+// naming the bad number for K < 1 (or not a whole number) and R < 1 (or not a finite number), and for
+// two-level an unknown or repeated option, a BLAS policy other than static/refit/rebuild and an
+// unknown TLAS builder (naming the valid ones).
 UpdateSpec parseUpdateSpec(const std::string& text);
 
-// parseUpdateSpec, then the strategy. Throws std::invalid_argument as parseUpdateSpec does, and for
-// an unknown builder or bad build options (builders/builder.hpp reviewBuildOptions).
+// parseUpdateSpec, then the strategy. Throws std::invalid_argument as parseUpdateSpec does, for
+// an unknown builder or bad build options (builders/builder.hpp reviewBuildOptions), and for two-level
+// (a tree per object: layout/two_level_update.hpp runs it).
 std::unique_ptr<UpdateStrategy> makeUpdateStrategy(const std::string& spec, const UpdateOptions& options);
 
 // ---- the per-frame driver -------------------------------------------------------------------------

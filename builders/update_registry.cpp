@@ -19,6 +19,19 @@ std::unique_ptr<UpdateStrategy> makeRefitRebuildEveryStrategy(const UpdateSpec&,
 std::unique_ptr<UpdateStrategy> makeRefitRebuildSahStrategy(const UpdateSpec&, const UpdateOptions&);
 std::unique_ptr<UpdateStrategy> makeRefitRotateStrategy(const UpdateSpec&, const UpdateOptions&);
 
+namespace {
+
+// two-level keeps a tree per object instance: the scene's instances drive it (layout/two_level_update.hpp),
+// a flat triangle list cannot.
+std::unique_ptr<UpdateStrategy> makeTwoLevelFlatRefusal(const UpdateSpec& spec, const UpdateOptions&) {
+  throw std::invalid_argument("update strategy '" + spec.text +
+                              "' keeps a tree per object instance and runs over an animated scene's instances "
+                              "(`bvhlab trace --update`); render --update and a flat triangle list take the "
+                              "single-tree strategies");
+}
+
+}  // namespace
+
 const std::vector<UpdateStrategyInfo>& updateStrategies() {
   static const std::vector<UpdateStrategyInfo> table = {
       {"rebuild", "a new tree every frame with the chosen builder", makeRebuildStrategy},
@@ -27,6 +40,8 @@ const std::vector<UpdateStrategyInfo>& updateStrategies() {
       {"refit+rebuild:sah>R", "refit; rebuild when the SAH exceeds R x the last rebuild's (R >= 1)",
        makeRefitRebuildSahStrategy},
       {"refit+rotate", "refit with tree rotations that lower the SAH (Kopta et al. 2012)", makeRefitRotateStrategy},
+      {"two-level", "a TLAS rebuilt every frame over per-object BLASes kept static, refit or rebuilt",
+       makeTwoLevelFlatRefusal, "[:blas=static|refit|rebuild][,tlas=BUILDER]"},
   };
   return table;
 }
@@ -35,7 +50,7 @@ namespace {
 
 std::string validForms() {
   std::string list;
-  for (const UpdateStrategyInfo& info : updateStrategies()) list += (list.empty() ? "" : ", ") + info.name;
+  for (const UpdateStrategyInfo& info : updateStrategies()) list += (list.empty() ? "" : ", ") + info.name + info.options;
   return list;
 }
 
@@ -45,6 +60,47 @@ std::string validForms() {
 
 }  // namespace
 
+// two-level[:key=value,...] (builders/update.hpp).
+static UpdateSpec parseTwoLevel(const std::string& text) {
+  UpdateSpec spec;
+  spec.text = text;
+  spec.name = "two-level";
+  if (text == "two-level") return spec;
+  const std::string prefix = "two-level:";
+  if (text.rfind(prefix, 0) != 0) refuse(text, "unknown strategy");
+  std::string rest = text.substr(prefix.size());
+  bool sawBlas = false, sawTlas = false;
+  while (true) {
+    const size_t comma = rest.find(',');
+    const std::string item = rest.substr(0, comma);
+    const size_t eq = item.find('=');
+    const std::string key = item.substr(0, eq), value = eq == std::string::npos ? "" : item.substr(eq + 1);
+    if (eq == std::string::npos || value.empty())
+      refuse(text, "two-level option '" + item + "' is not key=value (keys: blas, tlas)");
+    if (key == "blas") {
+      if (sawBlas) refuse(text, "two-level option blas given twice");
+      if (value != "static" && value != "refit" && value != "rebuild")
+        refuse(text, "blas=" + value + ": the BLAS policy is static, refit or rebuild");
+      spec.blas = value;
+      sawBlas = true;
+    } else if (key == "tlas") {
+      if (sawTlas) refuse(text, "two-level option tlas given twice");
+      try {
+        findBuilder(value);
+      } catch (const std::invalid_argument& e) {
+        refuse(text, std::string("tlas=") + value + ": " + e.what());
+      }
+      spec.tlasBuilder = value;
+      sawTlas = true;
+    } else {
+      refuse(text, "unknown two-level option '" + key + "' (keys: blas, tlas)");
+    }
+    if (comma == std::string::npos) break;
+    rest = rest.substr(comma + 1);
+  }
+  return spec;
+}
+
 UpdateSpec parseUpdateSpec(const std::string& text) {
   UpdateSpec spec;
   spec.text = text;
@@ -52,6 +108,7 @@ UpdateSpec parseUpdateSpec(const std::string& text) {
     spec.name = text;
     return spec;
   }
+  if (text.rfind("two-level", 0) == 0) return parseTwoLevel(text);
   const std::string prefix = "refit+rebuild:";
   if (text.rfind(prefix, 0) != 0) refuse(text, "unknown strategy");
   const std::string arg = text.substr(prefix.size());

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "experiments/findings_adjust.hpp"
+#include "experiments/findings_clip.hpp"
 #include "experiments/findings_rows.hpp"
 #include "experiments/replicates.hpp"
 #include "render/frame_stats.hpp"
@@ -72,6 +73,10 @@ class Finder {
         for (auto [prefix, bands] : {std::pair{"aa_control", &band_}, std::pair{"aa_shared_control", &sharedBand_}})
           if (const auto aa = control(*r, prefix); aa && aa->low > 0.0)
             (*bands)[session(*r)] = std::max((*bands)[session(*r)], extentOf(*aa));
+    // Clip groups' A/A controls (experiments/findings_clip.hpp): the band of the session's clip comparisons.
+    for (const json* row : ok_)
+      if (const auto aa = clipRatio(clipFrameTotals(*row), clipControlTotals(*row), seedOf(label(*row, "key") + "/clip-aa")))
+        clipBand_[session(*row)] = std::max(clipBand_[session(*row)], extentOf(aa->ratio));
     // The band between processes: each A/A control run measured again in another replicate (a new
     // process, minutes later) against its replicate 0: an A/A comparison across processes, made the
     // way runs from different sessions are compared (a block bootstrap of the two medians).
@@ -144,6 +149,7 @@ class Finder {
                                {"directional", wouldCall},
                                {"share", sameTested ? json(double(wouldCall) / double(sameTested)) : json()}};
     for (Pending& p : pending_) out_["comparisons"].push_back(std::move(p.c));
+    if (out_.contains("clip_mixed")) out_["clip_mixed_summary"] = clipMixedSummary(out_["clip_mixed"]);
     return out_;
   }
 
@@ -206,8 +212,25 @@ class Finder {
       m.band = it->second, m.hasBand = true, m.bandSource = "program control";
   }
 
+  // Two clips of one session: total clip time, paired over frames (experiments/findings_clip.hpp).
+  std::optional<Measured> clipMeasured(const json& a, const json& b) {
+    const std::vector<double> fa = clipFrameTotals(a), fb = clipFrameTotals(b);
+    if (fa.empty() || fb.empty() || session(a).empty() || session(a) != session(b)) return std::nullopt;
+    Measured m;
+    m.paired = true;
+    m.over = "clip frames";
+    m.n = std::min(fa.size(), fb.size());
+    const auto r = clipRatio(fa, fb, seedOf(label(a, "key") + "/" + label(b, "key") + "/clip"));
+    if (r) m.ratio = r->ratio;
+    if (auto it = clipBand_.find(session(a)); it != clipBand_.end())
+      m.band = it->second, m.hasBand = true, m.bandSource = "clip control";
+    if (r && m.hasBand) m.test = r->test(m.band);
+    return m;
+  }
+
   // Within one replicate (one row each): paired rounds in one session, program copies, or two sessions.
   Measured measuredOnce(const json& a, const json& b) {
+    if (std::optional<Measured> clip = clipMeasured(a, b)) return *clip;
     Measured m;
     const std::vector<double> fa = frames(a), fb = frames(b);
     m.paired = !session(a).empty() && session(a) == session(b) && fa.size() == fb.size() && !fa.empty();
@@ -397,6 +420,8 @@ class Finder {
   void sceneFindings(const std::string& scene, const std::vector<const json*>& rows) {
     contextAxes_ = varying(rows);
     noiseEntries(scene, rows);
+    for (json& entry : clipNoiseEntries(scene, rows, contextAxes_)) out_["noise"].push_back(std::move(entry));
+    if (json mixed = clipMixed(scene, rows, clipBand_); !mixed.empty()) out_["clip_mixed"].push_back(std::move(mixed));
     const bool deep = std::any_of(rows.begin(), rows.end(), [](const json* r) {
       return number(*r, "effective_depth").value_or(2.0) > 1.0;  // unknown: assume it matters
     });
@@ -566,6 +591,7 @@ class Finder {
   const json baselines_;
   std::vector<const json*> ok_;
   std::map<std::string, double> band_, sharedBand_;  // per session: second-program / shared-program control
+  std::map<std::string, double> clipBand_;            // per session: the clip group's A/A control
   std::optional<double> betweenBand_[2];             // across processes: frames, Embree-normalised frames
   std::map<std::pair<const json*, std::string>, std::optional<Interval>> controls_;
   std::vector<std::string> contextAxes_;

@@ -82,11 +82,17 @@ class Progress {
     if (!enabled_ || tty_) return;
     char buf[160] = "";
     const auto number = [&](const char* k) { return result.contains(k) && result[k].is_number() ? result[k].get<double>() : -1.0; };
+    // A clip run's "frames" is its per-frame array: the count it traced is clip.frames (and its
+    // frame_ms the clip's total).
+    const bool clip = result.contains("clip") && result["clip"].is_object() && result["clip"].contains("frames") &&
+                      result["clip"]["frames"].is_number();
+    const int frames = clip ? result["clip"]["frames"].get<int>() : int(number("frames"));
+    const char* unit = clip ? "clip frames" : "frames";
     if (number("frame_ms_ci_low") >= 0.0)
-      std::snprintf(buf, sizeof buf, "%.3g ms [%.3g, %.3g], %d frames", number("frame_ms"), number("frame_ms_ci_low"),
-                    number("frame_ms_ci_high"), int(number("frames")));
+      std::snprintf(buf, sizeof buf, "%.3g ms [%.3g, %.3g], %d %s", number("frame_ms"), number("frame_ms_ci_low"),
+                    number("frame_ms_ci_high"), frames, unit);
     else if (number("frame_ms") >= 0.0)
-      std::snprintf(buf, sizeof buf, "%.3g ms, %d frames", number("frame_ms"), int(number("frames")));
+      std::snprintf(buf, sizeof buf, "%.3g ms, %d %s", number("frame_ms"), frames, unit);
     std::fprintf(stderr, "bvhlab run: [%zu/%zu] ok %s: %s\n", done, total_, run.describe().c_str(), buf);
   }
   void finish() {

@@ -91,7 +91,8 @@ void appendTopLevel(PackedTwoLevel& p, const std::vector<Instance>& instances, c
     boxes.push_back(transformBox(p.blasBox[inst.blas], inst.objectToWorld));
     centroids.push_back(boxes.back().center());
   }
-  const Bvh tlas = buildBvh(top.builder, BuildInput{boxes, centroids}, top.options);
+  p.tlas = buildBvh(top.builder, BuildInput{boxes, centroids}, top.options);
+  const Bvh& tlas = p.tlas;
   // The layout's packer wants triangles: one placeholder per instance. Its TRIANGLE stream is dropped;
   // texel 3j.w of it names the instance at leaf-order position j.
   TriangleSoup placeholders;
@@ -171,6 +172,12 @@ Aabb transformBox(const Aabb& objectBox, const glm::mat4x3& m) {
 
 PackedTwoLevel packTwoLevel(const std::vector<PackedBvh>& blases, const std::vector<Instance>& instances,
                             const TopLevelBuild& top) {
+  PackedTwoLevel p = packBottomLevel(blases);
+  appendTopLevel(p, instances, top);
+  return p;
+}
+
+PackedTwoLevel packBottomLevel(const std::vector<PackedBvh>& blases) {
   if (blases.empty()) throw std::invalid_argument("packTwoLevel: no BLASes");
   const std::string& layout = blases.front().layout;
   if (!twoLevelLayoutSupported(layout))
@@ -202,7 +209,6 @@ PackedTwoLevel packTwoLevel(const std::vector<PackedBvh>& blases, const std::vec
   const size_t padded = (p.streams.nodes.size() + kInstanceTexels - 1) / kInstanceTexels * kInstanceTexels;
   p.streams.nodes.resize(padded, glm::uvec4(0u));
   p.dynamicTexelBegin = padded;
-  appendTopLevel(p, instances, top);
   return p;
 }
 

@@ -78,6 +78,7 @@ struct PackedTwoLevel {
   std::vector<Aabb> blasBox;             // per BLAS: its root box (object space)
   std::vector<uint32_t> recordInstance;  // per record (from the first, in TLAS leaf order): instance id
   size_t dynamicTexelBegin = 0;          // NODE texels from here on are rewritten by repackTopLevel
+  Bvh tlas;  // the TLAS as built (its primitives: the instances, by index), for its SAH
   uint32_t firstRecord() const { return uint32_t(dynamicTexelBegin / kInstanceTexels); }
 };
 
@@ -94,6 +95,9 @@ struct TopLevelBuild {
 // stream limit (as packBvh).
 PackedTwoLevel packTwoLevel(const std::vector<PackedBvh>& blases, const std::vector<Instance>& instances,
                             const TopLevelBuild& top = {});
+// The HEADER and BLASES regions alone (no TLAS yet: repackTopLevel adds it); the errors of
+// packTwoLevel that concern BLASes. packTwoLevel = packBottomLevel, then repackTopLevel.
+PackedTwoLevel packBottomLevel(const std::vector<PackedBvh>& blases);
 // A new frame: the instance records and the TLAS rebuilt for `instances` (same BLASes), the
 // BLASES region kept as it is. Same errors as packTwoLevel.
 void repackTopLevel(PackedTwoLevel& packed, const std::vector<Instance>& instances, const TopLevelBuild& top = {});

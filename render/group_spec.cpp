@@ -63,7 +63,8 @@ GroupSpec parseGroupSpec(const json& spec, const std::string& source) {
   // A time budget for the rounds: a group of few or fast runs gets more rounds than a big one.
   g.maxSeconds = numberField(spec, source, "max_seconds", 0.0);
   if (!(g.maxSeconds >= 0.0)) fail(source, "max_seconds", "must be >= 0");
-  g.wantControl = boolField(spec, source, "aa_control", true) && g.maxFrames >= int(kMinValuesForInterval);
+  g.clipControl = boolField(spec, source, "aa_control", true);
+  g.wantControl = g.clipControl && g.maxFrames >= int(kMinValuesForInterval);
   // One program per distinct shader text (render/program_cache.hpp); false: every run compiles its own.
   out.sharePrograms = boolField(spec, source, "share_programs", true);
   // Each run drawn by this many separately compiled copies of its program (each copy shared by the

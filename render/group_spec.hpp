@@ -14,6 +14,7 @@ struct GroupSettings {
   int minFrames = 10, maxFrames = 10;
   double targetPct = 2.0, maxSeconds = 0.0;
   bool wantControl = true;  // aa_control, and enough rounds for its interval
+  bool clipControl = true;  // aa_control: a group of clips steps its first clip twice (its interval is over frames)
   int programCopies = 1;
   std::string session = "unnamed";
 };

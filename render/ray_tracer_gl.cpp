@@ -39,10 +39,10 @@ GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& option
   const std::string& layout = packed.layout;
   timed_ = compileComputeProgram(
       assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, false, layout,
-                        packed.triangleFormat));
+                        packed.triangleFormat, options.twoLevel));
   counted_ = compileComputeProgram(
       assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, true, layout,
-                        packed.triangleFormat));
+                        packed.triangleFormat, options.twoLevel));
   upload(packed);
   const char* names[4] = {"u_nodes", "u_triangles", "u_attributes", "u_vertices"};
   for (GLuint program : {timed_, counted_}) {
@@ -88,7 +88,8 @@ void GlRayTracer::setRays(const std::vector<BatchRay>& rays) {
   const GLsizeiptr n = GLsizeiptr(std::max<size_t>(1, count_));
   glNamedBufferData(rayBuffer_, n * GLsizeiptr(sizeof(BatchRay)), rays.empty() ? nullptr : rays.data(), GL_STATIC_DRAW);
   glNamedBufferData(resultBuffer_, n * GLsizeiptr(sizeof(glm::uvec4)), nullptr, GL_STREAM_READ);
-  glNamedBufferData(countBuffer_, n * GLsizeiptr(sizeof(glm::uvec4)), nullptr, GL_STREAM_READ);
+  const GLsizeiptr perRay = options_.twoLevel ? 2 : 1;  // two-level: BLAS and TLAS counters
+  glNamedBufferData(countBuffer_, perRay * n * GLsizeiptr(sizeof(glm::uvec4)), nullptr, GL_STREAM_READ);
   tMax_.resize(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) tMax_[i] = rays[i].tMax;
   checkGl("uploading the rays");
@@ -141,14 +142,32 @@ std::vector<BatchHit> GlRayTracer::results() const {
   return decode(raw, options_.anyHit, tMax_);
 }
 
-std::vector<glm::uvec4> GlRayTracer::traceCounted(std::vector<BatchHit>* hits) {
+std::vector<glm::uvec4> GlRayTracer::traceCounted(std::vector<BatchHit>* hits, std::vector<glm::uvec4>* tlas) {
   dispatch(counted_);
-  std::vector<glm::uvec4> counts(count_);
+  const size_t perRay = options_.twoLevel ? 2 : 1;
+  std::vector<glm::uvec4> raw(perRay * count_);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  if (count_) glGetNamedBufferSubData(countBuffer_, 0, GLsizeiptr(count_ * sizeof(glm::uvec4)), counts.data());
+  if (count_) glGetNamedBufferSubData(countBuffer_, 0, GLsizeiptr(raw.size() * sizeof(glm::uvec4)), raw.data());
   checkGl("reading the ray counters");
   if (hits) *hits = results();
+  if (perRay == 1) return raw;
+  std::vector<glm::uvec4> counts(count_);
+  if (tlas) tlas->resize(count_);
+  for (size_t i = 0; i < count_; ++i) {
+    counts[i] = raw[2 * i];
+    if (tlas) (*tlas)[i] = raw[2 * i + 1];
+  }
   return counts;
+}
+
+std::vector<uint32_t> GlRayTracer::instances() const {
+  std::vector<glm::uvec4> raw(count_);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  if (count_) glGetNamedBufferSubData(resultBuffer_, 0, GLsizeiptr(count_ * sizeof(glm::uvec4)), raw.data());
+  checkGl("reading the ray results");
+  std::vector<uint32_t> ids(count_);
+  for (size_t i = 0; i < count_; ++i) ids[i] = raw[i].w;
+  return ids;
 }
 
 }  // namespace bvhlab

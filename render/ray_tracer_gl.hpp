@@ -18,6 +18,9 @@ struct RayTracerOptions {
   Storage storage = Storage::Tbo;
   Robustness robust = Robustness::Watertight;
   bool anyHit = false;  // traceAny instead of traceClosest
+  // The tree is a two-level one (layout/pack_two_level.hpp): the kernel's two-level walk
+  // (traversal/two_level.glsl); answers carry instance ids and the counters split TLAS and BLAS.
+  bool twoLevel = false;
 };
 
 class GlRayTracer {
@@ -46,7 +49,12 @@ class GlRayTracer {
   std::vector<BatchHit> results() const;
   // Traces once more with the counters compiled in: per ray (node visits, triangle tests, stack
   // overflow, box tests); `hits` gets that run's answers.
-  std::vector<glm::uvec4> traceCounted(std::vector<BatchHit>* hits = nullptr);
+  // Over a two-level tree the per-ray counters are the BLAS walks' (summed over the instances a ray
+  // enters) and `tlas` gets the TLAS walk's: (node visits, instance tests, 0, box tests).
+  std::vector<glm::uvec4> traceCounted(std::vector<BatchHit>* hits = nullptr, std::vector<glm::uvec4>* tlas = nullptr);
+  // Over a two-level tree: the instance id of each ray's last answer (0 for a miss or any hit);
+  // BatchHit::prim is then the instance's own triangle id.
+  std::vector<uint32_t> instances() const;
 
  private:
   void issue(unsigned program);  // binds the program and buffers, dispatches (not waited for)

@@ -91,14 +91,29 @@ TraceClip::TraceClip(const TraceCommand& command) : c(command) {
   s.setup = setupRender(rc);
   for (const std::string& w : s.setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';
   plan = planClip(rc, s.setup.scene);
-  updater = std::make_unique<ClipUpdater>(rc, s.setup.build);
   packer = &findLayout(s.setup.shader.layout);
   triangleFormat = findTriangleFormat(s.setup.shader.triangles).name;
   s.tracer.kernel = s.setup.shader.kernel;
   s.tracer.storage = s.setup.shader.storage;
   s.tracer.robust = s.setup.shader.robust;
   s.tracer.anyHit = isAnyHit(s.workload);
-  cost = updater->cost();
+  const UpdateSpec spec = parseUpdateSpec(rc.update);  // planClip checked it
+  if (spec.name == "two-level") {
+    try {
+      if (triangleFormat != "raw")
+        throw std::invalid_argument("a two-level tree takes raw triangles, not --triangles " + triangleFormat);
+      checkTwoLevel(packer->name, s.tracer.kernel);
+      for (int k = 0; k < rc.updateRepeats; ++k)
+        twoLevel.push_back(std::make_unique<TwoLevelUpdater>(spec, UpdateOptions{rc.builder, s.setup.build}, packer->name));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("--update " + rc.update + ": " + e.what());
+    }
+    s.tracer.twoLevel = true;
+    cost = s.setup.build.cost;
+  } else {
+    updater = std::make_unique<ClipUpdater>(rc, s.setup.build);
+    cost = updater->cost();
+  }
   scene = std::move(s.setup.scene);  // frame 0 as loaded; setFrame moves it on
   samples.resize(size_t(plan.count));
 }
@@ -121,20 +136,51 @@ void TraceClip::step(int f, const std::string& renderer) {
   TraceYardstick y(c, fs);
   y.trace();  // the answers to compare with (untimed)
 
-  // The update: every copy of the strategy once, each timed.
+  // The update: every copy of the strategy once, each timed; then the pack (CPU), timed once.
   ClipFrameSamples& sm = samples[size_t(f)];
-  const ClipUpdater::Step step = updater->update(soup);
-  sm.update = step.ms;
-  const bool rebuilt = step.rebuilt, agree = step.agree;
-  const double sah0 = step.sah;
-  const Bvh& tree = updater->tree();
+  nlohmann::json j;
+  bool rebuilt = false, agree = true;
+  double sah0 = 0.0, packMs = 0.0;
+  PackedBvh flatPacked;
+  const Bvh* tree = nullptr;
+  if (twoLevel.empty()) {
+    const ClipUpdater::Step step = updater->update(soup);
+    sm.update = step.ms;
+    rebuilt = step.rebuilt;
+    agree = step.agree;
+    sah0 = step.sah;
+    tree = &updater->tree();
+    const auto start = Clock::now();
+    flatPacked = packer->pack(*tree, soup);
+    packTriangles(flatPacked, soup, triangleFormat);
+    packMs = msSince(start);
+  } else {
+    std::vector<double> blasMs, tlasMs;
+    for (size_t k = 0; k < twoLevel.size(); ++k) {
+      const TwoLevelUpdater::Step step = twoLevel[k]->update(scene, sceneFrame);
+      blasMs.push_back(step.blasMs);
+      tlasMs.push_back(step.tlasMs);
+      sm.update.push_back(step.blasMs + step.tlasMs);
+      const double sah = twoLevel[k]->sahCost();
+      if (k == 0) {
+        rebuilt = step.blasBuilt;
+        sah0 = sah;
+        packMs = step.packMs;
+        j["blas_updated"] = step.blasUpdated;
+      } else if (step.blasBuilt != rebuilt || sah != sah0) {
+        agree = false;
+      }
+    }
+    putTimes(j, "blas_update_ms", blasMs);
+    putTimes(j, "tlas_update_ms", tlasMs);
+    j["tlas_sah_cost"] = twoLevel[0]->tlasSahCost();
+    j["instances"] = twoLevel[0]->instanceCount();
+    j["blases"] = twoLevel[0]->blasCount();
+  }
+  const PackedBvh& packed = twoLevel.empty() ? flatPacked : twoLevel[0]->packed().streams;
 
-  // Pack (CPU) and re-upload (GL), timed together as upload_ms; the re-upload repeated as often as
-  // the update is, the pack once.
-  auto start = Clock::now();
-  PackedBvh packed = packer->pack(tree, soup);
-  packTriangles(packed, soup, triangleFormat);
-  const double packMs = msSince(start);
+  // The re-upload (GL), timed with the pack as upload_ms; repeated as often as the update is.
+  Clock::time_point start;
   bool recompiled = false;
   if (!gl || stackSizeFor(packed) > gl->stackSize()) {  // a deeper tree needs a longer stack: new programs
     gl = std::make_unique<GlRayTracer>(packed, s.tracer);
@@ -158,7 +204,8 @@ void TraceClip::step(int f, const std::string& renderer) {
   if (dispatches == 0) dispatches = dispatchesPerSample(minSampleMs, shortest);
   for (int i = 0; i < rc.frames; ++i) sm.trace.push_back(gl->trace(dispatches));
   std::vector<BatchHit> hits;
-  const std::vector<glm::uvec4> counts = gl->traceCounted(&hits);
+  std::vector<glm::uvec4> tlasCounts;
+  const std::vector<glm::uvec4> counts = gl->traceCounted(&hits, &tlasCounts);
   uint64_t visits = 0, tests = 0, boxTests = 0, overflows = 0, found = 0;
   for (const glm::uvec4& k : counts) {
     visits += k.x;
@@ -166,34 +213,50 @@ void TraceClip::step(int f, const std::string& renderer) {
     boxTests += k.w;
     overflows += k.z != 0u;
   }
+  uint64_t tlasVisits = 0, instanceTests = 0, tlasBoxTests = 0;
+  for (const glm::uvec4& k : tlasCounts) {
+    tlasVisits += k.x;
+    instanceTests += k.y;
+    tlasBoxTests += k.w;
+  }
+  if (!twoLevel.empty() && !s.tracer.anyHit) {  // (instance, its triangle) -> the flat scene's triangle
+    const std::vector<uint32_t> instances = gl->instances();
+    for (size_t i = 0; i < hits.size(); ++i)
+      if (hits[i].hit) hits[i].prim = twoLevel[0]->flatTriangle(instances[i], hits[i].prim);
+  }
   for (const BatchHit& h : hits) found += h.hit;
   const HitAgreement agreement = compareHits(hits, y.hits(), y.anyHit());
   overflowsTotal += overflows;
   mismatchesTotal += agreement.mismatches;
   const double n = double(std::max<size_t>(1, y.rays().rays.size()));
 
-  nlohmann::json j;
   j["frame"] = sceneFrame;
   j["rebuilt"] = rebuilt;
-  j["rotations"] = updater->rotations();
+  j["rotations"] = updater ? updater->rotations() : 0u;
   putTimes(j, "update_ms", sm.update);
   putTimes(j, "upload_ms", sm.upload);
   j["pack_ms"] = packMs;
   j["gl_upload_ms_all"] = glUpload;
   putTimes(j, "ms", sm.trace);
   j["sah_cost"] = sah0;
-  if (rc.epo) j["epo"] = endPointOverlap(tree, soup.v0, soup.v1, soup.v2, cost);
-  j["node_visits_per_ray"] = double(visits) / n;
+  // EPO is a single tree's measure: a two-level frame has none.
+  if (rc.epo) j["epo"] = tree ? nlohmann::json(endPointOverlap(*tree, soup.v0, soup.v1, soup.v2, cost)) : nlohmann::json();
+  j["node_visits_per_ray"] = double(visits + tlasVisits) / n;
   j["triangle_tests_per_ray"] = double(tests) / n;
-  j["box_tests_per_ray"] = double(boxTests) / n;
-  j["ray_cost"] = cost.traversalCost * double(visits) / n + cost.intersectionCost * double(tests) / n;
+  j["box_tests_per_ray"] = double(boxTests + tlasBoxTests) / n;
+  if (!twoLevel.empty()) {
+    j["tlas_node_visits_per_ray"] = double(tlasVisits) / n;
+    j["blas_node_visits_per_ray"] = double(visits) / n;
+    j["instance_tests_per_ray"] = double(instanceTests) / n;
+  }
+  j["ray_cost"] = cost.traversalCost * double(visits + tlasVisits) / n + cost.intersectionCost * double(tests) / n;
   j["rays"] = y.rays().rays.size();
   j["hits"] = found;
   j["hit_mismatches"] = agreement.mismatches;
   j["hit_ties"] = agreement.ties;
   j["stack_overflow_rays"] = overflows;
   j["tree_hash"] = packedTreeHash(packed);
-  j["nodes"] = tree.nodes.size();
+  j["nodes"] = tree ? tree->nodes.size() : twoLevel[0]->nodeCount();
   j["programs_compiled"] = recompiled;
   j["repeats_agree"] = agree;  // every copy of the strategy rebuilt alike and reached the same SAH
   frameList.push_back(std::move(j));
@@ -215,6 +278,10 @@ nlohmann::json TraceClip::result(const std::string& renderer, uint64_t& overflow
   clip["update_ms_total"] = total.updateMs;
   clip["upload_ms_total"] = total.uploadMs;
   clip["trace_ms_total"] = total.traceMs;
+  // Per traced frame: the sum of its parts' medians (what findings pair clips over: frame f with frame f).
+  nlohmann::json frameTotals = nlohmann::json::array();
+  for (const ClipFrameSamples& f : samples) frameTotals.push_back(medianOf(f.update) + medianOf(f.upload) + medianOf(f.trace));
+  clip["frame_total_ms"] = frameTotals;
   clip["rebuilds"] = std::count_if(frameList.begin(), frameList.end(), [](const nlohmann::json& j) { return j["rebuilt"].get<bool>(); });
   clip["hit_mismatches"] = mismatchesTotal;
   clip["stack_overflow_rays"] = overflowsTotal;

@@ -17,6 +17,13 @@
 // frame f starts from its own state after frame f - 1 (the same state for a deterministic strategy),
 // so the N times are N measurements of the same update. Copy 0's tree is the one traced.
 //
+// --update two-level[:...] (layout/two_level_update.hpp): the two-level tree is updated instead (its
+// BLASes per the policy, the TLAS rebuilt), update_ms = its BLAS and TLAS parts (blas_update_ms,
+// tlas_update_ms), upload_ms = the BLAS pack (when a BLAS changed) plus the re-upload of every stream,
+// traced by the kernel's two-level walk (v1 and bvh2-cb layouts, raw triangles). Hits are mapped back
+// to the flat scene's triangles for the comparison with Embree; node_visits_per_ray counts TLAS and
+// BLAS visits together, tlas_node_visits_per_ray and blas_node_visits_per_ray apart.
+//
 // The clip's total_ms is the sum over frames of the medians of update_ms, upload_ms and ms; its
 // interval is a bootstrap (kClipBootstrap resamples, fixed seed): every frame's samples of each part
 // are resampled independently, the medians summed, and the 2.5% and 97.5% quantiles of the sums
@@ -33,6 +40,7 @@
 #include <nlohmann/json.hpp>
 
 #include "layout/layouts.hpp"
+#include "layout/two_level_update.hpp"
 #include "render/clip_update.hpp"
 #include "render/gl_context.hpp"
 #include "render/frame_stats.hpp"
@@ -64,6 +72,7 @@ class TraceClip {
  public:
   explicit TraceClip(const TraceCommand& c);
   int frames() const { return plan.count; }
+  const TraceCommand& command() const { return c; }
   Backend backend() const { return s.setup.backend; }
   // The clip's f-th frame: update, pack + upload, warm-up and timed traces, the counted pass.
   // renderer: the current context's (it sets the sample length, resolveMinSampleMs).
@@ -78,6 +87,9 @@ class TraceClip {
   TraceSetup s;
   ClipPlan plan;
   std::unique_ptr<ClipUpdater> updater;
+  // `--update two-level...`: one updater per --update-repeats copy (copy 0's tree is traced) instead
+  // of `updater`.
+  std::vector<std::unique_ptr<TwoLevelUpdater>> twoLevel;
   const LayoutInfo* packer = nullptr;
   std::string triangleFormat;
   CostModel cost;

@@ -161,12 +161,25 @@ json traceGroup(const GroupSpec& spec) {
     runs.push_back(std::move(r));
   }
   if (!clipRuns.empty()) {
+    // The clips' A/A control (experiments/findings_clip.hpp): the first clip stepped a second time,
+    // interleaved with the others as if it were another strategy.
+    const bool control = g.clipControl;
+    if (control) clipRuns.push_back(std::make_unique<TraceClip>(clipRuns.front()->command()));
     std::vector<uint64_t> overflows;
     std::vector<json> results;
     try {
       results = traceClipsInterleaved(clipRuns, overflows);
     } catch (const std::exception& ex) {
       for (const std::string& key : clipKeys) clips[key] = {{"error", ex.what()}};
+    }
+    if (control && !results.empty()) {
+      const json& c = results.back();
+      results.front()["aa_clip_control"] = {{"frame_total_ms", c["clip"]["frame_total_ms"]},
+                                            {"total_ms", c["clip"]["total_ms"]},
+                                            {"total_ms_ci_low", c["clip"]["total_ms_ci_low"]},
+                                            {"total_ms_ci_high", c["clip"]["total_ms_ci_high"]}};
+      results.pop_back();
+      overflows.pop_back();
     }
     for (size_t k = 0; k < results.size(); ++k) {
       results[k]["session"] = g.session;

@@ -4,6 +4,8 @@
 //   result i = (found, original triangle id, floatBits(t), instance id)   [any hit: (found, 0, 0, 0)]
 //   (instance id: a two-level tree's (traversal/two_level.glsl), 0 for a flat tree or a miss)
 //   counts i = (node visits, triangle tests, stack overflow, box tests)  [COUNT_STATS only]
+//   over a two-level tree (TWO_LEVEL) two per ray: counts 2i as above for the BLAS walks, counts 2i+1 =
+//   (TLAS node visits, instance tests, 0, TLAS box tests)
 
 layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer RayBuffer { vec4 rays[]; };
@@ -33,6 +35,11 @@ void main() {
   results[i] = uvec4(found ? 1u : 0u, primitive, floatBitsToUint(found ? hit.t : tMax), instance);
 #endif
 #ifdef COUNT_STATS
+#ifdef TWO_LEVEL
+  counts[2 * i] = uvec4(g_nodeVisits, g_triTests, g_stackOverflow ? 1u : 0u, g_boxTests);
+  counts[2 * i + 1] = uvec4(g_tlasNodeVisits, g_instanceTests, 0u, g_tlasBoxTests);
+#else
   counts[i] = uvec4(g_nodeVisits, g_triTests, g_stackOverflow ? 1u : 0u, g_boxTests);
+#endif
 #endif
 }

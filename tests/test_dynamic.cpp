@@ -197,6 +197,50 @@ TEST(DynamicTrace, StaticSceneAndBadSpecAreRefused) {
   }
 }
 
+// `--update two-level`: two terrain patches moving past each other, traced through the two-level
+// walk. Embree's answers over the flat frame agree with the kernel's (hits mapped back to the flat
+// scene's triangles), the counters split TLAS and BLAS, and the rigid BLASes are built once.
+TEST(DynamicTrace, TwoLevelTracesTheClipThroughTheTwoLevelWalk) {
+  std::string text = "[clip]\nframes = 6\nfps = 10\n" + kView;
+  for (const char* keys : {"[[object.keys]]\nframe = 0\nposition = [-1, 0, 0]\n[[object.keys]]\nframe = 5\n"
+                           "position = [1, 0.2, 0]\nrotation = { axis = [0, 1, 0], angle = 90 }\n",
+                           "[[object.keys]]\nframe = 0\nposition = [1, 0, 0]\n[[object.keys]]\nframe = 5\n"
+                           "position = [-1, -0.2, 0]\nscale = [1, 2, 0.5]\n"})
+    text += kTerrain + keys;
+  const std::string scene = writeTemp("two_level.toml", text).string();
+  for (const std::string layout : {"v1", "bvh2-cb"}) {
+    SCOPED_TRACE(layout);
+    const json j = traceJson(scene + " --update two-level:tlas=lbvh --layout " + layout + " --update-repeats 2");
+    ASSERT_EQ(j["frames"].size(), 6u);
+    EXPECT_EQ(j["clip"]["hit_mismatches"], 0);
+    EXPECT_EQ(j["clip"]["rebuilds"], 1);  // frame 0 builds the BLASes; later frames only the TLAS
+    for (const json& f : j["frames"]) {
+      EXPECT_EQ(f["instances"], 2);
+      EXPECT_EQ(f["blases"], 1);  // one rest mesh, shared
+      EXPECT_GT(f["hits"].get<int>(), 100);
+      EXPECT_TRUE(f["repeats_agree"].get<bool>());
+      const double tlas = f["tlas_node_visits_per_ray"].get<double>(), blas = f["blas_node_visits_per_ray"].get<double>();
+      EXPECT_GE(tlas, 1.0);  // every ray visits the TLAS root
+      EXPECT_GT(blas, 0.0);
+      EXPECT_GT(f["instance_tests_per_ray"].get<double>(), 0.0);
+      EXPECT_DOUBLE_EQ(f["node_visits_per_ray"].get<double>(), tlas + blas);
+      EXPECT_NEAR(f["update_ms"].get<double>(), f["blas_update_ms"].get<double>() + f["tlas_update_ms"].get<double>(),
+                  1e-6 + 0.5 * f["update_ms"].get<double>());  // medians of sums vs sums of medians (2 copies)
+    }
+  }
+  // A static BLAS under a deforming object, and a layout or triangle format without a two-level walk.
+  const std::string wave = clipScene("two_level_wave.toml", 3, "kind = \"wave\"\namplitude = 0.2\nwavelength = 1\n");
+  clitest::Result r = run("trace " + wave + " --update two-level --frames 1 --warmup 0");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("deforms"), std::string::npos) << r.err;
+  EXPECT_EQ(traceJson(wave + " --update two-level:blas=refit")["clip"]["hit_mismatches"], 0);
+  for (const std::string args : {" --layout bvh4", " --triangles indexed"}) {
+    r = run("trace " + scene + " --update two-level --frames 1 --warmup 0" + args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+    EXPECT_NE(r.err.find("--update two-level"), std::string::npos) << r.err;
+  }
+}
+
 // The `updates` axis: every value is a spec parseUpdateSpec accepts, checked at load; a bad one names
 // the file, its line and the key.
 std::string configError(const std::string& text) {

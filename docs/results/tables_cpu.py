@@ -314,6 +314,17 @@ def cpu_dynamic():
     runs = [r for r in rows if r.get("status") == "ok"]
     if len(runs) != len(rows):
         raise DataError(f"{rel(cpath)}: {len(rows) - len(runs)} runs did not finish")
+    # Clip verdicts (findings.json): each strategy against the baseline strategy of its builder, on total
+    # clip time paired over frames, called beyond the clip group's A/A band.
+    fpath, findings = read_json(DYN, "findings.json")
+    verdicts = {}
+    for c in findings.get("comparisons", []):
+        if c.get("axis") == "update" and c.get("interval_over") == "clip frames":
+            verdicts[c.get("a")] = c
+    bands = {}
+    for n in findings.get("noise", []):
+        if n.get("control") == "clip":
+            bands[n.get("scene")] = n
     out = []
     scenes = list(dict.fromkeys(r.get("scene") for r in runs))
     for s in scenes:
@@ -331,15 +342,33 @@ def cpu_dynamic():
         for r, clip, frames, rpath in mine:
             first, last = num(frames[0], "ray_cost", rpath), num(frames[-1], "ray_cost", rpath)
             peak = max(num(f, "ray_cost", rpath) for f in frames)
+            c = verdicts.get(r.get("key"))
+            if c is None or c.get("ci_low") is None:
+                vs = "baseline" if r.get("update") == findings.get("baselines", {}).get("update") else "–"
+            else:
+                vs = (with_ci(num(c, "ratio", fpath), num(c, "ci_low", fpath), num(c, "ci_high", fpath),
+                              lambda x: f"{x:.2f}") + f" {c.get('verdict')}")
             out.append([str(s), f"`{r.get('update')}`", str(r.get("builder")),
                         with_ci(num(clip, "total_ms", rpath), num(clip, "total_ms_ci_low", rpath),
-                                num(clip, "total_ms_ci_high", rpath), lambda x: f"{x:.0f}"),
+                                num(clip, "total_ms_ci_high", rpath), lambda x: f"{x:.0f}"), vs,
                         f"{num(clip, 'update_ms_total', rpath):.0f}", f"{num(clip, 'upload_ms_total', rpath):.0f}",
                         f"{num(clip, 'trace_ms_total', rpath):.0f}", str(clip.get("rebuilds")),
                         f"{first:.1f}", f"{last:.1f}", f"{last / first:.2f}", f"{peak:.1f}"])
-    header = ["scene", "update", "builder", "clip ms [95%]", "update ms", "upload ms", "trace ms", "rebuilds",
-              "ray cost, frame 0", "ray cost, last frame", "last / frame 0", "peak ray cost"]
+    header = ["scene", "update", "builder", "clip ms [95%]", "vs rebuild [95%], verdict", "update ms", "upload ms",
+              "trace ms", "rebuilds", "ray cost, frame 0", "ray cost, last frame", "last / frame 0", "peak ray cost"]
     lines = table(header, out)
+    band_text = "; ".join(f"{sc} {num(n, 'ratio', fpath):.3f} [{num(n, 'ci_low', fpath):.3f}, {num(n, 'ci_high', fpath):.3f}]"
+                          for sc, n in bands.items())
+    mixed = findings.get("clip_mixed_summary") or {}
+    lines += ["", "Verdicts: each clip's total over the same builder's `rebuild` clip, paired over the traced frames "
+              "(bootstrap over frames; experiments/findings_clip.hpp), called `faster`/`slower` only when the "
+              "interval clears the band of the scene's A/A control (its first clip traced twice in the same "
+              f"lockstep) after the Benjamini-Hochberg adjustment. A/A controls: {band_text or 'none'}. "
+              "A mixed strategy (refit+rebuild:K, refit+rebuild:sah>R, refit+rotate) beats both pure refit and "
+              "pure rebuild (both intervals below 1) on: "
+              f"{', '.join(mixed.get('scenes_beats_both', [])) or 'no scene'}; beyond the A/A band on: "
+              f"{', '.join(mixed.get('scenes_beats_both_beyond_band', [])) or 'no scene'} "
+              "(findings.json `clip_mixed`)."]
     r0 = runs[0]
     lines += ["", "Each row is one clip traced frame by frame (docs/animation.md): the traced frames' update, upload "
               "(pack + GL re-upload) and trace medians summed; the interval is the bootstrap over each frame's "
