@@ -65,7 +65,9 @@ std::string settingError(const std::string& what, const std::string& value, cons
   }
   if (what == "update") {  // any spec the strategies take, not only those U cycles through
     try {
-      parseUpdateSpec(value);
+      // The renderer draws one tree: a two-level tree is traced by `bvhlab trace --update` only.
+      if (parseUpdateSpec(value).name == "two-level")
+        return "update '" + value + "': the viewer draws a single tree; trace two-level clips with `bvhlab trace --update`";
       return "";
     } catch (const std::invalid_argument& e) {
       return e.what();

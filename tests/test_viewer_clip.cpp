@@ -119,6 +119,10 @@ TEST(ViewClip, RefusesAStaticSceneABadSpecAndAFramePastTheClip) {
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.err.find(past + ":1: clip_frame 12 is past the clip (12 frames)"), std::string::npos) << r.err;
 
+  r = view(*prefix, scene + " --update two-level --frames 1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("single tree"), std::string::npos) << r.err;
+
   const std::string bad = writeTemp("bad.txt", "1 set update sometimes\n").string();
   r = view(*prefix, scene + " --script " + bad + " --frames 2");
   EXPECT_NE(r.code, 0);
