@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "layout/layouts.hpp"
+#include "traversal/kernel_bvh2cb_aila_laine.hpp"
 #include "traversal/kernel_bvh2cb_stack.hpp"
 #include "traversal/kernel_cwbvh_groups.hpp"
 #include "traversal/kernel_cwbvh_stack.hpp"
@@ -50,6 +51,9 @@ const std::vector<KernelInfo>& bvh2cbKernels() {
       {"bvh2cb-stack-ordered",
        "explicit stack over both child boxes of one record, nearer child first, leaves walked from the parent's slot",
        "kernel_bvh2cb_stack.glsl", "bvh2-cb", BVHLAB_KERNEL_MIRRORS(glsl::bvh2cb_stack)},
+      {"bvh2cb-aila-laine",
+       "Aila & Laine 2009/2012: while-while loop, postponed leaves, persistent threads in the compute path",
+       "kernel_bvh2cb_aila_laine.glsl", "bvh2-cb", BVHLAB_KERNEL_MIRRORS(glsl::bvh2cb_aila_laine), true},
   };
   return table;
 }

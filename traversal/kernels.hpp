@@ -33,6 +33,9 @@ struct KernelInfo {
   // Robustness::testsIndex(); closest(r) / any(r) pick the one a variant runs.
   std::array<TraceClosestFn, 4> closestByTests;
   std::array<TraceAnyFn, 4> anyByTests;
+  // The compute path (shaders/trace_rays.glsl) runs this kernel with persistent threads: a fixed number
+  // of invocations taking batches of rays from an atomic counter (render/ray_tracer_gl.cpp).
+  bool persistentThreads = false;
   TraceClosestFn closest(Robustness r) const { return closestByTests[size_t(r.testsIndex())]; }
   TraceAnyFn any(Robustness r) const { return anyByTests[size_t(r.testsIndex())]; }
 };
