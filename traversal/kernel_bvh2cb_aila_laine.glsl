@@ -81,7 +81,6 @@ bool KERNEL_WALK(Ray ray, int root, float tMin, float tMax, bool anyHit, out Mes
       bool hitA = intersectAabb(ray.origin, invDir, aMin, aMax, tMin, hit.t, aEnter);
       g_boxTests++;
       bool hitB = intersectAabb(ray.origin, invDir, bMin, bMax, tMin, hit.t, bEnter);
-      bool pop = !hitA && !hitB;
       if (hitA && hitB) {
         if (sp == BVH_STACK_SIZE) {
           g_stackOverflow = true;  // stop: the result so far is incomplete, the flag says so
@@ -96,19 +95,24 @@ bool KERNEL_WALK(Ray ray, int root, float tMin, float tMax, bool anyHit, out Mes
         sp++;
         link = bFirst ? bLink : aLink;
         count = bFirst ? bCount : aCount;
-      } else {
+      } else if (hitA || hitB) {
         link = hitA ? aLink : bLink;
         count = hitA ? aCount : bCount;
+      } else {  // neither: pop (entries entered beyond the closest hit would fail their box test now: dropped)
+        while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
+        if (sp == 0) {
+          count = kAlDone;
+        } else {
+          sp--;
+          link = stackLink[sp];
+          count = stackCount[sp];
+        }
       }
-      // The first leaf: postpone it and go on with the next entry.
-      if (!pop && count != kBvh2cbInner && leafCount == kAlDone) {
+      // The first leaf (reached or popped): postpone it and go on with the next entry.
+      if (count < kAlDone && leafCount == kAlDone) {
         searchingLeaf = false;
         leafLink = link;
         leafCount = count;
-        pop = true;
-      }
-      // Pop: entries entered beyond the closest hit would fail their box test now and are dropped.
-      if (pop) {
         while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
         if (sp == 0) {
           count = kAlDone;

@@ -51,7 +51,6 @@ inline bool traverseBvh2cbAilaLaine(const Storage& s, Ray ray, int root, float t
       bool hitA = Tests::intersectAabb(ray.origin, invDir, aMin, aMax, tMin, hit.t, aEnter);
       c.boxTests++;
       bool hitB = Tests::intersectAabb(ray.origin, invDir, bMin, bMax, tMin, hit.t, bEnter);
-      bool pop = !hitA && !hitB;
       if (hitA && hitB) {
         if (sp == s.stackSize) {
           c.stackOverflow = true;
@@ -67,17 +66,28 @@ inline bool traverseBvh2cbAilaLaine(const Storage& s, Ray ray, int root, float t
         c.stackBytes += kStackEntryBytes;
         link = bFirst ? bLink : aLink;
         count = bFirst ? bCount : aCount;
-      } else {
+      } else if (hitA || hitB) {
         link = hitA ? aLink : bLink;
         count = hitA ? aCount : bCount;
+      } else {  // neither: pop (entries entered beyond the closest hit would fail their box test now: dropped)
+        while (sp > 0 && stackEnter[sp - 1] > hit.t) {
+          sp--;
+          c.stackBytes += kStackEntryBytes;
+        }
+        if (sp == 0) {
+          count = kAlDone;
+        } else {
+          sp--;
+          c.stackBytes += kStackEntryBytes;
+          link = stackLink[sp];
+          count = stackCount[sp];
+        }
       }
-      if (!pop && count != kBvh2cbInner && leafCount == kAlDone) {
+      // The first leaf (reached or popped): postpone it and go on with the next entry.
+      if (count < kAlDone && leafCount == kAlDone) {
         searchingLeaf = false;
         leafLink = link;
         leafCount = count;
-        pop = true;
-      }
-      if (pop) {
         while (sp > 0 && stackEnter[sp - 1] > hit.t) {
           sp--;
           c.stackBytes += kStackEntryBytes;
