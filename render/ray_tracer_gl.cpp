@@ -40,7 +40,7 @@ std::vector<BatchHit> decode(const std::vector<glm::uvec4>& raw, bool anyHit, co
 
 GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& options)
     : options_(options), layout_(packed.layout), triangleFormat_(packed.triangleFormat), stack_(stackSizeFor(packed)),
-      persistent_(findKernel(packed.layout, options.kernel).persistentThreads) {
+      persistent_(persistentThreadsOn(findKernel(packed.layout, options.kernel))) {
   const int stack = stack_;
   const std::string& layout = packed.layout;
   timed_ = compileComputeProgram(

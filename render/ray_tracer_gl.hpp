@@ -60,7 +60,7 @@ class GlRayTracer {
   unsigned timed_ = 0, counted_ = 0;
   unsigned streams_[4] = {0, 0, 0, 0}, streamBuffers_[4] = {0, 0, 0, 0};  // node, triangle, attribute, vertex
   unsigned rayBuffer_ = 0, resultBuffer_ = 0, countBuffer_ = 0;
-  bool persistent_ = false;      // the kernel's KernelInfo::persistentThreads
+  bool persistent_ = false;      // persistentThreadsOn(the kernel) (traversal/kernels.hpp)
   unsigned rayCounter_ = 0;      // trace_rays.glsl's nextRay (persistent threads)
   size_t count_ = 0;
   std::vector<float> tMax_;  // per ray, for any-hit answers
