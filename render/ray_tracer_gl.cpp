@@ -1,5 +1,6 @@
 #include "render/ray_tracer_gl.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <chrono>
 #include <stdexcept>
@@ -16,6 +17,10 @@ namespace bvhlab {
 namespace {
 
 constexpr GLuint kLocalSize = 64;  // trace_rays.glsl's local_size_x
+// Work groups of a persistent-threads dispatch: 4096 x 64 = 262,144 invocations, about the resident
+// thread count of the largest GPUs in use (an H100 or H200: 132 SMs x 2,048 threads = 270,336), so
+// every resident slot gets an invocation and a group launched late finds the rays taken and exits.
+constexpr GLuint kPersistentGroups = 4096;
 
 std::vector<BatchHit> decode(const std::vector<glm::uvec4>& raw, bool anyHit, const std::vector<float>& tMax) {
   std::vector<BatchHit> hits(raw.size());
@@ -34,7 +39,8 @@ std::vector<BatchHit> decode(const std::vector<glm::uvec4>& raw, bool anyHit, co
 }  // namespace
 
 GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& options)
-    : options_(options), layout_(packed.layout), triangleFormat_(packed.triangleFormat), stack_(stackSizeFor(packed)) {
+    : options_(options), layout_(packed.layout), triangleFormat_(packed.triangleFormat), stack_(stackSizeFor(packed)),
+      persistent_(persistentThreadsOn(findKernel(packed.layout, options.kernel))) {
   const int stack = stack_;
   const std::string& layout = packed.layout;
   timed_ = compileComputeProgram(
@@ -52,6 +58,9 @@ GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& option
   glCreateBuffers(1, &rayBuffer_);
   glCreateBuffers(1, &resultBuffer_);
   glCreateBuffers(1, &countBuffer_);
+  glCreateBuffers(1, &rayCounter_);
+  const GLuint zero = 0;
+  glNamedBufferData(rayCounter_, sizeof(GLuint), &zero, GL_DYNAMIC_DRAW);
   checkGl("GlRayTracer setup");
 }
 
@@ -79,8 +88,8 @@ GlRayTracer::~GlRayTracer() {
   glDeleteProgram(counted_);
   glDeleteTextures(4, streams_);
   glDeleteBuffers(4, streamBuffers_);
-  GLuint buffers[] = {rayBuffer_, resultBuffer_, countBuffer_};
-  glDeleteBuffers(3, buffers);
+  GLuint buffers[] = {rayBuffer_, resultBuffer_, countBuffer_, rayCounter_};
+  glDeleteBuffers(4, buffers);
 }
 
 void GlRayTracer::setRays(const std::vector<BatchRay>& rays) {
@@ -105,10 +114,24 @@ void GlRayTracer::issue(unsigned program) {
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, rayBuffer_);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, resultBuffer_);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, countBuffer_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, rayCounter_);
+  dispatchOnce();
+}
+
+void GlRayTracer::dispatchOnce() {
+  if (persistent_) {
+    // The counter the previous dispatch advanced goes back to 0 once that dispatch is done with it.
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    const GLuint zero = 0;
+    glClearNamedBufferData(rayCounter_, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  }
   glDispatchCompute(groups(), 1, 1);
 }
 
-unsigned GlRayTracer::groups() const { return unsigned((count_ + kLocalSize - 1) / kLocalSize); }
+unsigned GlRayTracer::groups() const {
+  const unsigned all = unsigned((count_ + kLocalSize - 1) / kLocalSize);
+  return persistent_ ? std::min(all, kPersistentGroups) : all;
+}
 
 double GlRayTracer::dispatch(unsigned program) {
   const auto start = std::chrono::steady_clock::now();
@@ -127,7 +150,7 @@ double GlRayTracer::trace(int dispatches) {
     // Each dispatch writes the same result buffer: the barrier orders them, so the time is the sum
     // of whole dispatches, not of overlapping ones.
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-    glDispatchCompute(groups(), 1, 1);
+    dispatchOnce();
   }
   glFinish();
   checkGl("ray dispatches");

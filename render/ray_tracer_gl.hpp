@@ -58,6 +58,7 @@ class GlRayTracer {
 
  private:
   void issue(unsigned program);  // binds the program and buffers, dispatches (not waited for)
+  void dispatchOnce();           // one dispatch of the bound program (the ray counter zeroed first)
   unsigned groups() const;       // work groups of one dispatch
   double dispatch(unsigned program);
   void upload(const PackedBvh& packed);
@@ -67,6 +68,8 @@ class GlRayTracer {
   unsigned timed_ = 0, counted_ = 0;
   unsigned streams_[4] = {0, 0, 0, 0}, streamBuffers_[4] = {0, 0, 0, 0};  // node, triangle, attribute, vertex
   unsigned rayBuffer_ = 0, resultBuffer_ = 0, countBuffer_ = 0;
+  bool persistent_ = false;      // persistentThreadsOn(the kernel) (traversal/kernels.hpp)
+  unsigned rayCounter_ = 0;      // trace_rays.glsl's nextRay (persistent threads)
   size_t count_ = 0;
   std::vector<float> tMax_;  // per ray, for any-hit answers
 };

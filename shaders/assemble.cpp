@@ -251,6 +251,11 @@ AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Ro
   std::string defines;
   if (anyHit) defines += "#define ANY_HIT 1\n";
   if (countStats) defines += "#define COUNT_STATS 1\n";
+  if (persistentThreadsOn(findKernel(layout, kernel))) {
+    // trace_rays.glsl's persistent threads; the subgroup batch fetch where the extension is available
+    // (its macro is defined only then: the GLSL falls back to one ray per atomicAdd).
+    defines += "#define PERSISTENT_THREADS 1\n#extension GL_KHR_shader_subgroup_ballot : enable\n";
+  }
   AssembledShader s = assembleTraversal(kernel, storage, robust, bvhStackSize, defines, layout, triangles, twoLevel);
   s.modules.push_back(ShaderModule{"trace_rays.glsl", s.modules.back().firstLine + s.modules.back().lineCount,
                                    0});

@@ -207,7 +207,7 @@ TEST(BytesFetched, ConsistentWithTheOtherCounters) {
     if (kernel == "stack-unordered") return {2 * kTexelBytes, 0, 0, 4};
     if (kernel == "stack-ordered") return {2 * kTexelBytes, 0, 0, 8};
     if (kernel == "stackless") return {2 * kTexelBytes, 0, 0, 0};
-    if (kernel == "bvh2cb-stack-ordered") return {4 * kTexelBytes, 0, 0, 12};
+    if (kernel == "bvh2cb-stack-ordered" || kernel == "bvh2cb-aila-laine") return {4 * kTexelBytes, 0, 0, 12};
     if (kernel == "bvh4-stack-ordered" || kernel == "bvh8-stack-ordered") return {0, 2 * kTexelBytes, 0, 12};
     if (kernel == "cwbvh-stack-ordered") return {5 * kTexelBytes, 0, kTexelBytes, 12};
     if (kernel == "cwbvh-groups") return {5 * kTexelBytes, 0, kTexelBytes, 8};

@@ -199,8 +199,9 @@ TEST(LayoutKernels, Bvh2cbHardCasesLeakNothingInWatertightMode) {
   EXPECT_GT(expectHardCasesAnsweredAsV1("bvh2-cb"), 100u);
 }
 
-// The bvh2-cb GLSL kernel gives its C++ mirror's answer and counters (box tests too) per ray, closest and any hit,
-// on a builder's tree and on a tree whose root is a leaf; v1's stack-ordered alongside as a control.
+// Every bvh2-cb GLSL kernel gives its C++ mirror's answer and counters (box tests too) per ray, closest and any
+// hit, on a builder's tree and on a tree whose root is a leaf (bvh2cb-aila-laine through the compute path's
+// persistent threads); v1's kernels alongside as a control.
 TEST(LayoutKernelsGlsl, EqualTheMirrorPerRay) {
   auto ctx = contextOrNull();
   if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
@@ -224,9 +225,11 @@ TEST(LayoutKernelsGlsl, EqualTheMirrorPerRay) {
         if (cs.packed.layout == "v1" && robust == Robustness::Fast) continue;  // test_trace covers v1
         SCOPED_TRACE(cs.name + (anyHit ? " any" : " closest") + " / " + robustnessName(robust));
         // expectGlslEqualsMirror (layout_test_util.hpp): answer, visits, triangle and box tests per ray.
-        const size_t found =
-            expectGlslEqualsMirror(cs.packed, findKernel(cs.packed.layout, ""), cs.rays, anyHit, robust, cs.storage);
-        EXPECT_GT(found, cs.rays.size() / 10) << "too few hits for the comparison to mean much";
+        for (const KernelInfo& k : kernelsFor(cs.packed.layout)) {  // bvh2-cb: stack-ordered and aila-laine
+          SCOPED_TRACE(k.name);
+          const size_t found = expectGlslEqualsMirror(cs.packed, k, cs.rays, anyHit, robust, cs.storage);
+          EXPECT_GT(found, cs.rays.size() / 10) << "too few hits for the comparison to mean much";
+        }
       }
 }
 

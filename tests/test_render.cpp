@@ -189,12 +189,12 @@ TEST(Render, ReportBranchingDiffersFromFullOnlyWhereGlassIs) {
   EXPECT_LE(m.maxDiff, kMirrorMax);
 }
 
-// cwbvh (8-wide compressed nodes, 8-bit conservative child boxes) packs the same builder's tree, so the
-// same triangles sit in its leaves as in v1's: every ray finds the same closest hit, and the images are
+// cwbvh (8-wide compressed nodes, 8-bit conservative child boxes) and bvh2-cb (both child boxes in the
+// parent) pack the same builder's tree, so the same triangles sit in their leaves as in v1's: every ray finds the same closest hit, and the images are
 // byte-identical (the claim of docs/layouts.md#cwbvh). Checked on the report scene (analytic objects,
 // reflection and refraction rays through the bunny) and on the bare bunny (`bvhlab render FILE`'s framing).
 // Should a tie at equal distance ever resolve differently, the failure names the differing pixels.
-TEST(Render, CwbvhImageIsByteIdenticalToV1s) {
+TEST(Render, CwbvhAndBvh2cbImagesAreByteIdenticalToV1s) {
   BVHLAB_REQUIRE_DATASETS();
   for (const std::string which : {"report", "bunny"}) {
     SCOPED_TRACE(which);
@@ -204,7 +204,9 @@ TEST(Render, CwbvhImageIsByteIdenticalToV1s) {
     };
     const std::unique_ptr<PreparedScene> v1 = prepareScene(load(), "sah-binned", BuildOptions{}, "v1");
     const std::unique_ptr<PreparedScene> cw = prepareScene(load(), "sah-binned", BuildOptions{}, "cwbvh");
+    const std::unique_ptr<PreparedScene> cb = prepareScene(load(), "sah-binned", BuildOptions{}, "bvh2-cb");
     ASSERT_EQ(cw->soup.size(), v1->soup.size());
+    ASSERT_EQ(cb->soup.size(), v1->soup.size());
     ASSERT_GT(cw->soup.size(), 70000u) << "the bunny's triangles must be in the scene";
     const FrameOptions f = smallFrame(v1->scene, 160, 90);
     size_t meshPixels = 0;
@@ -216,23 +218,25 @@ TEST(Render, CwbvhImageIsByteIdenticalToV1s) {
       if (o.countStats)
         for (size_t i = 0; i < a.rgba.size() / 4; ++i)
           meshPixels += statsPrimaryIdPlusOne(a.stats[i]) > v1->data.objects.size();  // ids past the analytic objects
-      for (const KernelInfo& cwKernel : kernelsFor("cwbvh")) {  // every cwbvh kernel
+      for (const PreparedScene* other : {cw.get(), cb.get()})
+      for (const KernelInfo& cwKernel : kernelsFor(other->packed.layout)) {  // every cwbvh and bvh2-cb kernel
         SCOPED_TRACE(cwKernel.name);
         ShaderOptions oc = o;
-        oc.layout = "cwbvh";
+        oc.layout = other->packed.layout;
         oc.kernel = cwKernel.name;
-        oc.bvhStackSize = stackSizeFor(cw->packed);
-        const Rendered b = renderGpu(*cw, oc, f);
+        oc.bvhStackSize = stackSizeFor(other->packed);
+        const Rendered b = renderGpu(*other, oc, f);
         ASSERT_EQ(a.rgba.size(), b.rgba.size());
         size_t differing = 0;
         for (size_t i = 0; i < a.rgba.size() / 4; ++i) {
           bool differs = std::memcmp(&a.rgba[4 * i], &b.rgba[4 * i], 4) != 0;
           if (o.countStats) differs |= statsPrimaryIdPlusOne(a.stats[i]) != statsPrimaryIdPlusOne(b.stats[i]);
           if (differs && ++differing <= 3)
-            ADD_FAILURE() << viewName(view) << " pixel (" << i % 160 << "," << i / 160 << ") differs between v1 and cwbvh";
+            ADD_FAILURE() << viewName(view) << " pixel (" << i % 160 << "," << i / 160 << ") differs between v1 and " << oc.layout;
         }
-        std::printf("[ measured ] %s, %s view, %s, 160x90: %zu of %zu pixels differ between v1 and cwbvh\n",
-                    which.c_str(), viewName(view), cwKernel.name.c_str(), differing, a.rgba.size() / 4);
+        std::printf("[ measured ] %s, %s view, %s, 160x90: %zu of %zu pixels differ between v1 and %s\n",
+                    which.c_str(), viewName(view), cwKernel.name.c_str(), differing, a.rgba.size() / 4,
+                    oc.layout.c_str());
         EXPECT_EQ(differing, 0u) << viewName(view);
       }
     }

@@ -1,11 +1,15 @@
 #include "traversal/kernels.hpp"
 
+#include <cstdlib>
+#include <cstring>
+
 #include <algorithm>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
 
 #include "layout/layouts.hpp"
+#include "traversal/kernel_bvh2cb_aila_laine.hpp"
 #include "traversal/kernel_bvh2cb_stack.hpp"
 #include "traversal/kernel_cwbvh_groups.hpp"
 #include "traversal/kernel_cwbvh_stack.hpp"
@@ -50,6 +54,9 @@ const std::vector<KernelInfo>& bvh2cbKernels() {
       {"bvh2cb-stack-ordered",
        "explicit stack over both child boxes of one record, nearer child first, leaves walked from the parent's slot",
        "kernel_bvh2cb_stack.glsl", "bvh2-cb", BVHLAB_KERNEL_MIRRORS(glsl::bvh2cb_stack)},
+      {"bvh2cb-aila-laine",
+       "Aila & Laine 2009/2012: while-while loop, postponed leaves (persistent threads in the compute path with BVHLAB_PERSISTENT_THREADS=1)",
+       "kernel_bvh2cb_aila_laine.glsl", "bvh2-cb", BVHLAB_KERNEL_MIRRORS(glsl::bvh2cb_aila_laine), true},
   };
   return table;
 }
@@ -149,6 +156,11 @@ int stackSizeFor(const PackedBvh& packed) {
   if (bound > uint64_t(std::numeric_limits<int>::max()))
     throw std::invalid_argument("stackSizeFor: wide tree depth " + std::to_string(depth) + " is too large");
   return int(bound);
+}
+
+bool persistentThreadsOn(const KernelInfo& kernel) {
+  const char* on = std::getenv("BVHLAB_PERSISTENT_THREADS");
+  return kernel.persistentThreads && on && std::strcmp(on, "1") == 0;
 }
 
 }  // namespace bvhlab

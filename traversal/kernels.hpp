@@ -33,11 +33,22 @@ struct KernelInfo {
   // Robustness::testsIndex(); closest(r) / any(r) pick the one a variant runs.
   std::array<TraceClosestFn, 4> closestByTests;
   std::array<TraceAnyFn, 4> anyByTests;
+  // The kernel is designed for persistent threads in the compute path (shaders/trace_rays.glsl): a
+  // fixed number of invocations taking batches of rays from an atomic counter (render/ray_tracer_gl.cpp).
+  // They are used only where persistentThreadsOn says so.
+  bool persistentThreads = false;
   TraceClosestFn closest(Robustness r) const { return closestByTests[size_t(r.testsIndex())]; }
   TraceAnyFn any(Robustness r) const { return anyByTests[size_t(r.testsIndex())]; }
 };
 
 // The kernels of layout v1, the default layout (what every v1 test and sweep iterates over).
+// Whether the compute path runs `kernel` with persistent threads: its KernelInfo::persistentThreads and
+// the environment variable BVHLAB_PERSISTENT_THREADS=1. Off by default: on llvmpipe (Mesa 22.3, LLVM
+// 15) the persistent loop returned 5 to 17 of 65,536 diffuse bunny rays as misses that Embree hits,
+// with this kernel and with bvh2cb-stack-ordered alike, in every form of the loop tried (subgroup batch
+// fetch, one atomicAdd per ray, a for loop without break), while the same kernels with one invocation
+// per ray miss none. Until a GPU shows the loop loses no ray (trace's hit_mismatches), it is opt-in.
+bool persistentThreadsOn(const KernelInfo& kernel);
 const std::vector<KernelInfo>& kernels();
 // The kernels that walk `layout`; throws std::invalid_argument naming the valid layouts.
 const std::vector<KernelInfo>& kernelsFor(const std::string& layout);

@@ -28,6 +28,7 @@ const std::vector<std::pair<std::string, std::array<TwoLevelMirror, 4>>>& table(
       {"stack-ordered", mirrors<OrderedWalk>()},
       {"stackless", mirrors<StacklessWalk>()},
       {"bvh2cb-stack-ordered", mirrors<Bvh2cbWalk>()},
+      {"bvh2cb-aila-laine", mirrors<Bvh2cbAilaLaineWalk>()},
   };
   return t;
 }

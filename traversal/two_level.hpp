@@ -7,6 +7,7 @@
 #include <string>
 
 #include "layout/pack_two_level.hpp"
+#include "traversal/kernel_bvh2cb_aila_laine.hpp"
 #include "traversal/kernel_bvh2cb_stack.hpp"
 #include "traversal/kernel_stack_ordered.hpp"
 #include "traversal/kernel_stack_unordered.hpp"
@@ -43,6 +44,7 @@ BVHLAB_TWO_LEVEL_WALK(OrderedWalk, stack_ordered, traverseOrdered)
 BVHLAB_TWO_LEVEL_WALK(UnorderedWalk, stack_unordered, traverseUnordered)
 BVHLAB_TWO_LEVEL_WALK(StacklessWalk, stackless, traverseStackless)
 BVHLAB_TWO_LEVEL_WALK(Bvh2cbWalk, bvh2cb_stack, traverseBvh2cb)
+BVHLAB_TWO_LEVEL_WALK(Bvh2cbAilaLaineWalk, bvh2cb_aila_laine, traverseBvh2cbAilaLaine)
 #undef BVHLAB_TWO_LEVEL_WALK
 
 // instanceRay of two_level.glsl.
@@ -129,7 +131,7 @@ struct TwoLevelMirror {
 };
 
 // Whether `kernel` has a two-level walk (the assembler refuses the others): the v1 kernels and
-// bvh2cb-stack-ordered.
+// the bvh2-cb kernels.
 bool hasTwoLevelWalk(const std::string& kernel);
 // The mirror of `kernel` over a two-level tree with robustness r's tests. Throws
 // std::invalid_argument for a kernel without a two-level walk, naming those with one.
