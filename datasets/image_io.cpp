@@ -19,6 +19,11 @@ namespace {
 
 // Guards against absurd headers (a 2^28-pixel RGBA32F image is already 4 GiB).
 constexpr int64_t kMaxPixels = int64_t(1) << 28;
+// A tiled file's tile may cover up to the whole image, or up to this many pixels (256x256, more than
+// the tile sizes writers use) for a small image. A larger tile holds only pixels that do not exist,
+// yet readers allocate buffers for it: a fuzzed 20x18 EXR declaring 8,257,552x16 tiles made OpenEXR
+// and OpenImageIO allocate 14 GB (tests/fuzz/regressions/exr/).
+constexpr int64_t kMaxSmallImageTilePixels = int64_t(1) << 16;
 
 [[noreturn]] void fail(const fs::path& path, const std::string& what) {
   throw InputError(path.string() + ": " + what);
@@ -49,6 +54,11 @@ std::unique_ptr<OIIO::ImageInput> openInput(const fs::path& path) {
   if (spec.depth > 1) fail(path, "volume images are not supported");
   if (int64_t(spec.width) * spec.height > kMaxPixels)
     fail(path, "image too large (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) + ")");
+  const int64_t tilePixels = int64_t(std::max(spec.tile_width, 0)) * std::max(spec.tile_height, 1);
+  if (tilePixels > std::max(int64_t(spec.width) * spec.height, kMaxSmallImageTilePixels))
+    fail(path, "tiles larger than the image (" + std::to_string(spec.tile_width) + "x" +
+                   std::to_string(spec.tile_height) + " tiles of a " + std::to_string(spec.width) + "x" +
+                   std::to_string(spec.height) + " image)");
   return in;
 }
 

@@ -112,6 +112,20 @@ INSTANTIATE_TEST_SUITE_P(ImageAndJsonTargets, FuzzSeeds,
                          [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
 
 // Every folder is a known parser, so a misspelt folder cannot silently replay nothing.
+// The EXR whose tiles were larger than its image is refused by name, before any pixel is read (not
+// merely read by a machine with the memory for it).
+TEST(FuzzRegressionsExr, TilesLargerThanTheImageAreRefusedNamingBothSizes) {
+  const fs::path file = kRegressions / "exr/tiles-of-8257552x16-in-a-20x18-image-allocated-14gb.exr";
+  try {
+    loadImage(file);
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("tiles larger than the image (8257552x16 tiles of a 20x18 image)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(FuzzRegressionsLayout, FoldersNameKnownParsers) {
   const auto& names = fuzz::parserNames();
   for (const auto& e : fs::directory_iterator(kRegressions)) {
