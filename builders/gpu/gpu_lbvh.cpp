@@ -5,36 +5,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "builders/gpu/gpu_build_steps.hpp"
 #include "datasets/scene.hpp"  // InputError
 #include "render/gl_context.hpp"
 
 namespace bvhlab::gpubuild {
 
-namespace {
-
-constexpr uint32_t kGroup = 256;  // local_size_x of the per-primitive and per-node passes
 static_assert(sizeof(Aabb) == 24 && sizeof(glm::vec3) == 12, "boxes and centroids are uploaded as they lie");
-
-uint32_t groupsFor(uint64_t items) { return uint32_t((items + kGroup - 1) / kGroup); }
-
-template <class T>
-std::vector<T> download(GLuint buffer, size_t count) {
-  std::vector<T> out(count);
-  if (count) glGetNamedBufferSubData(buffer, 0, GLsizeiptr(count * sizeof(T)), out.data());
-  return out;
-}
-
-// The buffers of one build, deleted with it; the storage-buffer slots the passes bound are cleared
-// first, so that no binding names a deleted buffer afterwards.
-struct Buffers {
-  std::array<GLuint, 15> ids{};
-  ~Buffers() {
-    for (GLuint slot = 0; slot < 6; ++slot) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, 0);
-    glDeleteBuffers(GLsizei(ids.size()), ids.data());
-  }
-};
-
-}  // namespace
 
 double GpuPhaseTimes::totalMs() const {
   double sum = 0.0;
@@ -55,19 +32,13 @@ GpuLbvh::GpuLbvh(std::optional<GpuLimits> limits)
 void GpuLbvh::checkLimits(size_t n) const {
   const uint64_t nodes = 2 * uint64_t(n) - 1;
   // The largest storage buffers a build binds, by what they hold.
-  const std::pair<const char*, uint64_t> buffers[] = {
-      {"node boxes", nodes * 24},       {"primitive boxes", uint64_t(n) * 24},
-      {"node costs", nodes * 8},        {"node counts", nodes * 8},
-      {"sort keys", uint64_t(n) * 12},  {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}};
-  for (const auto& [what, bytes] : buffers)
-    if (bytes > limits_.maxStorageBlockBytes)
-      throw InputError("lbvh-gpu: " + std::to_string(n) + " primitives need a " + std::to_string(bytes) +
-                       "-byte shader storage buffer (" + what + "); GL_MAX_SHADER_STORAGE_BLOCK_SIZE is " +
-                       std::to_string(limits_.maxStorageBlockBytes) + " bytes here");
-  if (groupsFor(n) > limits_.maxWorkGroupsX || uint64_t(n) > uint64_t(limits_.maxWorkGroupsX) * kGroup)
-    throw InputError("lbvh-gpu: " + std::to_string(n) + " primitives need " + std::to_string(groupsFor(n)) +
-                     " workgroups of " + std::to_string(kGroup) + " in one dispatch; GL_MAX_COMPUTE_WORK_GROUP_COUNT "
-                     "(x) is " + std::to_string(limits_.maxWorkGroupsX) + " here");
+  checkBuildLimits("lbvh-gpu", n, limits_,
+                   {{"node boxes", nodes * 24},
+                    {"primitive boxes", uint64_t(n) * 24},
+                    {"node costs", nodes * 8},
+                    {"node counts", nodes * 8},
+                    {"sort keys", uint64_t(n) * 12},
+                    {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}});
 }
 
 Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times) const {
@@ -90,7 +61,7 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
 
   enum { kBoxes, kCentroids, kBoundKeys, kGrid, kKeys, kScratch, kCounts, kLabels, kChildren, kParents, kNodeBoxes,
          kInfo, kCosts, kFitCounters, kCollapseCounters };
-  Buffers b;
+  BuildBuffers<15, 6> b;
   b.ids[kBoxes] = makeStorageBuffer(uint64_t(n) * 24, input.boxes.data());
   b.ids[kCentroids] = makeStorageBuffer(uint64_t(n) * 12, input.centroids.data());
   const uint32_t initialKeys[6] = {~0u, ~0u, ~0u, 0u, 0u, 0u};  // min keys from the top, max from the bottom
@@ -114,25 +85,12 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   }
   checkGl("lbvh-gpu: uploading the input");
 
-  struct Queries {  // deleted on every way out, a GL error's exception included
-    GLuint ids[6];
-    Queries() { glGenQueries(6, ids); }
-    ~Queries() { glDeleteQueries(6, ids); }
-  } timestamps;
-  const GLuint* queries = timestamps.ids;
-  // A timestamp after each phase, each followed by glFlush: llvmpipe takes a timestamp when it runs
-  // its command queue, not where the query was issued (without the flush, measured here: the
-  // collapse phase read 0.04 ms and the fit phase took its time); on a GPU the flush only submits.
-  auto stamp = [&](int k) {
-    glQueryCounter(queries[k], GL_TIMESTAMP);
-    glFlush();
-  };
   auto bind = [&](std::initializer_list<int> which) {
     GLuint slot = 0;
     for (int w : which) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot++, b.ids[w]);
   };
 
-  stamp(0);
+  PhaseStamps stamps;
   // morton
   bind({kCentroids, kBoundKeys});
   bounds_.set("u_count", n);
@@ -143,10 +101,10 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   bind({kCentroids, kGrid, kKeys});
   morton_.set("u_count", n);
   morton_.dispatch(groupsFor(n), "lbvh-gpu morton: codes (gpubuild_morton.glsl)");
-  stamp(1);
+  stamps.mark("morton");
   // sort
   sort_.sort(b.ids[kKeys], b.ids[kScratch], b.ids[kCounts], n);
-  stamp(2);
+  stamps.mark("sort");
   // hierarchy
   bind({kKeys, kLabels});
   labels_.set("u_count", n);
@@ -154,12 +112,12 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   bind({kKeys, kLabels, kChildren, kParents});
   hierarchy_.set("u_count", n);
   hierarchy_.dispatch(groupsFor(inner), "lbvh-gpu hierarchy: radix tree (gpubuild_hierarchy.glsl)");
-  stamp(3);
+  stamps.mark("hierarchy");
   // fit
   bind({kBoxes, kKeys, kChildren, kParents, kNodeBoxes, kFitCounters});
   fit_.set("u_count", n);
   fit_.dispatch(groupsFor(n), "lbvh-gpu fit: boxes bottom-up (gpubuild_fit.glsl)");
-  stamp(4);
+  stamps.mark("fit");
   // collapse
   bind({kChildren, kParents, kNodeBoxes, kInfo, kCosts, kCollapseCounters});
   collapse_.set("u_count", n);
@@ -167,15 +125,10 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   collapse_.set("u_ct", options.cost.traversalCost);
   collapse_.set("u_ci", options.cost.intersectionCost);
   collapse_.dispatch(groupsFor(n), "lbvh-gpu collapse: SAH leaf collapse (gpubuild_collapse.glsl)");
-  stamp(5);
+  stamps.mark("collapse");
   checkGl("lbvh-gpu: timer queries");
 
-  if (times) {
-    static const char* const kPhases[] = {"morton", "sort", "hierarchy", "fit", "collapse"};
-    GLuint64 stamps[6];
-    for (int q = 0; q < 6; ++q) glGetQueryObjectui64v(queries[q], GL_QUERY_RESULT, &stamps[q]);
-    for (int p = 0; p < 5; ++p) times->phases.emplace_back(kPhases[p], double(stamps[p + 1] - stamps[p]) * 1e-6);
-  }
+  if (times) stamps.read(*times);
 
   // Download (untimed) and the depth-first emission of builders/collapse.hpp's emitCollapsed: an
   // emitted inner node's children take the slots base, base + 1, then the left child's descendants,

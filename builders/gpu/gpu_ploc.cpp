@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "builders/gpu/gpu_build_steps.hpp"
 #include "datasets/scene.hpp"  // InputError
 #include "render/gl_context.hpp"
 
@@ -14,65 +15,7 @@ namespace bvhlab::gpubuild {
 
 namespace {
 
-constexpr uint32_t kGroup = 256;  // local_size_x of every per-primitive and per-cluster pass
 constexpr uint32_t kClusterBytes = 28;  // a cluster as the shaders store it: box (6 floats), node
-
-uint32_t groupsFor(uint64_t items) { return uint32_t((items + kGroup - 1) / kGroup); }
-
-template <class T>
-std::vector<T> download(GLuint buffer, size_t count) {
-  std::vector<T> out(count);
-  if (count) glGetNamedBufferSubData(buffer, 0, GLsizeiptr(count * sizeof(T)), out.data());
-  return out;
-}
-
-// The buffers of one build, deleted with it; the storage-buffer slots the passes bound are cleared
-// first, so that no binding names a deleted buffer afterwards.
-struct Buffers {
-  std::array<GLuint, 19> ids{};
-  ~Buffers() {
-    for (GLuint slot = 0; slot < 7; ++slot) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, 0);
-    glDeleteBuffers(GLsizei(ids.size()), ids.data());
-  }
-};
-
-// GL timestamps between the phases of one build, each followed by glFlush (llvmpipe takes a timestamp
-// when it runs its command queue: builders/gpu/gpu_lbvh.cpp). mark(phase) ends an interval of `phase`;
-// a phase met several times (the passes) sums its intervals, in the order phases first appear.
-class Stamps {
- public:
-  Stamps() { stamp(); }
-  ~Stamps() {
-    if (!ids_.empty()) glDeleteQueries(GLsizei(ids_.size()), ids_.data());
-  }
-  Stamps(const Stamps&) = delete;
-  Stamps& operator=(const Stamps&) = delete;
-  void mark(const char* phase) {
-    phases_.push_back(phase);
-    stamp();
-  }
-  void read(GpuPhaseTimes& times) const {
-    std::vector<GLuint64> at(ids_.size());
-    for (size_t q = 0; q < ids_.size(); ++q) glGetQueryObjectui64v(ids_[q], GL_QUERY_RESULT, &at[q]);
-    std::map<std::string, size_t> index;
-    for (size_t p = 0; p < phases_.size(); ++p) {
-      const auto [it, fresh] = index.emplace(phases_[p], times.phases.size());
-      if (fresh) times.phases.emplace_back(phases_[p], 0.0);
-      times.phases[it->second].second += double(at[p + 1] - at[p]) * 1e-6;
-    }
-  }
-
- private:
-  void stamp() {
-    GLuint id = 0;
-    glGenQueries(1, &id);
-    ids_.push_back(id);
-    glQueryCounter(id, GL_TIMESTAMP);
-    glFlush();
-  }
-  std::vector<GLuint> ids_;
-  std::vector<std::string> phases_;
-};
 
 }  // namespace
 
@@ -92,20 +35,14 @@ GpuPloc::GpuPloc(std::optional<GpuLimits> limits)
 void GpuPloc::checkLimits(size_t n) const {
   const uint64_t nodes = 2 * uint64_t(n) - 1;
   // The largest storage buffers a build binds, by what they hold.
-  const std::pair<const char*, uint64_t> buffers[] = {
-      {"node boxes", nodes * 24},          {"primitive boxes", uint64_t(n) * 24},
-      {"clusters", uint64_t(n) * kClusterBytes}, {"node costs", nodes * 8},
-      {"node counts", nodes * 8},          {"sort keys", uint64_t(n) * 12},
-      {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}};
-  for (const auto& [what, bytes] : buffers)
-    if (bytes > limits_.maxStorageBlockBytes)
-      throw InputError("ploc-gpu: " + std::to_string(n) + " primitives need a " + std::to_string(bytes) +
-                       "-byte shader storage buffer (" + what + "); GL_MAX_SHADER_STORAGE_BLOCK_SIZE is " +
-                       std::to_string(limits_.maxStorageBlockBytes) + " bytes here");
-  if (groupsFor(n) > limits_.maxWorkGroupsX || uint64_t(n) > uint64_t(limits_.maxWorkGroupsX) * kGroup)
-    throw InputError("ploc-gpu: " + std::to_string(n) + " primitives need " + std::to_string(groupsFor(n)) +
-                     " workgroups of " + std::to_string(kGroup) + " in one dispatch; GL_MAX_COMPUTE_WORK_GROUP_COUNT "
-                     "(x) is " + std::to_string(limits_.maxWorkGroupsX) + " here");
+  checkBuildLimits("ploc-gpu", n, limits_,
+                   {{"node boxes", nodes * 24},
+                    {"primitive boxes", uint64_t(n) * 24},
+                    {"clusters", uint64_t(n) * kClusterBytes},
+                    {"node costs", nodes * 8},
+                    {"node counts", nodes * 8},
+                    {"sort keys", uint64_t(n) * 12},
+                    {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}});
 }
 
 Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times) const {
@@ -135,7 +72,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
 
   enum { kBoxes, kCentroids, kBoundKeys, kGrid, kKeys, kScratch, kCounts, kNodeBoxes, kChildren, kParents, kInfo,
          kCosts, kCollapseCounters, kClustersA, kClustersB, kNearest, kSums };
-  Buffers b;
+  BuildBuffers<19, 7> b;
   b.ids[kBoxes] = makeStorageBuffer(uint64_t(n) * 24, input.boxes.data());
   b.ids[kCentroids] = makeStorageBuffer(uint64_t(n) * 12, input.centroids.data());
   const uint32_t initialKeys[6] = {~0u, ~0u, ~0u, 0u, 0u, 0u};  // min keys from the top, max from the bottom
@@ -172,7 +109,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
     return value;
   };
 
-  Stamps stamps;
+  PhaseStamps stamps;
   // morton
   bind({kCentroids, kBoundKeys});
   bounds_.set("u_count", n);
