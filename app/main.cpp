@@ -113,6 +113,11 @@ int buildCommand(const BuildCommand& c) {
       nlohmann::json phases = nlohmann::json::object();
       for (const auto& [phase, ms] : t.phaseMedianMs) phases[phase] = ms;
       j["gpu_phases_ms"] = phases;
+      if (t.passesIssued) {  // ploc-gpu's clustering passes and the CPU's reads of their state
+        j["gpu_passes"] = t.passes;
+        j["gpu_passes_issued"] = t.passesIssued;
+        j["gpu_readbacks"] = t.readbacks;
+      }
       j["gpu_renderer"] = t.renderer;
     }
     std::cout << j.dump() << std::endl;

@@ -214,8 +214,13 @@ TEST_F(GpuPloc, RegisteredAsAGpuBuilderAndTimedPerPhase) {
     names.push_back(phase);
     EXPECT_GE(ms, 0.0) << phase;
   }
-  EXPECT_EQ(names, (std::vector<std::string>{"morton", "sort", "clusters", "readback", "nn", "merge", "collapse"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"morton", "sort", "clusters", "nn", "merge", "readback", "collapse"}));
   EXPECT_GT(t.medianMs, 0.0);
+  // The passes follow one another on the GPU: the CPU reads their state once per batch, not per pass.
+  EXPECT_GT(t.passes, 5u);
+  EXPECT_GE(t.passesIssued, t.passes);
+  EXPECT_GE(t.readbacks, 1u);
+  EXPECT_LT(t.readbacks, t.passes);
 }
 
 // Builder x kernel against brute force for ploc-gpu's trees (as test_gpu_builders does for lbvh-gpu):
@@ -240,7 +245,7 @@ TEST_F(GpuPloc, EveryKernelOnPlocGpuTreesFindsTheBruteForceHits) {
 }
 
 // The command line: `builders` marks ploc-gpu as a GPU builder; `build --json` at a radius reports its
-// GL-timed median and phases and ploc's tree_hash at that radius; --ploc-top-down is a usage error.
+// GL-timed median, phases and pass counts and ploc's tree_hash at that radius; --ploc-top-down is a usage error.
 TEST(GpuPlocCli, BuildJsonHasGpuTimesAndPlocsHash) {
   std::string obj;
   for (int i = 0; i <= 20; ++i)
@@ -272,6 +277,9 @@ TEST(GpuPlocCli, BuildJsonHasGpuTimesAndPlocsHash) {
   EXPECT_LE(t["median"].get<double>(), t["high"].get<double>());
   for (const char* phase : {"morton", "sort", "clusters", "nn", "merge", "readback", "collapse"})
     EXPECT_TRUE(g["gpu_phases_ms"].contains(phase)) << phase;
+  EXPECT_GT(g["gpu_passes"].get<int>(), 0);
+  EXPECT_GE(g["gpu_passes_issued"].get<int>(), g["gpu_passes"].get<int>());
+  EXPECT_GE(g["gpu_readbacks"].get<int>(), 1);
   const clitest::Result topDown = clitest::run("build --mesh " + mesh + " --builder ploc-gpu --ploc-top-down 4");
   EXPECT_EQ(topDown.code, 2);
   EXPECT_NE(topDown.err.find("--ploc-top-down"), std::string::npos) << topDown.err;

@@ -137,6 +137,9 @@ GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input,
     for (size_t p = 0; p < times.phases.size(); ++p) phases[p].push_back(times.phases[p].second);
   }
   timing.builds = builds;
+  timing.passes = times.passes;
+  timing.passesIssued = times.passesIssued;
+  timing.readbacks = times.readbacks;
   timing.totalMs = medianInterval(totals);
   timing.medianMs = medianOf(totals);
   for (size_t p = 0; p < phases.size(); ++p) timing.phaseMedianMs.emplace_back(times.phases[p].first, medianOf(phases[p]));

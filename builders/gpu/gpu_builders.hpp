@@ -35,6 +35,9 @@ struct GpuBuildTiming {
   double medianMs = 0.0;
   std::vector<std::pair<std::string, double>> phaseMedianMs;
   size_t builds = 0;
+  // ploc-gpu's clustering passes, passes issued and pass-state readbacks per build (GpuPhaseTimes; the
+  // same in every build of one input); 0 for lbvh-gpu.
+  uint32_t passes = 0, passesIssued = 0, readbacks = 0;
   std::string renderer;  // GL_RENDERER of the context that built
 };
 // Throws std::invalid_argument when `builder` is not a GPU builder.

@@ -8,11 +8,11 @@
 
 namespace bvhlab::gpubuild {
 
-ComputeProgram::ComputeProgram(const std::string& module) : module_(module) {
+ComputeProgram::ComputeProgram(const std::string& module, const std::string& defines) : module_(module) {
   const auto& sources = glslSources();
   const auto found = sources.find(module);
   if (found == sources.end()) throw std::runtime_error("GPU builder: no embedded GLSL module " + module);
-  const std::string source = "#version 450\n" + found->second;
+  const std::string source = "#version 450\n" + defines + found->second;
   GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
   const char* text = source.c_str();
   glShaderSource(shader, 1, &text, nullptr);
@@ -43,10 +43,21 @@ void ComputeProgram::set(const char* name, uint32_t v) const { glProgramUniform1
 void ComputeProgram::set(const char* name, int32_t v) const { glProgramUniform1i(program_, glGetUniformLocation(program_, name), v); }
 void ComputeProgram::set(const char* name, float v) const { glProgramUniform1f(program_, glGetUniformLocation(program_, name), v); }
 
+// The barrier after every pass: storage written by a pass is read by the next pass, by buffer reads
+// and copies, and (ploc-gpu's pass state) as the next dispatch's indirect command.
+constexpr GLbitfield kPassBarrier = GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT;
+
 void ComputeProgram::dispatch(uint32_t groups, const char* pass) const {
   glUseProgram(program_);
   glDispatchCompute(groups, 1, 1);
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  glMemoryBarrier(kPassBarrier);
+  checkGl(pass);
+}
+
+void ComputeProgram::dispatchIndirect(GLintptr offset, const char* pass) const {
+  glUseProgram(program_);
+  glDispatchComputeIndirect(offset);
+  glMemoryBarrier(kPassBarrier);
   checkGl(pass);
 }
 

@@ -8,11 +8,12 @@
 
 namespace bvhlab::gpubuild {
 
-// Compiles and links "#version 450" + the embedded module `module` in the current context. Throws
-// std::runtime_error naming the module and quoting the driver's log when it does not compile or link.
+// Compiles and links "#version 450" + `defines` + the embedded module `module` in the current context.
+// Throws std::runtime_error naming the module and quoting the driver's log when it does not compile or
+// link.
 class ComputeProgram {
  public:
-  explicit ComputeProgram(const std::string& module);
+  explicit ComputeProgram(const std::string& module, const std::string& defines = "");
   ~ComputeProgram();
   ComputeProgram(const ComputeProgram&) = delete;
   ComputeProgram& operator=(const ComputeProgram&) = delete;
@@ -24,6 +25,8 @@ class ComputeProgram {
   void set(const char* name, float v) const;
   // glDispatchCompute(groups, 1, 1), then a shader-storage barrier; checkGl names `pass`.
   void dispatch(uint32_t groups, const char* pass) const;
+  // glDispatchComputeIndirect(offset) from the bound GL_DISPATCH_INDIRECT_BUFFER, then the same barrier.
+  void dispatchIndirect(GLintptr offset, const char* pass) const;
 
  private:
   GLuint program_ = 0;

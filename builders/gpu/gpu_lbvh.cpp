@@ -47,7 +47,7 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
                                 " is not supported on the GPU (only 0: plain position codes)");
   const size_t count = input.boxes.size();
   checkLimits(count);
-  if (times) times->phases.clear();
+  if (times) *times = GpuPhaseTimes{};
   const uint32_t n = uint32_t(count);
   if (n == 1) {  // lbvh's tree of one primitive: one leaf; nothing to sort or link
     Bvh bvh;

@@ -24,6 +24,9 @@ namespace bvhlab::gpubuild {
 // primitive).
 struct GpuPhaseTimes {
   std::vector<std::pair<std::string, double>> phases;
+  // ploc-gpu: the clustering passes that merged, the passes issued (a batch's passes past the last one
+  // dispatch nothing) and the CPU's reads of the pass state. 0 for lbvh-gpu, which reads nothing back.
+  uint32_t passes = 0, passesIssued = 0, readbacks = 0;
   double totalMs() const;
 };
 

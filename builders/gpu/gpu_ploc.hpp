@@ -4,10 +4,11 @@
 //   sort      lbvh-gpu's stable radix sort by (code, index) (builders/gpu/gpu_radix_sort.hpp)
 //   clusters  the leaves and one balanced tree per run of equal codes (gpubuild_ploc_runs/clusters.glsl)
 //   nn        per clustering pass: every cluster's nearest neighbour within the radius (gpubuild_ploc_nn.glsl)
-//   merge     per pass: mutual pairs merge, the clusters compacted by a prefix scan
-//             (gpubuild_ploc_count.glsl, gpubuild_scan.glsl, gpubuild_ploc_merge.glsl)
-//   readback  per pass: the GPU idle while the CPU reads the pass's cluster count back (4 bytes), which
-//             decides whether another pass runs and how many workgroups it takes
+//   merge     per pass: mutual pairs merge, the clusters compacted by a prefix scan, the next pass's
+//             count and workgroups written on the GPU (gpubuild_ploc_count.glsl, gpubuild_scan.glsl,
+//             gpubuild_ploc_merge.glsl, gpubuild_ploc_next.glsl); passes are dispatched indirectly
+//   readback  per batch of passes: the GPU idle while the CPU reads the pass state back (24 bytes),
+//             which decides whether another batch is issued (GpuPhaseTimes::readbacks: how many)
 //   collapse  lbvh-gpu's SAH leaf collapse, bottom-up (gpubuild_collapse.glsl)
 // Nodes are numbered as the CPU numbers them (leaves n - 1 + sorted position, inner nodes downwards
 // from n - 2 as they are made, the root at 0), merges within a pass in order. The download (untimed)
@@ -39,7 +40,7 @@ class GpuPloc {
 
  private:
   GpuLimits limits_;
-  ComputeProgram bounds_, grid_, morton_, runs_, clusters_, nn_, count_, scan_, merge_, collapse_;
+  ComputeProgram bounds_, grid_, morton_, runs_, clusters_, nn_, count_, scan_, scanPass_, merge_, next_, collapse_;
   GpuRadixSort sort_;
 };
 

@@ -5,7 +5,8 @@
 layout(local_size_x = 256) in;
 layout(std430, binding = 0) readonly buffer Nearest { uint nearest[]; };
 layout(std430, binding = 1) writeonly buffer Sums { uint sums[]; };
-uniform uint u_count;
+// The pass's cluster count (gpubuild_ploc_next.glsl writes it; the pass is dispatched indirectly).
+layout(std430, binding = 7) readonly buffer PassState { uvec3 dispatchGroups; uint passClusters; };
 
 shared uint s_kept, s_merged;
 
@@ -14,7 +15,7 @@ void main() {
   uint block = gl_WorkGroupID.x, blocks = gl_NumWorkGroups.x;
   if (t == 0u) s_kept = 0u, s_merged = 0u;
   barrier();
-  if (x < u_count) {
+  if (x < passClusters) {
     uint y = nearest[x];
     bool mutual = nearest[y] == x;
     if (!mutual || x < y) atomicAdd(s_kept, 1u);

@@ -2,8 +2,8 @@
 // nearest neighbour is not mutual is copied; a mutual pair becomes one inner node at the lower
 // position (left child the lower one, the box their union as Aabb::grow makes it). Positions and
 // node numbers come from the scanned counts of step 2 plus a scan within the workgroup: the pass's
-// merges take the inner nodes u_count - 2, u_count - 3, .. in order (the CPU's numbering; u_count - 1
-// clusters are made from u_count by that many merges, so node 0, the root, comes last).
+// merges take the inner nodes m - 2, m - 3, .. in order, m = passClusters (the CPU's numbering; one
+// cluster is made from m by m - 1 merges, so node 0, the root, comes last).
 layout(local_size_x = 256) in;
 struct Cluster { float box[6]; uint node; };
 layout(std430, binding = 0) readonly buffer Clusters { Cluster clusters[]; };
@@ -13,7 +13,8 @@ layout(std430, binding = 3) writeonly buffer Next { Cluster next[]; };
 layout(std430, binding = 4) writeonly buffer NodeBoxes { float nodeBoxes[]; };
 layout(std430, binding = 5) writeonly buffer Children { uint children[]; };
 layout(std430, binding = 6) writeonly buffer Parents { uint parents[]; };
-uniform uint u_count;
+// The pass's cluster count (gpubuild_ploc_next.glsl writes it; the pass is dispatched indirectly).
+layout(std430, binding = 7) readonly buffer PassState { uvec3 dispatchGroups; uint passClusters; };
 
 shared uvec2 s_scan[256];  // kept, merged
 
@@ -22,7 +23,7 @@ void main() {
   uint block = gl_WorkGroupID.x, blocks = gl_NumWorkGroups.x;
   uint y = x;
   bool kept = false, merged = false;
-  if (x < u_count) {
+  if (x < passClusters) {
     y = nearest[x];
     bool mutual = nearest[y] == x;
     kept = !mutual || x < y;
@@ -45,7 +46,7 @@ void main() {
     return;
   }
   // sums[blocks] is the total kept: the merges' scan continues from it.
-  uint node = u_count - 2u - (sums[blocks + block] - sums[blocks] + before.y);
+  uint node = passClusters - 2u - (sums[blocks + block] - sums[blocks] + before.y);
   Cluster c;
   for (uint a = 0u; a < 3u; ++a) {
     float p = clusters[x].box[a], q = clusters[y].box[a];

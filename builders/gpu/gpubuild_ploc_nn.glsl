@@ -11,7 +11,8 @@ layout(local_size_x = 256) in;
 struct Cluster { float box[6]; uint node; };
 layout(std430, binding = 0) readonly buffer Clusters { Cluster clusters[]; };
 layout(std430, binding = 1) writeonly buffer Nearest { uint nearest[]; };
-uniform uint u_count;  // clusters (>= 2)
+// The pass's cluster count (gpubuild_ploc_next.glsl writes it; the pass is dispatched indirectly).
+layout(std430, binding = 7) readonly buffer PassState { uvec3 dispatchGroups; uint passClusters; };
 uniform uint u_radius;
 
 const uint kHalo = 128u;
@@ -38,18 +39,18 @@ void main() {
   // Shared slot s holds cluster first + s.
   uint base = gl_WorkGroupID.x * 256u, first = base - min(base, u_radius);
   if (tiled) {
-    uint span = min(u_count, base + 256u + u_radius) - first;
+    uint span = min(passClusters, base + 256u + u_radius) - first;
     for (uint s = t; s < span; s += 256u) {
       s_lo[s] = lowOf(first + s);
       s_hi[s] = highOf(first + s);
     }
     barrier();
   }
-  if (x >= u_count) return;
+  if (x >= passClusters) return;
   vec3 xlo = tiled ? s_lo[x - first] : lowOf(x), xhi = tiled ? s_hi[x - first] : highOf(x);
   uvec2 best = uvec2(0xffffffffu);
   uint found = x;
-  uint from = x - min(x, u_radius), to = min(u_count - 1u, x + u_radius);
+  uint from = x - min(x, u_radius), to = min(passClusters - 1u, x + u_radius);
   for (uint j = from; j <= to; ++j) {
     if (j == x) continue;
     vec3 jlo = tiled ? s_lo[j - first] : lowOf(j), jhi = tiled ? s_hi[j - first] : highOf(j);
