@@ -15,6 +15,7 @@
 #include "builders/builder.hpp"
 #include "builders/gpu/gpu_lbvh.hpp"
 #include "builders/gpu/gpu_ploc.hpp"
+#include "layout/layout_bvh2cb.hpp"
 #include "render/gl_context.hpp"
 
 namespace bvhlab {
@@ -68,7 +69,7 @@ class BuildContext {
   };
   std::unique_ptr<GlContext> own_;
   GLint program_ = 0, generic_ = 0;
-  std::array<Binding, 7> bindings_{};  // the slots the passes bind (0..6)
+  std::array<Binding, 8> bindings_{};  // the slots the passes bind (0..7)
 };
 
 }  // namespace
@@ -112,8 +113,33 @@ void registerGpuBuilders() {
   (void)once;
 }
 
+namespace {
+
+// Throws naming the first texel where the GPU's stream differs from the CPU's.
+void expectSameStreams(const PackedBvh& gpu, const PackedBvh& cpu, const std::string& builder) {
+  const std::pair<const char*, std::pair<const std::vector<glm::uvec4>*, const std::vector<glm::uvec4>*>> streams[] = {
+      {"node", {&gpu.nodes, &cpu.nodes}},
+      {"triangle", {&gpu.triangles, &cpu.triangles}},
+      {"attribute", {&gpu.attributes, &cpu.attributes}}};
+  for (const auto& [name, pair] : streams) {
+    const auto& [g, c] = pair;
+    if (g->size() != c->size())
+      throw std::runtime_error(builder + ": the GPU pack's " + name + " stream has " + std::to_string(g->size()) +
+                               " texels, the CPU's " + std::to_string(c->size()));
+    for (size_t i = 0; i < g->size(); ++i)
+      if ((*g)[i] != (*c)[i])
+        throw std::runtime_error(builder + ": the GPU pack's " + name + " stream differs from the CPU's at texel " +
+                                 std::to_string(i));
+  }
+  if (gpu.depth != cpu.depth)
+    throw std::runtime_error(builder + ": the GPU pack's depth " + std::to_string(gpu.depth) + " is not the CPU's " +
+                             std::to_string(cpu.depth));
+}
+
+}  // namespace
+
 GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input, const BuildOptions& options,
-                            size_t builds) {
+                            size_t builds, const std::string& packLayout, const TriangleSoup* soup) {
   if (!findBuilder(builder).gpu) throw std::invalid_argument(builder + " does not build on the GPU");
   validateBuildInput(input, options);
   BuildContext context;
@@ -126,17 +152,27 @@ GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input,
   else
     lbvh.emplace();
   gpubuild::GpuPhaseTimes times;
-  auto build = [&] { return ploc ? ploc->build(input, options, &times) : lbvh->build(input, options, &times); };
+  PackedBvh packed;
+  const gpubuild::GpuPackRequest request{packLayout, soup, &packed};
+  const gpubuild::GpuPackRequest* pack = packLayout.empty() ? nullptr : &request;
+  auto build = [&] {
+    return ploc ? ploc->build(input, options, &times, pack) : lbvh->build(input, options, &times, pack);
+  };
   build();  // warm-up: the driver compiles at the first dispatch
   std::vector<double> totals;
   std::vector<std::vector<double>> phases;
+  Bvh last;
   for (size_t k = 0; k < builds; ++k) {
-    build();
+    last = build();
     totals.push_back(times.totalMs());
     phases.resize(times.phases.size());
     for (size_t p = 0; p < times.phases.size(); ++p) phases[p].push_back(times.phases[p].second);
   }
   timing.builds = builds;
+  if (pack) {
+    expectSameStreams(packed, packLayout == "v1" ? packBvh(last, *soup) : packBvh2cb(last, *soup), builder);
+    timing.packLayout = packLayout;
+  }
   timing.passes = times.passes;
   timing.passesIssued = times.passesIssued;
   timing.readbacks = times.readbacks;

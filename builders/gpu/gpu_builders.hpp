@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "builders/bvh.hpp"
+#include "layout/layout.hpp"
 #include "render/frame_stats.hpp"
 
 namespace bvhlab {
@@ -38,10 +39,14 @@ struct GpuBuildTiming {
   // ploc-gpu's clustering passes, passes issued and pass-state readbacks per build (GpuPhaseTimes; the
   // same in every build of one input); 0 for lbvh-gpu.
   uint32_t passes = 0, passesIssued = 0, readbacks = 0;
-  std::string renderer;  // GL_RENDERER of the context that built
+  std::string packLayout;  // the layout the builds packed into on the GPU ("" = none)
+  std::string renderer;    // GL_RENDERER of the context that built
 };
+// With `packLayout` (v1 or bvh2-cb: gpubuild::gpuPackable) and the `soup` the input was made from, every
+// build also packs on the GPU (phase `pack`), and the last build's streams are checked texel for texel
+// against the CPU's pack of its tree: a difference throws std::runtime_error naming the stream and texel.
 // Throws std::invalid_argument when `builder` is not a GPU builder.
 GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input, const BuildOptions& options,
-                            size_t builds);
+                            size_t builds, const std::string& packLayout = "", const TriangleSoup* soup = nullptr);
 
 }  // namespace bvhlab

@@ -2,8 +2,10 @@
 #include "builders/gpu/gpu_lbvh.hpp"
 
 #include <array>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "builders/gpu/gpu_build_steps.hpp"
 #include "datasets/scene.hpp"  // InputError
@@ -29,24 +31,27 @@ GpuLbvh::GpuLbvh(std::optional<GpuLimits> limits)
       fit_("gpubuild_fit.glsl"),
       collapse_("gpubuild_collapse.glsl") {}
 
-void GpuLbvh::checkLimits(size_t n) const {
+void GpuLbvh::checkLimits(size_t n, bool pack) const {
   const uint64_t nodes = 2 * uint64_t(n) - 1;
   // The largest storage buffers a build binds, by what they hold.
-  checkBuildLimits("lbvh-gpu", n, limits_,
-                   {{"node boxes", nodes * 24},
-                    {"primitive boxes", uint64_t(n) * 24},
-                    {"node costs", nodes * 8},
-                    {"node counts", nodes * 8},
-                    {"sort keys", uint64_t(n) * 12},
-                    {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}});
+  std::vector<std::pair<const char*, uint64_t>> buffers = {{"node boxes", nodes * 24},
+                                                              {"primitive boxes", uint64_t(n) * 24},
+                                                              {"node costs", nodes * 8},
+                                                              {"node counts", nodes * 8},
+                                                              {"sort keys", uint64_t(n) * 12},
+                                                              {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}};
+  if (pack)
+    for (const auto& buffer : GpuPacker::buffers(n)) buffers.push_back(buffer);
+  checkBuildLimits("lbvh-gpu", n, limits_, buffers);
 }
 
-Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times) const {
+Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times,
+                   const GpuPackRequest* pack) const {
   if (options.mortonSizeBits != 0)
     throw std::invalid_argument("lbvh-gpu: --morton-size-bits " + std::to_string(options.mortonSizeBits) +
                                 " is not supported on the GPU (only 0: plain position codes)");
   const size_t count = input.boxes.size();
-  checkLimits(count);
+  checkLimits(count, pack != nullptr);
   if (times) *times = GpuPhaseTimes{};
   const uint32_t n = uint32_t(count);
   if (n == 1) {  // lbvh's tree of one primitive: one leaf; nothing to sort or link
@@ -55,6 +60,7 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
     bvh.nodes[0].bounds = input.boxes[0];
     bvh.nodes[0].count = 1;
     bvh.primIndices = {0};
+    if (pack) packOnTheCpu(bvh, *pack);
     return bvh;
   }
   const uint32_t inner = n - 1, nodes = 2 * n - 1;
@@ -90,6 +96,8 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
     for (int w : which) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot++, b.ids[w]);
   };
 
+  std::optional<GpuPackJob> packJob;  // the soup uploaded before the timed phases
+  if (pack) packJob.emplace(packer_, *pack, n);
   PhaseStamps stamps;
   // morton
   bind({kCentroids, kBoundKeys});
@@ -126,9 +134,11 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   collapse_.set("u_ci", options.cost.intersectionCost);
   collapse_.dispatch(groupsFor(n), "lbvh-gpu collapse: SAH leaf collapse (gpubuild_collapse.glsl)");
   stamps.mark("collapse");
+  if (packJob) packJob->run({b.ids[kChildren], b.ids[kParents], b.ids[kNodeBoxes], b.ids[kInfo], b.ids[kKeys]}, stamps);
   checkGl("lbvh-gpu: timer queries");
 
   if (times) stamps.read(*times);
+  if (packJob) packJob->download();
 
   // Download (untimed) and the depth-first emission of builders/collapse.hpp's emitCollapsed: an
   // emitted inner node's children take the slots base, base + 1, then the left child's descendants,

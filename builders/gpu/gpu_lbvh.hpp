@@ -16,6 +16,7 @@
 
 #include "builders/bvh.hpp"
 #include "builders/gpu/gpu_compute.hpp"
+#include "builders/gpu/gpu_pack.hpp"
 #include "builders/gpu/gpu_radix_sort.hpp"
 
 namespace bvhlab::gpubuild {
@@ -38,15 +39,19 @@ class GpuLbvh {
   // Throws InputError naming GL_MAX_SHADER_STORAGE_BLOCK_SIZE or GL_MAX_COMPUTE_WORK_GROUP_COUNT when
   // the input needs more than the limits allow (before any GL work), std::invalid_argument for Morton
   // size bits (not implemented on the GPU), std::runtime_error naming the pass for a GL error.
-  Bvh build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times = nullptr) const;
+  // With `pack`, the tree is also packed on the GPU (builders/gpu/gpu_pack.hpp; phase `pack`) and the
+  // streams downloaded into pack->out.
+  Bvh build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times = nullptr,
+            const GpuPackRequest* pack = nullptr) const;
 
   // The check build() makes first.
-  void checkLimits(size_t primitives) const;
+  void checkLimits(size_t primitives, bool pack = false) const;
 
  private:
   GpuLimits limits_;
   ComputeProgram bounds_, grid_, morton_, labels_, hierarchy_, fit_, collapse_;
   GpuRadixSort sort_;
+  GpuPacker packer_;
 };
 
 }  // namespace bvhlab::gpubuild

@@ -2,6 +2,7 @@
 #include "builders/gpu/gpu_ploc.hpp"
 
 #include <array>
+#include <optional>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -50,20 +51,23 @@ GpuPloc::GpuPloc(std::optional<GpuLimits> limits)
       next_("gpubuild_ploc_next.glsl"),
       collapse_("gpubuild_collapse.glsl") {}
 
-void GpuPloc::checkLimits(size_t n) const {
+void GpuPloc::checkLimits(size_t n, bool pack) const {
   const uint64_t nodes = 2 * uint64_t(n) - 1;
   // The largest storage buffers a build binds, by what they hold.
-  checkBuildLimits("ploc-gpu", n, limits_,
-                   {{"node boxes", nodes * 24},
-                    {"primitive boxes", uint64_t(n) * 24},
-                    {"clusters", uint64_t(n) * kClusterBytes},
-                    {"node costs", nodes * 8},
-                    {"node counts", nodes * 8},
-                    {"sort keys", uint64_t(n) * 12},
-                    {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}});
+  std::vector<std::pair<const char*, uint64_t>> buffers = {{"node boxes", nodes * 24},
+                                                              {"primitive boxes", uint64_t(n) * 24},
+                                                              {"clusters", uint64_t(n) * kClusterBytes},
+                                                              {"node costs", nodes * 8},
+                                                              {"node counts", nodes * 8},
+                                                              {"sort keys", uint64_t(n) * 12},
+                                                              {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}};
+  if (pack)
+    for (const auto& buffer : GpuPacker::buffers(n)) buffers.push_back(buffer);
+  checkBuildLimits("ploc-gpu", n, limits_, buffers);
 }
 
-Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times) const {
+Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times,
+                   const GpuPackRequest* pack) const {
   const uint32_t radius = options.plocRadius;
   if (radius < 1 || radius > kMaxPlocRadius)
     throw std::invalid_argument("ploc-gpu: plocRadius " + std::to_string(radius) + " is outside 1.." +
@@ -75,7 +79,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
     throw std::invalid_argument("ploc-gpu: --ploc-top-down " + std::to_string(options.plocTopDown) +
                                 " is not supported on the GPU (only 0: clustering up to the root)");
   const size_t count = input.boxes.size();
-  checkLimits(count);
+  checkLimits(count, pack != nullptr);
   if (times) *times = GpuPhaseTimes{};
   const uint32_t n = uint32_t(count);
   if (n == 1) {  // ploc's tree of one primitive: one leaf; nothing to sort or cluster
@@ -84,6 +88,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
     bvh.nodes[0].bounds = input.boxes[0];
     bvh.nodes[0].count = 1;
     bvh.primIndices = {0};
+    if (pack) packOnTheCpu(bvh, *pack);
     return bvh;
   }
   const uint32_t inner = n - 1, nodes = 2 * n - 1, blocks = groupsFor(n);
@@ -122,6 +127,8 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
     GLuint slot = 0;
     for (int w : which) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot++, b.ids[w]);
   };
+  std::optional<GpuPackJob> packJob;  // the soup uploaded before the timed phases
+  if (pack) packJob.emplace(packer_, *pack, n);
   PhaseStamps stamps;
   // morton
   bind({kCentroids, kBoundKeys});
@@ -203,6 +210,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   collapse_.set("u_ci", options.cost.intersectionCost);
   collapse_.dispatch(groupsFor(n), "ploc-gpu collapse: SAH leaf collapse (gpubuild_collapse.glsl)");
   stamps.mark("collapse");
+  if (packJob) packJob->run({b.ids[kChildren], b.ids[kParents], b.ids[kNodeBoxes], b.ids[kInfo], b.ids[kKeys]}, stamps);
   checkGl("ploc-gpu: timer queries");
   if (times) {
     stamps.read(*times);
@@ -210,6 +218,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
     times->passesIssued = issued;
     times->readbacks = readbacks;
   }
+  if (packJob) packJob->download();
 
   // Download (untimed) and the depth-first emission of builders/collapse.hpp's emitCollapsed: an
   // emitted inner node's children take the slots base, base + 1, then the left child's descendants,

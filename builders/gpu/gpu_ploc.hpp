@@ -19,6 +19,7 @@
 
 #include "builders/bvh.hpp"
 #include "builders/gpu/gpu_compute.hpp"
+#include "builders/gpu/gpu_pack.hpp"
 #include "builders/gpu/gpu_lbvh.hpp"  // GpuPhaseTimes
 #include "builders/gpu/gpu_radix_sort.hpp"
 
@@ -33,15 +34,19 @@ class GpuPloc {
   // the input needs more than the limits allow (before any GL work), std::invalid_argument for a
   // radius outside 1..kMaxPlocRadius and for Morton size bits or plocTopDown (not implemented on the
   // GPU), std::runtime_error naming the pass for a GL error.
-  Bvh build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times = nullptr) const;
+  // With `pack`, the tree is also packed on the GPU (builders/gpu/gpu_pack.hpp; phase `pack`) and the
+  // streams downloaded into pack->out.
+  Bvh build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times = nullptr,
+            const GpuPackRequest* pack = nullptr) const;
 
   // The check build() makes first.
-  void checkLimits(size_t primitives) const;
+  void checkLimits(size_t primitives, bool pack = false) const;
 
  private:
   GpuLimits limits_;
   ComputeProgram bounds_, grid_, morton_, runs_, clusters_, nn_, count_, scan_, scanPass_, merge_, next_, collapse_;
   GpuRadixSort sort_;
+  GpuPacker packer_;
 };
 
 }  // namespace bvhlab::gpubuild

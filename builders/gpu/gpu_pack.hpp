@@ -1,0 +1,88 @@
+// The GPU pack: a GPU builder's tree, still in its build buffers, packed into layout v1 or bvh2-cb
+// (layout/layout.hpp, layout/layout_bvh2cb.hpp) by compute passes, so that a build on the GPU gives
+// the streams a renderer binds without a round trip through the CPU. Timed as the builders' `pack`
+// phase (builders/gpu/gpu_lbvh.hpp, gpu_ploc.hpp):
+//   edges      every node's step from its parent: v1 slot, bvh2-cb record and first-primitive offsets,
+//              depth, and whether a collapsed leaf hides it (gpubuild_pack_edges.glsl)
+//   jump       pointer-jumping rounds until every node holds the sum over its path from the root, each
+//              round dispatched indirectly and stopped on the GPU once done (gpubuild_pack_jump.glsl,
+//              gpubuild_pack_gate.glsl): ceil(log2(depth)) rounds, at most kMaxJumpRounds
+//   nodes      the NODE stream (gpubuild_pack_nodes.glsl, one program per layout)
+//   triangles  the TRIANGLE and ATTRIBUTE streams in leaf order, gathered from the soup's texels
+//              (gpubuild_pack_triangles.glsl)
+// The streams are those layout/pack.cpp and pack_bvh2cb.cpp write for the Bvh the build downloads,
+// texel for texel (tests/test_gpu_pack.cpp). The soup's texels (7 per triangle, in original order) are
+// uploaded before the timed phases, as a renderer keeps its triangles resident on the GPU.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "builders/gpu/gpu_compute.hpp"
+#include "layout/layout.hpp"
+
+namespace bvhlab::gpubuild {
+
+class PhaseStamps;
+
+// The layouts the GPU pack writes (with the raw triangle format): v1 and bvh2-cb.
+bool gpuPackable(const std::string& layout);
+
+// Rounds of pointer jumping issued: trees up to 2^16 levels deep. A deeper tree is an error at download.
+constexpr uint32_t kMaxJumpRounds = 16;
+
+// What a build packs and where the downloaded streams go.
+struct GpuPackRequest {
+  std::string layout;                // gpuPackable
+  const TriangleSoup* soup = nullptr;  // the triangles the build's input was made from (same order)
+  PackedBvh* out = nullptr;          // filled after the build (untimed download)
+};
+
+// The build buffers the pack reads, as the GPU builders lay them out: children (2 per inner node),
+// parents (per node; the root's ~0u), node boxes (6 floats per node), info (count and emitted inner
+// nodes per node, from the collapse pass), sorted keys (GpuKey); nodes numbered inner 0 .. n - 2
+// (root 0), leaves n - 1 + sorted position.
+struct GpuTreeBuffers {
+  GLuint children = 0, parents = 0, nodeBoxes = 0, info = 0, keys = 0;
+};
+
+// The CPU's pack of `bvh` into request.out (layout/pack.cpp, pack_bvh2cb.cpp): what a GPU builder gives
+// for one primitive, where it builds nothing on the GPU.
+void packOnTheCpu(const Bvh& bvh, const GpuPackRequest& request);
+
+// The pack's programs, compiled once per builder object.
+class GpuPacker {
+ public:
+  GpuPacker();
+  // The storage buffers a pack of n primitives adds to a build (for checkBuildLimits).
+  static std::array<std::pair<const char*, uint64_t>, 6> buffers(uint64_t n);
+
+ private:
+  friend class GpuPackJob;
+  ComputeProgram edges_, jump_, gate_, nodesV1_, nodesBvh2cb_, triangles_;
+};
+
+// One build's pack: constructed before the timed phases (checks the request, uploads the soup's
+// texels, makes the buffers), run() after the collapse pass (marks `pack`), download() after the
+// timestamps are read. Throws std::invalid_argument for a layout the GPU does not pack or a soup of
+// another size, std::runtime_error for a GL error (naming the pass) or a tree deeper than
+// 2^kMaxJumpRounds levels.
+class GpuPackJob {
+ public:
+  GpuPackJob(const GpuPacker& packer, const GpuPackRequest& request, uint32_t primitives);
+  ~GpuPackJob();
+  GpuPackJob(const GpuPackJob&) = delete;
+  GpuPackJob& operator=(const GpuPackJob&) = delete;
+  void run(const GpuTreeBuffers& tree, PhaseStamps& stamps);
+  void download() const;
+
+ private:
+  enum { kSoup, kSteps, kAncestors, kState, kNodeStream, kTriangleStream, kAttributeStream, kBuffers };
+  const GpuPacker& packer_;
+  GpuPackRequest request_;
+  uint32_t n_ = 0;
+  GpuTreeBuffers tree_;
+  std::array<GLuint, kBuffers> ids_{};
+};
+
+}  // namespace bvhlab::gpubuild

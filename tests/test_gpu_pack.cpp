@@ -1,0 +1,243 @@
+// The GPU pack (builders/gpu/gpu_pack.hpp) on llvmpipe: lbvh-gpu's and ploc-gpu's trees packed on the
+// GPU into v1 and bvh2-cb give the streams the CPU packs from the downloaded tree, texel for texel, on
+// the bunny, synthetic meshes, a deep tree and a root that is one leaf, at several leaf sizes; one
+// primitive packed on the CPU; other layouts, mismatched soups and sizes past the GL limits refused;
+// the `pack` phase timed; `build --json` saying which layout it packed.
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "cli_run.hpp"
+#include "builders/builder.hpp"
+#include "builders/gpu/gpu_builders.hpp"
+#include "builders/gpu/gpu_lbvh.hpp"
+#include "builders/gpu/gpu_pack.hpp"
+#include "builders/gpu/gpu_ploc.hpp"
+#include "datasets/scene.hpp"
+#include "datasets/scene_io.hpp"
+#include "layout/layout.hpp"
+#include "layout/layout_bvh2cb.hpp"
+#include "render/gl_context.hpp"
+#include "require.hpp"
+#include "traversal_test_util.hpp"
+
+namespace bvhlab {
+namespace {
+
+using gpubuild::GpuPackRequest;
+
+class GpuPack : public ::testing::Test {
+ public:
+  static void SetUpTestSuite() {
+    registerGpuBuilders();
+    context_ = createContext(Backend::OSMesa);
+    lbvh_ = std::make_unique<gpubuild::GpuLbvh>();
+    ploc_ = std::make_unique<gpubuild::GpuPloc>();
+  }
+  static void TearDownTestSuite() {
+    lbvh_.reset();
+    ploc_.reset();
+    context_.reset();
+  }
+  // Builds with `builder` packing into `layout` on the GPU; returns the tree, the GPU's streams in *out.
+  static Bvh build(const std::string& builder, const TriangleSoup& soup, const std::string& layout,
+                   const BuildOptions& options, PackedBvh* out) {
+    const std::vector<Aabb> boxes = triangleBoxes(soup);
+    const std::vector<glm::vec3> centroids = triangleCentroids(soup);
+    const BuildInput input{boxes, centroids, soup.v0, soup.v1, soup.v2};
+    const GpuPackRequest request{layout, &soup, out};
+    return builder == "ploc-gpu" ? ploc_->build(input, options, nullptr, &request)
+                                 : lbvh_->build(input, options, nullptr, &request);
+  }
+
+ protected:
+  static std::unique_ptr<GlContext> context_;
+  static std::unique_ptr<gpubuild::GpuLbvh> lbvh_;
+  static std::unique_ptr<gpubuild::GpuPloc> ploc_;
+};
+std::unique_ptr<GlContext> GpuPack::context_;
+std::unique_ptr<gpubuild::GpuLbvh> GpuPack::lbvh_;
+std::unique_ptr<gpubuild::GpuPloc> GpuPack::ploc_;
+
+PackedBvh cpuPack(const Bvh& bvh, const TriangleSoup& soup, const std::string& layout) {
+  return layout == "v1" ? packBvh(bvh, soup) : packBvh2cb(bvh, soup);
+}
+
+void expectSameStreams(const PackedBvh& gpu, const PackedBvh& cpu) {
+  EXPECT_EQ(gpu.layout, cpu.layout);
+  EXPECT_EQ(gpu.depth, cpu.depth);
+  ASSERT_EQ(gpu.nodes.size(), cpu.nodes.size());
+  ASSERT_EQ(gpu.triangles.size(), cpu.triangles.size());
+  ASSERT_EQ(gpu.attributes.size(), cpu.attributes.size());
+  for (size_t i = 0; i < gpu.nodes.size(); ++i) ASSERT_EQ(gpu.nodes[i], cpu.nodes[i]) << "node texel " << i;
+  for (size_t i = 0; i < gpu.triangles.size(); ++i) ASSERT_EQ(gpu.triangles[i], cpu.triangles[i]) << "triangle texel " << i;
+  for (size_t i = 0; i < gpu.attributes.size(); ++i)
+    ASSERT_EQ(gpu.attributes[i], cpu.attributes[i]) << "attribute texel " << i;
+}
+
+// Every builder x layout x leaf size on `soup`: the GPU's streams are the CPU's pack of the tree.
+void expectCpuStreams(const TriangleSoup& soup, const std::string& what) {
+  for (const char* builder : {"lbvh-gpu", "ploc-gpu"})
+    for (const char* layout : {"v1", kLayoutBvh2cb})
+      for (uint32_t leaf : {1u, 4u, 8u}) {
+        SCOPED_TRACE(what + ", " + builder + ", " + layout + ", leaf size " + std::to_string(leaf));
+        BuildOptions options;
+        options.maxLeafSize = leaf;
+        PackedBvh gpu;
+        const Bvh bvh = GpuPack::build(builder, soup, layout, options, &gpu);
+        expectSameStreams(gpu, cpuPack(bvh, soup, layout));
+      }
+}
+
+// One small triangle per Morton bit: triangle k sits at 2^(k / 3) grid cells along axis k % 3 (0 on the
+// others), so its code has bit k alone, every code a different highest bit, and lbvh's radix tree is a
+// chain about 60 deep (many pointer-jumping rounds). Corners at the grid's ends fix its bounds.
+Mesh mortonChain() {
+  Mesh m;
+  auto add = [&](glm::vec3 p) {
+    const uint32_t v = uint32_t(m.positions.size());
+    m.positions.push_back(p);
+    m.positions.push_back(p + glm::vec3(0.25f, 0.0f, 0.0f));
+    m.positions.push_back(p + glm::vec3(0.0f, 0.25f, 0.0f));
+    m.triangles.push_back({v, v + 1, v + 2});
+  };
+  add(glm::vec3(0.0f));
+  add(glm::vec3(float(1 << 21)));
+  for (int k = 0; k < 63; ++k) {
+    glm::vec3 p(0.0f);
+    p[k % 3] = float(1 << (k / 3));
+    add(p);
+  }
+  return m;
+}
+
+TEST_F(GpuPack, SyntheticMeshesGiveTheCpuStreams) {
+  using namespace traversaltest;
+  expectCpuStreams(soupOf({sphereMesh(12, 24, 1.0f), randomSoupMesh(700, 4)}), "sphere and random soup");
+  const TriangleSoup deep = soupOf({mortonChain()});
+  expectCpuStreams(deep, "a chain of Morton bits");
+  PackedBvh gpu;
+  BuildOptions leaf1;
+  leaf1.maxLeafSize = 1;
+  build("lbvh-gpu", deep, "v1", leaf1, &gpu);
+  EXPECT_GT(gpu.depth, 32u) << "the deep input is not deep: fewer jumping rounds than meant";
+}
+
+TEST_F(GpuPack, TheBunnyGivesTheCpuStreams) {
+  const std::filesystem::path path = std::filesystem::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes/bunny00.off";
+  if (!std::filesystem::exists(path)) BVHLAB_SKIP_OR_FAIL(path << " is missing: run `bash datasets/fetch.sh`");
+  expectCpuStreams(gatherTriangles(loadInput(path)), "bunny");
+}
+
+// Three copies of one triangle: the collapse makes the root one leaf (3 A <= A + 2 A + A). v1 holds
+// one node; bvh2-cb one record with the leaf in A and an empty slot over the same box in B.
+TEST_F(GpuPack, ARootThatIsOneLeaf) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.triangles = {{0, 1, 2}, {0, 1, 2}, {0, 1, 2}};
+  const TriangleSoup soup = traversaltest::soupOf({m});
+  for (const char* builder : {"lbvh-gpu", "ploc-gpu"})
+    for (const char* layout : {"v1", kLayoutBvh2cb}) {
+      SCOPED_TRACE(std::string(builder) + ", " + layout);
+      PackedBvh gpu;
+      const Bvh bvh = build(builder, soup, layout, BuildOptions{}, &gpu);
+      ASSERT_EQ(bvh.nodes.size(), 1u) << "the root was not collapsed: this case tests nothing";
+      expectSameStreams(gpu, cpuPack(bvh, soup, layout));
+      EXPECT_EQ(gpu.nodes.size(), std::string(layout) == "v1" ? 2u : 4u);
+    }
+}
+
+TEST_F(GpuPack, OnePrimitiveIsPackedOnTheCpu) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.triangles = {{0, 1, 2}};
+  const TriangleSoup soup = traversaltest::soupOf({m});
+  for (const char* layout : {"v1", kLayoutBvh2cb}) {
+    PackedBvh gpu;
+    const Bvh bvh = build("lbvh-gpu", soup, layout, BuildOptions{}, &gpu);
+    expectSameStreams(gpu, cpuPack(bvh, soup, layout));
+  }
+}
+
+TEST_F(GpuPack, OtherLayoutsMismatchedSoupsAndSizesPastTheLimitsAreRefused) {
+  const TriangleSoup soup = traversaltest::soupOf({traversaltest::randomSoupMesh(50, 2)});
+  PackedBvh out;
+  try {
+    build("lbvh-gpu", soup, "bvh4", BuildOptions{}, &out);
+    ADD_FAILURE() << "bvh4 was packed on the GPU";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'bvh4'"), std::string::npos) << e.what();
+  }
+  const TriangleSoup other = traversaltest::soupOf({traversaltest::randomSoupMesh(49, 2)});
+  const std::vector<Aabb> boxes = triangleBoxes(soup);
+  const std::vector<glm::vec3> centroids = triangleCentroids(soup);
+  const BuildInput input{boxes, centroids, soup.v0, soup.v1, soup.v2};
+  const GpuPackRequest mismatched{"v1", &other, &out};
+  EXPECT_THROW(lbvh_->build(input, BuildOptions{}, nullptr, &mismatched), std::invalid_argument);
+  // A limit the build fits in (its largest buffer, the node boxes, takes 48 bytes a primitive) but the
+  // pack's soup texels (112 bytes a primitive) do not.
+  const size_t n = 1000;
+  const gpubuild::GpuLimits limits{60 * n, 1u << 20};
+  for (const char* builder : {"lbvh-gpu", "ploc-gpu"}) {
+    SCOPED_TRACE(builder);
+    auto check = [&](bool pack) {
+      if (std::string(builder) == "ploc-gpu")
+        gpubuild::GpuPloc(limits).checkLimits(n, pack);
+      else
+        gpubuild::GpuLbvh(limits).checkLimits(n, pack);
+    };
+    EXPECT_NO_THROW(check(false));
+    try {
+      check(true);
+      ADD_FAILURE() << "the pack's buffers were not counted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("soup texels (pack)"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("GL_MAX_SHADER_STORAGE_BLOCK_SIZE"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST_F(GpuPack, TimedAsThePackPhase) {
+  const TriangleSoup soup = traversaltest::soupOf({traversaltest::randomSoupMesh(2000, 6)});
+  const std::vector<Aabb> boxes = triangleBoxes(soup);
+  const std::vector<glm::vec3> centroids = triangleCentroids(soup);
+  const BuildInput input{boxes, centroids, soup.v0, soup.v1, soup.v2};
+  for (const char* builder : {"lbvh-gpu", "ploc-gpu"}) {
+    const GpuBuildTiming t = timeGpuBuild(builder, input, BuildOptions{}, 3, kLayoutBvh2cb, &soup);
+    EXPECT_EQ(t.packLayout, kLayoutBvh2cb);
+    ASSERT_FALSE(t.phaseMedianMs.empty());
+    EXPECT_EQ(t.phaseMedianMs.back().first, "pack") << builder;
+    EXPECT_GT(t.phaseMedianMs.back().second, 0.0) << builder;
+    const GpuBuildTiming unpacked = timeGpuBuild(builder, input, BuildOptions{}, 3);
+    EXPECT_TRUE(unpacked.packLayout.empty());
+    for (const auto& [phase, ms] : unpacked.phaseMedianMs) EXPECT_NE(phase, "pack");
+  }
+}
+
+// `build --json`: gpu_pack names the layout packed on the GPU (v1 or bvh2-cb with raw triangles) and
+// is null where the CPU packs (another layout or triangle format).
+TEST(GpuPackCli, BuildJsonSaysWhichLayoutWasPackedOnTheGpu) {
+  std::string obj;
+  for (int i = 0; i < 12; ++i) obj += "v " + std::to_string(i) + " " + std::to_string(i % 3) + " 0\nv " +
+                                      std::to_string(i) + " 1 1\nv " + std::to_string(i + 1) + " 0 1\n";
+  for (int i = 0; i < 12; ++i)
+    obj += "f " + std::to_string(3 * i + 1) + " " + std::to_string(3 * i + 2) + " " + std::to_string(3 * i + 3) + "\n";
+  const std::string mesh = clitest::writeTemp("gpu_pack.obj", obj).string();
+  const std::pair<std::string, nlohmann::json> cases[] = {
+      {"--layout bvh2-cb", "bvh2-cb"}, {"", "v1"}, {"--layout bvh4", nullptr}, {"--triangles precomputed", nullptr}};
+  for (const auto& [flags, expected] : cases) {
+    const clitest::Result r = clitest::run("build --mesh " + mesh + " --builder ploc-gpu --json --gpu-builds 2 " + flags);
+    ASSERT_EQ(r.code, 0) << flags << ": " << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["gpu_pack"], expected) << flags;
+    EXPECT_EQ(j["gpu_phases_ms"].contains("pack"), !expected.is_null()) << flags;
+  }
+}
+
+}  // namespace
+}  // namespace bvhlab
