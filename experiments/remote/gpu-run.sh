@@ -13,11 +13,16 @@
 #   bash experiments/remote/gpu-run.sh BUNDLE OUTDIR [PAPER_S [BUILDERS_S [LAYOUTS_S [KERNELS_S [SHARING_S [GPUBUILD_S]]]]]]
 # The default caps fit one 10-minute call: 90 s for step 1b, 270 s for step 2, 150 s for step 3, the
 # older steps 4-6 skipped. GPUBUILD_MESHES (space-separated) replaces step 1b's two scenes.
+# Environment: RENDER_S (step 1's cap, default 90; 0 skips it) and DYNAMIC_S (step 7, default 0 = skipped):
+# experiments/configs/dynamic.toml, the update strategies over the bench animations with the GPU
+# builders among the per-frame rebuilds. A second, shorter call runs what the first left out, e.g.
+#   RENDER_S=0 DYNAMIC_S=200 bash experiments/remote/gpu-run.sh installed OUT2 0 0 0 0 0 0
 # BUNDLE: a folder or .tar.xz from experiments/remote/bundle.py (or "installed": ./build/bvhlab as it is).
 # datasets/cache must hold the meshes and worlds (bash datasets/fetch.sh, or unpack a copy of it).
 set -u
 bundle=$1; out=$2; paper_s=${3:-270}; builders_s=${4:-150}; layouts_s=${5:-0}; kernels_s=${6:-0}; sharing_s=${7:-0}
 gpubuild_s=${8:-90}
+render_s=${RENDER_S:-90}; dynamic_s=${DYNAMIC_S:-0}
 t0=$(date +%s); step() { echo "[gpu-run t=$(( $(date +%s) - t0 ))s] $*"; }
 mkdir -p "$out" /tmp/gpu-run
 if [ "$bundle" = installed ]; then
@@ -36,12 +41,16 @@ egl=$(find /usr/local/nvidia /usr/lib /usr/lib64 -name 'libEGL_nvidia.so.0' 2>/d
 step "binary $B; EGL vendor file '${vendor}', libEGL_nvidia '${egl}'"
 nvidia-smi -L 2>/dev/null; echo "host: $(nproc) cores"
 
-step "1. the EGL path: the report scene, 1280x720"
-timeout 90 "$B" render datasets/scenes/report.toml --backend egl --width 1280 --height 720 --frames 30 \
-  --warmup 5 -o "$out/report_gpu.png" --json > "$out/render_report.json"; echo "rc=$?"
-head -c 600 "$out/render_report.json"; echo
-timeout 60 "$B" render datasets/scenes/report.toml --backend egl --width 1280 --height 720 --frames 5 \
-  --view visits -o "$out/visits_gpu.png" --json > "$out/render_visits.json"; echo "rc=$?"
+if [ "$render_s" -gt 0 ]; then
+  step "1. the EGL path: the report scene, 1280x720"
+  timeout "$render_s" "$B" render datasets/scenes/report.toml --backend egl --width 1280 --height 720 --frames 30 \
+    --warmup 5 -o "$out/report_gpu.png" --json > "$out/render_report.json"; echo "rc=$?"
+  head -c 600 "$out/render_report.json"; echo
+  timeout 60 "$B" render datasets/scenes/report.toml --backend egl --width 1280 --height 720 --frames 5 \
+    --view visits -o "$out/visits_gpu.png" --json > "$out/render_visits.json"; echo "rc=$?"
+else
+  step "1. the EGL path skipped"
+fi
 
 # 1b: one JSON line per build into gpu-builders.jsonl: the GPU builders with --gpu-builds 11 (median and
 # interval of the GL-timed builds, phases, GL_RENDERER), the CPU builders three times each (build_ms is
@@ -97,4 +106,7 @@ mkdir -p /tmp/gpu-run/sharing
   echo "$s rc=$?"; grep 'sah-binned' /tmp/gpu-run/sharing/$s.log | tail -1
 done
 tar -C /tmp/gpu-run -czf "$out/sharing-gpu.tgz" --exclude=images sharing
+# 7: the update strategies over the bench animations, the GPU builders rebuilding every frame beside
+# the CPU builders of this host (docs/animation.md).
+sweep dynamic-gpu experiments/configs/dynamic.toml "$dynamic_s"
 step "done"; ls -la "$out"
