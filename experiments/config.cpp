@@ -206,6 +206,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         }
         else if (rk == "backend") out.backend = r.oneOf(rv, key, kBackends, "backend");
         else if (rk == "heatmaps") out.heatmaps = r.boolean(rv, key);
+        else if (rk == "gpu_builds") out.gpuBuilds = int(r.integer(rv, key, 0, 1000));
         else if (rk == "timeout_s") {
           out.timeoutSeconds = r.number(rv, key);
           if (!(out.timeoutSeconds > 0.0)) r.fail(rv.source(), key, "must be > 0 seconds");
@@ -238,7 +239,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         } else
           r.fail(rk.source(), key,
                  "unknown key; [render] has width, height, warmup, frames, backend, heatmaps, timeout_s, env, args, "
-                 "camera_path");
+                 "camera_path, gpu_builds");
       }
     } else if (section == "measure") {
       for (auto&& [mk, mv] : r.table(v, section)) {

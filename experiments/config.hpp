@@ -68,6 +68,9 @@ struct RunRender {
   // Runs on the `updates` axis (`trace --update`): frames 0, clipStep, 2 clipStep, ... of the scene's
   // clip, at most clipFrames of them (0 = all), each update timed updateRepeats times.
   int clipFrames = 0, clipStep = 1, updateRepeats = 1;
+  // [render] gpu_builds: a GPU builder's runs also time this many GL-timed builds (`--gpu-builds`,
+  // render/gpu_build_timing.hpp: gpu_build_ms and its interval); 0 = none.
+  int gpuBuilds = 0;
   // A timed sample of a GLSL trace lasts at least this long (`trace --min-sample-ms`): shorter
   // dispatches (a GPU) are repeated back to back after one untimed one, and the sample is their mean.
   // < 0: the tracer's default (10 ms on a GPU, 0 on a software renderer).

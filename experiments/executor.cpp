@@ -110,6 +110,7 @@ std::vector<std::string> renderCommandLine(const fs::path& binary, const RunRequ
     if (!r.cameraPathFile.empty()) argv.insert(argv.end(), {"--camera-path", r.cameraPathFile.string()});
   }
 
+  if (r.gpuBuilds > 0) argv.insert(argv.end(), {"--gpu-builds", std::to_string(r.gpuBuilds)});
   for (const auto& [name, value] : spec.axes) {
     const AxisInfo* axis = findAxis(name);
     if (name == "scene") continue;

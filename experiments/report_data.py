@@ -121,6 +121,18 @@ def fmt_ms(row, key="frame_ms"):
     return '%.*f <span class="ci">[%.*f, %.*f]</span>' % (d, ms, d, ci[0], d, ci[1])
 
 
+def build_ms_cell(row):
+    """A CPU builder's wall-clock build_ms; a GPU builder's GL-timed median with its interval where the run
+    timed its builds (`gpu_builds` in [render]: render/gpu_build_timing.hpp), marked GPU."""
+    gpu = num(row.get("gpu_build_ms"))
+    if gpu is None:
+        return fmt(row.get("build_ms"))
+    lo, hi = num(row.get("gpu_build_ms_ci_low")), num(row.get("gpu_build_ms_ci_high"))
+    interval = ' <span class="ci">[%s, %s]</span>' % (fmt(lo), fmt(hi)) if lo is not None and hi is not None else ""
+    packed = row.get("gpu_pack") or ""
+    return "%s%s on the GPU%s" % (fmt(gpu), interval, " (pack into %s included)" % html.escape(packed) if packed else "")
+
+
 def fps(row):
     return ratio(1000.0, num(row.get("frame_ms")))
 

@@ -6,7 +6,7 @@ import html
 import math
 import re
 
-from report_data import fmt, fmt_ms, fmt_ratio, label, num, plt
+from report_data import build_ms_cell, fmt, fmt_ms, fmt_ratio, label, num, plt
 from report_html import section_plot
 
 REFERENCE_BUILDER = "sah-binned"  # visits are compared against it when the scene has it
@@ -78,7 +78,8 @@ def section_rays(page, data):
            "95%% interval. Visits and tests are per ray over the batch, with 95%% intervals of the mean; "
            "<i>visits vs %s</i> compares the same rays traced over two trees (conservative interval). "
            "<i>mismatches</i>: rays whose closest triangle (any-hit: answer) differs from Embree's, ties at equal "
-           "distance not counted." % REFERENCE_BUILDER)
+           "distance not counted. <i>build ms</i>: a CPU builder's wall-clock build; a GPU builder's GL-timed build "
+           "(median and interval over <code>gpu_builds</code> builds) where the run timed it." % REFERENCE_BUILDER)
     for scene in data.values(rows, "scene"):
         srows = [r for r in rows if label(r, "scene") == scene]
         page.section("rays-" + slug(scene), "%s" % scene, level=3)
@@ -101,11 +102,13 @@ def section_rays(page, data):
                               fmt(r.get("rays")), fmt_ms(r), mrays_cell(r), fmt(r.get("embree_mrays_per_s")),
                               fmt_ratio(r.get("ratio_to_embree"), r.get("ratio_ci_low"), r.get("ratio_ci_high")),
                               mean_cell(r, "node_visits_per_ray"), vs, mean_cell(r, "triangle_tests_per_ray"),
-                              fmt(r.get("ray_cost"), 4), fmt(r.get("sah_cost"), 4), fmt(r.get("hit_mismatches"))])
+                              fmt(r.get("ray_cost"), 4), fmt(r.get("sah_cost"), 4), build_ms_cell(r),
+                              fmt(r.get("hit_mismatches"))])
         page.table("rays-table-" + slug(scene),
                    ["workload", "builder", "kernel", "leaf", "rays", "GLSL ms [95%]", "Mrays/s [95%]",
                     "Embree Mrays/s", "× Embree's time [95%]", "visits/ray [95%]",
-                    "visits vs %s [95%%]" % REFERENCE_BUILDER, "tests/ray [95%]", "ray cost", "SAH", "mismatches"],
+                    "visits vs %s [95%%]" % REFERENCE_BUILDER, "tests/ray [95%]", "ray cost", "SAH", "build ms",
+                    "mismatches"],
                    cells)
     section_plot(page, "plot-scaling", "Scaling series: cost against size", scaling_plot(data, rows),
                  "Scenes named scaling_*: one generator at sizes from 10k triangles up. Build time, SAH, node visits "

@@ -6,7 +6,7 @@ import json
 import os
 import platform
 
-from report_data import (AXES, builder_bests, describe, fmt, fmt_ms, label, matplotlib, num, plural,
+from report_data import (AXES, build_ms_cell, builder_bests, describe, fmt, fmt_ms, label, matplotlib, num, plural,
                          representative, typical_values)
 from report_html import figure_uri
 from report_plots import heatmap_scale
@@ -78,7 +78,8 @@ def section_builder_table(page, data):
     page.p("One row per builder and scene: its run with the lowest median frame time over its own choices "
            "(kernel, leaf size, bins), the other axes held at the setting the builders share. <i>vs fastest</i> "
            "is that run against the scene's fastest builder at its best, with the interval and verdict from "
-           "findings.json when it has them.")
+           "findings.json when it has them. <i>build ms</i> is the CPU builders' wall-clock build and the GPU "
+           "builders' GL-timed build (median and interval over repeated builds) where the runs timed it.")
     config_axes = [a for a in data.varying(rows, exclude=("scene", "builder"))]
     out = []
     for scene in data.values(rows, "scene"):
@@ -96,7 +97,7 @@ def section_builder_table(page, data):
                         fmt(best.get("sah_cost"), 4), fmt(best.get("epo"), 4),
                         "%s (%s)" % (fmt(best.get("node_visits_per_ray"), 4), fmt(best.get("node_visits_p95"))),
                         "%s (%s)" % (fmt(best.get("triangle_tests_per_ray"), 4), fmt(best.get("triangle_tests_p95"))),
-                        fmt(best.get("ray_cost"), 4), fmt(best.get("build_ms")), sah_before(best),
+                        fmt(best.get("ray_cost"), 4), build_ms_cell(best), sah_before(best),
                         fmt(best.get("optimize_ms")), references(best), fmt(best.get("nodes")),
                         fmt(mb / 1e6 if mb is not None else None)])
     page.table("table-builders-data", ["scene", "builder", "runs", "best configuration", "frame ms [95%]",

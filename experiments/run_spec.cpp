@@ -74,6 +74,7 @@ json RunRender::keyJson() const {
   key["target_ci_pct"] = targetCiPct;
   if (maxSeconds > 0.0) key["max_seconds"] = maxSeconds;
   if (programCopies != 1) key["program_copies"] = programCopies;  // frame_ms is then a median over copies
+  if (gpuBuilds != 0) key["gpu_builds"] = gpuBuilds;  // only when set: other configs' keys stay as they were
   return key;
 }
 
@@ -177,6 +178,7 @@ RunSpec RunSpec::fromJson(const json& j) {
   s.render.clipFrames = r.value("clip_frames", s.render.clipFrames);
   s.render.clipStep = r.value("clip_step", s.render.clipStep);
   s.render.updateRepeats = r.value("update_repeats", s.render.updateRepeats);
+  s.render.gpuBuilds = r.value("gpu_builds", s.render.gpuBuilds);
   s.render.cameraPath = r.value("camera_path", "");
   s.render.cameraPathHash = r.value("camera_path_hash", "");
   s.render.cameraPathFile = r.value("camera_path_file", "");

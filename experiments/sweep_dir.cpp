@@ -151,7 +151,7 @@ const std::vector<std::string>& resultColumns() {
       "aa_shared_control_ratio", "aa_shared_control_ci_low", "aa_shared_control_ci_high", "session", "program",
       "replicates",
       "bvh_stack_size",
-      "build_ms", "sah_cost", "epo", "tree_hash", "references", "sah_before_optimize", "optimize_ms", "nodes",
+      "build_ms", "gpu_build_ms", "gpu_build_ms_ci_low", "gpu_build_ms_ci_high", "gpu_pack", "sah_cost", "epo", "tree_hash", "references", "sah_before_optimize", "optimize_ms", "nodes",
       "leaves", "bvh_depth",
       "bytes", "bytes_per_triangle", "triangles", "node_visits_per_ray", "node_visits_p95", "triangle_tests_per_ray",
       "triangle_tests_p95", "box_tests_per_ray", "box_tests_p95", "ray_cost", "mesh_rays", "effective_depth", "image_mae", "image_psnr", "image_error_note",

@@ -60,6 +60,10 @@ void addTreeOptions(CLI::App& app, RenderCommand& rc) {
   app.add_option("--morton-grid", rc.mortonGrid,
                  "ploc, lbvh: the Morton codes' grid: cube (one cell size on every axis) | axes (each axis over its own extent)");
   app.add_option("--storage", rc.storage, "tbo | tex2d | ssbo");
+  app.add_option("--gpu-builds", rc.gpuBuilds,
+                 "a GPU builder with --json: GL-timed builds after a warm-up, recorded as gpu_build_ms with its "
+                 "interval (0 = none)")
+      ->check(CLI::Range(0, 1000));
 }
 
 void addRenderOptions(CLI::App& app, RenderCommand& rc, RenderCliText& text) {

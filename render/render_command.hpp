@@ -53,6 +53,9 @@ struct RenderCommand {
   // A shorter clip: frames 0, clipStep, 2 clipStep, ... of the scene's clip, at most clipFrames of
   // them (0 = as many as the clip has).
   int clipFrames = 0, clipStep = 1;
+  // A GPU builder with --json: this many GL-timed builds of the scene after a warm-up, recorded as
+  // gpu_build_ms and its interval (render/gpu_build_timing.hpp); 0 = none.
+  int gpuBuilds = 0;
 };
 
 // Runs it; prints the JSON object on stdout when asked. Returns the process exit code.

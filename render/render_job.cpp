@@ -8,6 +8,7 @@
 
 #include "datasets/image_io.hpp"
 #include "datasets/scene_io.hpp"
+#include "render/gpu_build_timing.hpp"
 #include "render/frame_stats.hpp"
 #include "render/heatmap.hpp"
 #include "layout/layouts.hpp"
@@ -284,6 +285,7 @@ nlohmann::json finishRender(const RenderCommand& cmd, const RenderSetup& setup, 
   out["warnings"] = setup.buildReview.warnings;
   out["triangles"] = prepared.soup.size();
   out["build_ms"] = b.buildMs;
+  addGpuBuildTiming(out, prepared, cmd.builder, setup.build, cmd.gpuBuilds);
   out["sah_cost"] = b.sahCost;
   out["nodes"] = b.nodes;
   out["leaves"] = b.leaves;

@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "render/frame_stats.hpp"
+#include "render/gpu_build_timing.hpp"
 #include "render/gl_context.hpp"
 #include "traversal/kernels.hpp"
 
@@ -306,6 +307,7 @@ nlohmann::json traceResult(const TraceCommand& c, const TraceSetup& s, const Tra
   j["storage"] = storageName(to.storage);
   j["triangles"] = prepared->soup.size();
   j["build_ms"] = b.buildMs;
+  addGpuBuildTiming(j, *prepared, rc.builder, s.setup.build, rc.gpuBuilds);
   j["sah_cost"] = b.sahCost;
   j["references"] = b.references;
   j["tree_hash"] = prepared->treeHash();

@@ -2,6 +2,7 @@
 // expansion minus exclusions, stable run keys, sweep unions and references, generated scenes, camera
 // paths, the render command line, and every shipped config against the real registries and data.
 #include "test_experiments_fixture.hpp"
+#include "builders/gpu/gpu_builders.hpp"
 #include "layout/layouts.hpp"
 #include "traversal/kernels.hpp"
 
@@ -207,8 +208,10 @@ leaf_sizes = [1, 4]
 // Every shipped config loads against the real builder and kernel registries, with its data: a config
 // whose scene or mesh is missing FAILS (CI fetches the data with datasets/fetch.sh first; a shipped
 // config that cannot run is a broken config, not a skip). Known configs also keep their run counts;
-// one added later is loaded and checked for runs without a count.
+// one added later is loaded and checked for runs without a count. The registry is bvhlab's: the CPU
+// builders and the GPU builders it registers.
 TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
+  registerGpuBuilders();  // as the bvhlab app does before it parses a command (no GL needed to register)
   const fs::path dir = fs::path(BVHLAB_SOURCE_DIR) / "experiments" / "configs";
   std::map<std::string, size_t> expectedRuns = {
       {"quick.toml", 72},      {"seed-figures.toml", 20}, {"builders.toml", 1990}, {"accuracy-vs-time.toml", 30},
@@ -217,7 +220,7 @@ TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
       {"flythrough.toml", 15}, {"large.toml", 2}, {"bench.toml", 400},
       {"morton-grid.toml", 20}, {"ploc-top-down.toml", 12}, {"storage.toml", 15},
       {"sbvh-knobs.toml", 15},  // 3 scenes x (sah-binned + 4 sbvh settings)
-      {"builders-gpu.toml", 72},   // 3 scenes x 2 workloads x 9 builders + 2 rendered scenes x 9
+      {"builders-gpu.toml", 88},   // 3 scenes x 2 workloads x 11 builders + 2 rendered scenes x 11
       {"kernels-gpu.toml", 21}};   // 3 scenes x 2 workloads x 3 kernels + the report scene x 3
   // layouts.toml sweeps `layouts = "all"`: (3 scenes x 2 workloads + the report scene + the bunny's diffuse
   // rays with indexed triangles) per registered layout.
@@ -284,6 +287,28 @@ uber = true
         "--branching report", "--view visits", "--uber", "--exposure 2"})
     EXPECT_NE(line.find(part), std::string::npos) << part << " not in: " << line;
   EXPECT_EQ(cfg.runs[0].axis("builder")->label, "sah-binned[bins=12]");
+}
+
+// [render] gpu_builds reaches the command line (render and trace runs alike), the run's key (only when
+// set: other configs keep their keys) and plan.json; a value outside 0..1000 is refused naming the key.
+TEST_F(Experiments, GpuBuildsReachTheCommandLineTheKeyAndThePlan) {
+  writeText(root / "m.off", "OFF\n0 0 0\n");
+  const ExperimentConfig plain = parse("[axes]\nscenes = 'm.off'\n");
+  const ExperimentConfig timed = parse("[render]\ngpu_builds = 6\n[axes]\nscenes = 'm.off'\n");
+  ASSERT_EQ(timed.runs.size(), 1u);
+  EXPECT_NE(plain.runs[0].key, timed.runs[0].key);
+  const std::string line = shellQuote(renderCommandLine("/bin/bvhlab", RunRequest{timed.runs[0], root / "i.png", "", "", ""}));
+  EXPECT_NE(line.find("--gpu-builds 6"), std::string::npos) << line;
+  const std::string plainLine = shellQuote(renderCommandLine("/bin/bvhlab", RunRequest{plain.runs[0], root / "i.png", "", "", ""}));
+  EXPECT_EQ(plainLine.find("--gpu-builds"), std::string::npos) << plainLine;
+  EXPECT_EQ(RunSpec::fromJson(timed.runs[0].toJson()).render.gpuBuilds, 6);
+  try {
+    parse("[render]\ngpu_builds = -1\n[axes]\nscenes = 'm.off'\n");
+    ADD_FAILURE() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cfg.toml:2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("render.gpu_builds"), std::string::npos) << e.what();
+  }
 }
 
 // A builder table's ploc_radius and morton_size_bits reach the render command line and the label, and

@@ -4,6 +4,8 @@
 // primitive packed on the CPU; other layouts, mismatched soups and sizes past the GL limits refused;
 // the `pack` phase timed; `build --json` saying which layout it packed.
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -29,6 +31,7 @@
 namespace bvhlab {
 namespace {
 
+namespace fs = std::filesystem;
 using gpubuild::GpuPackRequest;
 
 class GpuPack : public ::testing::Test {
@@ -237,6 +240,55 @@ TEST(GpuPackCli, BuildJsonSaysWhichLayoutWasPackedOnTheGpu) {
     EXPECT_EQ(j["gpu_pack"], expected) << flags;
     EXPECT_EQ(j["gpu_phases_ms"].contains("pack"), !expected.is_null()) << flags;
   }
+}
+
+// A sweep with [render] gpu_builds through `bvhlab run`: the GPU builder's trace row records its
+// GL-timed build (median, interval, the layout packed on the GPU), the CPU builder's row none, and the
+// report's builder table shows the GPU time marked as such.
+TEST(GpuPackCli, SweepRowsAndTheReportCarryTheGlTimedBuild) {
+  const fs::path cfg = clitest::writeTemp("gpu-pack-run/cfg.toml", R"(
+[experiment]
+name = "gpu-builds-test"
+description = "GL-timed GPU builds in a sweep"
+[render]
+frames = 3
+warmup = 1
+gpu_builds = 6
+[measure]
+max_frames = 3
+[trace]
+count = 2000
+[axes]
+scenes = { generate = "large", triangles = 3000, seed = 2, name = "cloud" }
+builders = ["lbvh", "lbvh-gpu"]
+rays = "primary"
+)");
+  const fs::path out = clitest::testDir() / "gpu-pack-run/out";
+  const clitest::Result r = clitest::run("run " + cfg.string() + " --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::ifstream in(out / "results.json");
+  const nlohmann::json results = nlohmann::json::parse(in);
+  int gpuRows = 0, cpuRows = 0;
+  for (const nlohmann::json& row : results["rows"]) {
+    if (row.value("control_of", nlohmann::json()).is_string()) continue;
+    ASSERT_EQ(row["status"], "ok") << row.dump();
+    if (row["builder"] == "lbvh-gpu") {
+      ++gpuRows;
+      ASSERT_TRUE(row["gpu_build_ms"].is_number()) << row.dump();
+      EXPECT_GT(row["gpu_build_ms"].get<double>(), 0.0);
+      EXPECT_LE(row["gpu_build_ms_ci_low"].get<double>(), row["gpu_build_ms"].get<double>());
+      EXPECT_GE(row["gpu_build_ms_ci_high"].get<double>(), row["gpu_build_ms"].get<double>());
+      EXPECT_EQ(row["gpu_pack"], "v1");
+    } else {
+      ++cpuRows;
+      EXPECT_TRUE(!row.contains("gpu_build_ms") || row["gpu_build_ms"].is_null()) << row.dump();
+    }
+  }
+  EXPECT_EQ(gpuRows, 1);
+  EXPECT_EQ(cpuRows, 1);
+  std::ifstream hin(out / "report.html");
+  const std::string html((std::istreambuf_iterator<char>(hin)), {});
+  EXPECT_NE(html.find("on the GPU (pack into v1 included)"), std::string::npos);
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 
 #include "builders/builder.hpp"
 #include "builders/gpu/gpu_lbvh.hpp"
+#include "builders/gpu/gpu_pack.hpp"
 #include "builders/gpu/gpu_ploc.hpp"
 #include "layout/layout_bvh2cb.hpp"
 #include "render/gl_context.hpp"
@@ -108,6 +109,11 @@ void registerGpuBuilders() {
                      /*usesMortonSizeBits=*/true};
     ploc.gpu = true;
     registerBuilder(std::move(ploc));
+    setGpuBuildTimer([](const std::string& builder, const BuildInput& input, const BuildOptions& options, size_t builds,
+                        const std::string& layout, const std::string& triangleFormat, const TriangleSoup& soup) {
+      const bool pack = gpubuild::gpuPackable(layout) && triangleFormat == "raw";
+      return timeGpuBuild(builder, input, options, builds, pack ? layout : std::string(), &soup);
+    });
     return true;
   }();
   (void)once;

@@ -16,11 +16,12 @@
 
 #include "builders/bvh.hpp"
 #include "layout/layout.hpp"
-#include "render/frame_stats.hpp"
+#include "render/gpu_build_timing.hpp"
 
 namespace bvhlab {
 
-// Adds lbvh-gpu and ploc-gpu to builders() (once; later calls do nothing).
+// Adds lbvh-gpu and ploc-gpu to builders() and timeGpuBuild as the runs' GPU build timer
+// (render/gpu_build_timing.hpp), once; later calls do nothing.
 void registerGpuBuilders();
 
 // The registry's entry for lbvh-gpu: gpubuild::GpuLbvh in the current or a headless context.
@@ -28,20 +29,7 @@ Bvh buildLbvhGpu(const BuildInput& input, const BuildOptions& options);
 // The registry's entry for ploc-gpu: gpubuild::GpuPloc likewise.
 Bvh buildPlocGpu(const BuildInput& input, const BuildOptions& options);
 
-// A GPU builder's GL-timed build: `builds` builds after one untimed warm-up (the driver compiles the
-// shaders at the first dispatch), the median total with its order-statistic interval
-// (render/frame_stats.hpp; none below kMinValuesForInterval builds) and each phase's median.
-struct GpuBuildTiming {
-  std::optional<Interval> totalMs;
-  double medianMs = 0.0;
-  std::vector<std::pair<std::string, double>> phaseMedianMs;
-  size_t builds = 0;
-  // ploc-gpu's clustering passes, passes issued and pass-state readbacks per build (GpuPhaseTimes; the
-  // same in every build of one input); 0 for lbvh-gpu.
-  uint32_t passes = 0, passesIssued = 0, readbacks = 0;
-  std::string packLayout;  // the layout the builds packed into on the GPU ("" = none)
-  std::string renderer;    // GL_RENDERER of the context that built
-};
+// GpuBuildTiming: render/gpu_build_timing.hpp (runs record it through the timer registerGpuBuilders sets).
 // With `packLayout` (v1 or bvh2-cb: gpubuild::gpuPackable) and the `soup` the input was made from, every
 // build also packs on the GPU (phase `pack`), and the last build's streams are checked texel for texel
 // against the CPU's pack of its tree: a difference throws std::runtime_error naming the stream and texel.
