@@ -40,15 +40,16 @@ std::vector<BatchHit> decode(const std::vector<glm::uvec4>& raw, bool anyHit, co
 
 GlRayTracer::GlRayTracer(const PackedBvh& packed, const RayTracerOptions& options)
     : options_(options), layout_(packed.layout), triangleFormat_(packed.triangleFormat), stack_(stackSizeFor(packed)),
-      persistent_(persistentThreadsOn(findKernel(packed.layout, options.kernel))) {
+      persistent_(persistentThreadsOn(findKernel(packed.layout, options.kernel),
+                                      reinterpret_cast<const char*>(glGetString(GL_RENDERER)))) {
   const int stack = stack_;
   const std::string& layout = packed.layout;
   timed_ = compileComputeProgram(
       assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, false, layout,
-                        packed.triangleFormat, options.twoLevel));
+                        packed.triangleFormat, options.twoLevel, persistent_));
   counted_ = compileComputeProgram(
       assembleRayTracer(options.kernel, options.storage, options.robust, stack, options.anyHit, true, layout,
-                        packed.triangleFormat, options.twoLevel));
+                        packed.triangleFormat, options.twoLevel, persistent_));
   upload(packed);
   const char* names[4] = {"u_nodes", "u_triangles", "u_attributes", "u_vertices"};
   for (GLuint program : {timed_, counted_}) {

@@ -40,6 +40,8 @@ class GlRayTracer {
   // stackSize() (std::invalid_argument otherwise; build a new tracer then). Not waited for.
   void setTree(const PackedBvh& packed);
   int stackSize() const { return stack_; }
+  // Whether the programs run trace_rays.glsl's persistent-threads loop (persistentThreadsOn).
+  bool persistentThreads() const { return persistent_; }
   // One dispatch over every ray, waited for (glFinish); returns wall-clock ms. With dispatches > 1
   // (a GPU, where one dispatch is shorter than its clock's ramp-up and glFinish's round trip): one
   // untimed dispatch waited for, then `dispatches` back to back (a barrier between, so they do not

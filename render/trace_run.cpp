@@ -295,6 +295,7 @@ nlohmann::json traceResult(const TraceCommand& c, const TraceSetup& s, const Tra
   j["hits"] = glFound;
   j["embree_hits"] = embreeFound;
   j["hit_mismatches"] = agree.mismatches;
+  j["persistent_threads"] = gl.persistentThreads();
   j["hit_miss_mismatches"] = agree.hitMiss;
   j["hit_ties"] = agree.ties;
   j["builder"] = rc.builder;

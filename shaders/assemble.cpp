@@ -247,11 +247,11 @@ AssembledShader assembleTraversal(const std::string& kernel, Storage storage, Ro
 
 AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
                                   bool anyHit, bool countStats, const std::string& layout,
-                                  const std::string& triangles, bool twoLevel) {
+                                  const std::string& triangles, bool twoLevel, bool persistentThreads) {
   std::string defines;
   if (anyHit) defines += "#define ANY_HIT 1\n";
   if (countStats) defines += "#define COUNT_STATS 1\n";
-  if (persistentThreadsOn(findKernel(layout, kernel))) {
+  if (persistentThreads) {
     // trace_rays.glsl's persistent threads; the subgroup batch fetch where the extension is available
     // (its macro is defined only then: the GLSL falls back to one ray per atomicAdd).
     defines += "#define PERSISTENT_THREADS 1\n#extension GL_KHR_shader_subgroup_ballot : enable\n";

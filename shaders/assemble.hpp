@@ -115,9 +115,12 @@ AssembledShader assembleTracer(const SceneFeatures& features, const ShaderOption
 // (checkTriangleFormat).
 // twoLevel: over a two-level tree (layout/pack_two_level.hpp); refused (std::invalid_argument) for a
 // layout or kernel without a two-level walk (checkTwoLevel).
+// persistentThreads: trace_rays.glsl's persistent-threads loop (the caller decides: persistentThreadsOn,
+// traversal/kernels.hpp).
 AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
                                   bool anyHit, bool countStats, const std::string& layout = "v1",
-                                  const std::string& triangles = "raw", bool twoLevel = false);
+                                  const std::string& triangles = "raw", bool twoLevel = false,
+                                  bool persistentThreads = false);
 // The traversal alone (defines, common.glsl, storage, layout, ray tests, triangle format, kernel;
 // for a two-level tree the kernel twice around two_level.glsl): traceClosest and traceAny, for a
 // caller's own main (the ray tracer's trace_rays.glsl, tests). `defines`: extra #define lines.

@@ -7,9 +7,10 @@
 //   over a two-level tree (TWO_LEVEL) two per ray: counts 2i as above for the BLAS walks, counts 2i+1 =
 //   (TLAS node visits, instance tests, 0, TLAS box tests)
 //
-// PERSISTENT_THREADS (traversal/kernels.hpp persistentThreadsOn: opt-in, see there why): Aila & Laine's persistent
-// threads. The host launches a fixed number of workgroups (render/ray_tracer_gl.cpp) and every
-// invocation loops, taking its next ray from the atomic counter `nextRay` until the rays run out. Where
+// PERSISTENT_THREADS (traversal/kernels.hpp persistentThreadsOn: which kernels, and why not on
+// llvmpipe): Aila & Laine's persistent threads. The host launches a fixed number of workgroups
+// (render/ray_tracer_gl.cpp) and every invocation loops, taking its next ray from the atomic counter
+// `nextRay` until the rays run out. Where
 // GL_KHR_shader_subgroup_ballot is available the subgroup's active invocations take one batch of
 // consecutive rays with one atomicAdd (the paper's per-warp fetch), ray base + rank among the active
 // lanes; elsewhere each invocation takes one ray per atomicAdd. Either way each ray is traced by exactly

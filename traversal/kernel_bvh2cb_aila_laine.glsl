@@ -42,7 +42,8 @@
 //
 // Compute path (shaders/trace_rays.glsl): this kernel is registered with persistent threads
 // (KernelInfo::persistentThreads): a fixed number of invocations loop, taking batches of rays from an
-// atomic counter, one batch per subgroup where GL_KHR_shader_subgroup_ballot is available.
+// atomic counter, one batch per subgroup where GL_KHR_shader_subgroup_ballot is available (not on
+// llvmpipe by default: traversal/kernels.hpp persistentThreadsOn says why).
 
 #ifndef KERNEL_WALK
 #define KERNEL_WALK traverseBvh2cbAilaLaine

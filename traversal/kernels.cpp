@@ -55,7 +55,7 @@ const std::vector<KernelInfo>& bvh2cbKernels() {
        "explicit stack over both child boxes of one record, nearer child first, leaves walked from the parent's slot",
        "kernel_bvh2cb_stack.glsl", "bvh2-cb", BVHLAB_KERNEL_MIRRORS(glsl::bvh2cb_stack)},
       {"bvh2cb-aila-laine",
-       "Aila & Laine 2009/2012: while-while loop, postponed leaves (persistent threads in the compute path with BVHLAB_PERSISTENT_THREADS=1)",
+       "Aila & Laine 2009/2012: while-while loop, postponed leaves (persistent threads in the compute path, except on llvmpipe)",
        "kernel_bvh2cb_aila_laine.glsl", "bvh2-cb", BVHLAB_KERNEL_MIRRORS(glsl::bvh2cb_aila_laine), true},
   };
   return table;
@@ -158,9 +158,12 @@ int stackSizeFor(const PackedBvh& packed) {
   return int(bound);
 }
 
-bool persistentThreadsOn(const KernelInfo& kernel) {
-  const char* on = std::getenv("BVHLAB_PERSISTENT_THREADS");
-  return kernel.persistentThreads && on && std::strcmp(on, "1") == 0;
+bool persistentThreadsOn(const KernelInfo& kernel, const std::string& renderer) {
+  if (!kernel.persistentThreads) return false;
+  const char* env = std::getenv("BVHLAB_PERSISTENT_THREADS");
+  if (env && std::strcmp(env, "1") == 0) return true;
+  if (env && std::strcmp(env, "0") == 0) return false;
+  return renderer.find("llvmpipe") == std::string::npos;
 }
 
 }  // namespace bvhlab

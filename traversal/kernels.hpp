@@ -42,13 +42,15 @@ struct KernelInfo {
 };
 
 // The kernels of layout v1, the default layout (what every v1 test and sweep iterates over).
-// Whether the compute path runs `kernel` with persistent threads: its KernelInfo::persistentThreads and
-// the environment variable BVHLAB_PERSISTENT_THREADS=1. Off by default: on llvmpipe (Mesa 22.3, LLVM
-// 15) the persistent loop returned 5 to 17 of 65,536 diffuse bunny rays as misses that Embree hits,
-// with this kernel and with bvh2cb-stack-ordered alike, in every form of the loop tried (subgroup batch
-// fetch, one atomicAdd per ray, a for loop without break), while the same kernels with one invocation
-// per ray miss none. Until a GPU shows the loop loses no ray (trace's hit_mismatches), it is opt-in.
-bool persistentThreadsOn(const KernelInfo& kernel);
+// Whether the compute path runs `kernel` with persistent threads on the GL implementation named
+// `renderer` (GL_RENDERER): only a kernel designed for them (KernelInfo::persistentThreads), and by
+// default not on llvmpipe. There every shader invocation has ONE budget of 65,535 loop iterations shared
+// by all its loops (gallivm's loop limiter, LP_MAX_TGSI_LOOP_ITERATIONS), after which every loop exits:
+// a persistent invocation tracing hundreds of rays exhausts it, and its last rays end their walks early
+// (measured: 5 to 17 of 65,536 diffuse bunny rays returned as misses, each traced after about 300 rays
+// in its invocation; tests/test_persistent_threads.cpp shows the budget). BVHLAB_PERSISTENT_THREADS=1
+// turns them on anyway, =0 off everywhere.
+bool persistentThreadsOn(const KernelInfo& kernel, const std::string& renderer);
 const std::vector<KernelInfo>& kernels();
 // The kernels that walk `layout`; throws std::invalid_argument naming the valid layouts.
 const std::vector<KernelInfo>& kernelsFor(const std::string& layout);
