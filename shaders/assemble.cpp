@@ -118,7 +118,9 @@ const char* kKindDefines[6] = {"HAS_SPHERE", "HAS_BOX", "HAS_CYLINDER", "HAS_CON
 // The kernel's module: once for a flat tree; for a two-level tree (traversal/two_level.glsl) twice
 // around two_level.glsl, as the BLAS walk and as the TLAS walk with its counters renamed.
 void appendKernel(Assembler& a, const std::string& layout, const std::string& kernel, bool twoLevel) {
-  const std::string& file = findKernel(layout, kernel).glslFile;
+  const KernelInfo& info = findKernel(layout, kernel);
+  const std::string& file = info.glslFile;
+  if (!info.glslDefines.empty()) a.raw("<kernel defines>", info.glslDefines);
   if (!twoLevel) {
     a.module(file);
     return;

@@ -318,6 +318,36 @@ TEST(WideKernelsGlsl, EqualTheMirrorPerRay) {
         }
 }
 
+// The fetch-whole kernels walk as the stack-ordered ones do: per ray the same hit and the same
+// counters, bytes included (their mirrors; the GLSL equals each mirror above).
+TEST(WideKernels, FetchWholeWalksAsStackOrdered) {
+  const layouttest::TestMesh& m = layouttest::testMeshes().front();
+  const Bvh tree = build("sah-binned", m.soup);
+  const std::vector<BatchRay> rays = testRays(m.soup, 800, 11);
+  for (const char* layout : {"bvh4", "bvh8"}) {
+    const PackedBvh packed = findLayout(layout).pack(tree, m.soup);
+    const KernelInfo& plain = findKernel(layout, std::string(layout) + "-stack-ordered");
+    const KernelInfo& whole = findKernel(layout, std::string(layout) + "-fetch-whole");
+    size_t hits = 0;
+    for (const BatchRay& r : rays) {
+      glsl::Counters a, b;
+      glsl::MeshHit ha, hb;
+      const bool fa = plain.traceClosest(packed, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, ha, a);
+      const bool fb = whole.traceClosest(packed, glsl::Ray{r.origin, r.dir}, r.tMin, r.tMax, hb, b);
+      ASSERT_EQ(fa, fb);
+      ASSERT_EQ(ha.tri, hb.tri);
+      ASSERT_EQ(ha.t, hb.t);
+      ASSERT_EQ(a.nodeVisits, b.nodeVisits);
+      ASSERT_EQ(a.boxTests, b.boxTests);
+      ASSERT_EQ(a.triTests, b.triTests);
+      ASSERT_EQ(a.nodeBytes, b.nodeBytes);
+      ASSERT_EQ(a.stackBytes, b.stackBytes);
+      hits += fa;
+    }
+    EXPECT_GT(hits, rays.size() / 10) << layout;
+  }
+}
+
 // A kernel of another layout is refused, naming the wide layout's kernel.
 TEST(WideKernels, MismatchedLayoutAndKernelAreRefused) {
   const auto message = [](const std::function<void()>& f) {

@@ -1,6 +1,11 @@
 // kernel_wide_stack.glsl — ordered stack traversal over the wide layouts bvh4 and bvh8
 // (layout/layout_wide.hpp; registered as bvh4-stack-ordered and bvh8-stack-ordered, the same code:
-// the width only bounds a record's child count, which the slot pointing at it carries). At a record
+// the width only bounds a record's child count, which the slot pointing at it carries).
+//
+// WIDE_FETCH_WHOLE = W (registered as bvh4-fetch-whole and bvh8-fetch-whole): the same walk, but a
+// record's 2k texels are all fetched into registers before its first box test, so a GPU has the k
+// slots' loads in flight at once instead of one slot's per test (the node fetched whole, as the wide
+// kernels of Ylitie et al. 2017 fetch theirs). Every counter, byte and hit is the plain kernel's. At a record
 // the kernel tests every child box; the nearest child the ray meets is walked next (held in
 // registers) and the others met are pushed sorted by entry distance, nearer above farther (insertion
 // into this record's part of the stack). A leaf is walked straight from its slot, and a popped entry whose entry lies beyond the
@@ -55,10 +60,22 @@ bool traverseWide(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit)
       uint nearLink = 0u, nearCount = 0u;
       float nearEnter = 0.0;
       bool met = false;
+#ifdef WIDE_FETCH_WHOLE
+      children = min(children, uint(WIDE_FETCH_WHOLE));  // the packer's bound (k <= W): the arrays' size
+      uvec4 slotLo[WIDE_FETCH_WHOLE], slotHi[WIDE_FETCH_WHOLE];
+      for (uint i = 0u; i < children; ++i) {
+        slotLo[i] = fetchNode(int(link + 2u * i));
+        slotHi[i] = fetchNode(int(link + 2u * i) + 1);
+      }
+#endif
       for (uint i = 0u; i < children; ++i) {
         uint childLink, childCount;
         float enter;
+#ifdef WIDE_FETCH_WHOLE
+        decodeSlot(slotLo[i], slotHi[i], bmin, bmax, childLink, childCount);
+#else
         loadSlot(link + 2u * i, bmin, bmax, childLink, childCount);
+#endif
         g_boxTests++;
         if (intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, enter)) {
           if (!met) {

@@ -1,6 +1,8 @@
 // kernel_wide_stack.hpp — C++ mirror of kernel_wide_stack.glsl (ordered stack over layouts bvh4 and
 // bvh8; stack bound, NaN handling and counter definitions are documented there).
 #pragma once
+#include <algorithm>
+
 #include "traversal/intersectors.hpp"
 #include "traversal/layout_wide.hpp"
 
@@ -18,7 +20,9 @@ namespace bvhlab::glsl::wide_stack {
 constexpr uint kSlotBytes = bvhlab::kWideSlotTexels * kTexelBytes;
 constexpr uint kStackEntryBytes = uint(2 * sizeof(uint) + sizeof(float));
 
-template <class Tests>
+// FetchWhole = 0: kernel_wide_stack.glsl as it is; = W: with WIDE_FETCH_WHOLE = W (the record's slots
+// fetched before its tests; the same walk and counts).
+template <class Tests, uint FetchWhole = 0>
 inline bool traverseWide(const Storage& s, Ray ray, float tMin, float tMax, bool anyHit, MeshHit& hit,
                          Counters& c) {
   hit = MeshHit{tMax, -1, vec2(0.0f)};
@@ -43,11 +47,22 @@ inline bool traverseWide(const Storage& s, Ray ray, float tMin, float tMax, bool
       uint nearLink = 0u, nearCount = 0u;
       float nearEnter = 0.0f;
       bool met = false;
+      uvec4 slotLo[FetchWhole > 0 ? FetchWhole : 1], slotHi[FetchWhole > 0 ? FetchWhole : 1];
+      if constexpr (FetchWhole > 0) {
+        children = std::min(children, FetchWhole);
+        for (uint i = 0u; i < children; ++i) {
+          slotLo[i] = fetchNode(s, int(link + 2u * i));
+          slotHi[i] = fetchNode(s, int(link + 2u * i) + 1);
+        }
+      }
       for (uint i = 0u; i < children; ++i) {
         uint childLink, childCount;
         float enter;
-        c.nodeBytes += kSlotBytes;
-        loadSlot(s, link + 2u * i, bmin, bmax, childLink, childCount);
+        c.nodeBytes += kSlotBytes;  // fetched before the loop or here: once per child either way
+        if constexpr (FetchWhole > 0)
+          decodeSlot(slotLo[i], slotHi[i], bmin, bmax, childLink, childCount);
+        else
+          loadSlot(s, link + 2u * i, bmin, bmax, childLink, childCount);
         c.boxTests++;
         if (Tests::intersectAabb(ray.origin, invDir, bmin, bmax, tMin, hit.t, enter)) {
           if (!met) {
@@ -124,3 +139,28 @@ inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters
 }
 
 }  // namespace bvhlab::glsl::wide_stack
+
+// bvh4-fetch-whole and bvh8-fetch-whole: kernel_wide_stack.glsl with WIDE_FETCH_WHOLE = 4 / 8.
+namespace bvhlab::glsl::wide_whole4 {
+template <class Tests = FastTests>
+inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
+  return wide_stack::traverseWide<Tests, 4>(s, ray, tMin, tMax, false, hit, c);
+}
+template <class Tests = FastTests>
+inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
+  MeshHit hit;
+  return wide_stack::traverseWide<Tests, 4>(s, ray, tMin, tMax, true, hit, c);
+}
+}  // namespace bvhlab::glsl::wide_whole4
+
+namespace bvhlab::glsl::wide_whole8 {
+template <class Tests = FastTests>
+inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
+  return wide_stack::traverseWide<Tests, 8>(s, ray, tMin, tMax, false, hit, c);
+}
+template <class Tests = FastTests>
+inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
+  MeshHit hit;
+  return wide_stack::traverseWide<Tests, 8>(s, ray, tMin, tMax, true, hit, c);
+}
+}  // namespace bvhlab::glsl::wide_whole8

@@ -61,15 +61,27 @@ const std::vector<KernelInfo>& bvh2cbKernels() {
   return table;
 }
 
-// bvh4 and bvh8 share one kernel file and mirror (the child count comes with each slot).
+// bvh4 and bvh8 share one kernel file and mirror (the child count comes with each slot); the
+// fetch-whole variants are the same file with WIDE_FETCH_WHOLE defined to the width.
+KernelInfo withDefines(KernelInfo k, std::string defines) {
+  k.glslDefines = std::move(defines);
+  return k;
+}
+
 const std::vector<KernelInfo>& wideKernels(uint32_t width) {
   static const std::vector<KernelInfo> bvh4 = {
       {"bvh4-stack-ordered", "explicit stack: every child box of a 4-wide node tested, hits pushed nearest on top",
        "kernel_wide_stack.glsl", "bvh4", BVHLAB_KERNEL_MIRRORS(glsl::wide_stack)},
+      withDefines({"bvh4-fetch-whole", "bvh4-stack-ordered's walk with each node's child slots fetched before its tests",
+                   "kernel_wide_stack.glsl", "bvh4", BVHLAB_KERNEL_MIRRORS(glsl::wide_whole4)},
+                  "#define WIDE_FETCH_WHOLE 4\n"),
   };
   static const std::vector<KernelInfo> bvh8 = {
       {"bvh8-stack-ordered", "explicit stack: every child box of an 8-wide node tested, hits pushed nearest on top",
        "kernel_wide_stack.glsl", "bvh8", BVHLAB_KERNEL_MIRRORS(glsl::wide_stack)},
+      withDefines({"bvh8-fetch-whole", "bvh8-stack-ordered's walk with each node's child slots fetched before its tests",
+                   "kernel_wide_stack.glsl", "bvh8", BVHLAB_KERNEL_MIRRORS(glsl::wide_whole8)},
+                  "#define WIDE_FETCH_WHOLE 8\n"),
   };
   return width == 4 ? bvh4 : bvh8;
 }

@@ -37,6 +37,8 @@ struct KernelInfo {
   // fixed number of invocations taking batches of rays from an atomic counter (render/ray_tracer_gl.cpp).
   // They are used only where persistentThreadsOn says so.
   bool persistentThreads = false;
+  // #define lines put before the kernel's GLSL file (a variant of a shared file: bvh4-/bvh8-fetch-whole).
+  std::string glslDefines = "";
   TraceClosestFn closest(Robustness r) const { return closestByTests[size_t(r.testsIndex())]; }
   TraceAnyFn any(Robustness r) const { return anyByTests[size_t(r.testsIndex())]; }
 };

@@ -7,11 +7,14 @@ const uint kWideInner = 0x80000000u;  // = bvhlab::kWideInner: count >= this mar
 // The slot at NODE texel `texel` (0: the root slot; a record's child c at link + 2c). count <
 // kWideInner: a leaf of count triangles from triangle link; otherwise an inner node whose record of
 // count - kWideInner slots starts at texel link.
-void loadSlot(uint texel, out vec3 bmin, out vec3 bmax, out uint link, out uint count) {
-  uvec4 lo = fetchNode(int(texel));
-  uvec4 hi = fetchNode(int(texel) + 1);
+// decodeSlot: the same from the slot's two texels, already fetched (the fetch-whole kernels).
+void decodeSlot(uvec4 lo, uvec4 hi, out vec3 bmin, out vec3 bmax, out uint link, out uint count) {
   bmin = uintBitsToFloat(lo.xyz);
   bmax = uintBitsToFloat(hi.xyz);
   link = lo.w;
   count = hi.w;
+}
+
+void loadSlot(uint texel, out vec3 bmin, out vec3 bmax, out uint link, out uint count) {
+  decodeSlot(fetchNode(int(texel)), fetchNode(int(texel) + 1), bmin, bmax, link, count);
 }

@@ -6,13 +6,15 @@
 
 namespace bvhlab::glsl {
 
-inline void loadSlot(const Storage& s, uint texel, vec3& bmin, vec3& bmax, uint& link, uint& count) {
-  uvec4 lo = fetchNode(s, int(texel));
-  uvec4 hi = fetchNode(s, int(texel) + 1);
+inline void decodeSlot(uvec4 lo, uvec4 hi, vec3& bmin, vec3& bmax, uint& link, uint& count) {
   bmin = uintBitsToFloat(uvec3(lo));
   bmax = uintBitsToFloat(uvec3(hi));
   link = lo.w;
   count = hi.w;
+}
+
+inline void loadSlot(const Storage& s, uint texel, vec3& bmin, vec3& bmax, uint& link, uint& count) {
+  decodeSlot(fetchNode(s, int(texel)), fetchNode(s, int(texel) + 1), bmin, bmax, link, count);
 }
 
 }  // namespace bvhlab::glsl
