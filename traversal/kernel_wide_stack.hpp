@@ -140,27 +140,19 @@ inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters
 
 }  // namespace bvhlab::glsl::wide_stack
 
-// bvh4-fetch-whole and bvh8-fetch-whole: kernel_wide_stack.glsl with WIDE_FETCH_WHOLE = 4 / 8.
-namespace bvhlab::glsl::wide_whole4 {
-template <class Tests = FastTests>
-inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
-  return wide_stack::traverseWide<Tests, 4>(s, ray, tMin, tMax, false, hit, c);
-}
-template <class Tests = FastTests>
-inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
-  MeshHit hit;
-  return wide_stack::traverseWide<Tests, 4>(s, ray, tMin, tMax, true, hit, c);
-}
-}  // namespace bvhlab::glsl::wide_whole4
-
-namespace bvhlab::glsl::wide_whole8 {
-template <class Tests = FastTests>
-inline bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
-  return wide_stack::traverseWide<Tests, 8>(s, ray, tMin, tMax, false, hit, c);
-}
-template <class Tests = FastTests>
-inline bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
-  MeshHit hit;
-  return wide_stack::traverseWide<Tests, 8>(s, ray, tMin, tMax, true, hit, c);
-}
-}  // namespace bvhlab::glsl::wide_whole8
+// bvh4-fetch-whole and bvh8-fetch-whole (WideWhole<4>, WideWhole<8>): kernel_wide_stack.glsl with
+// WIDE_FETCH_WHOLE = W.
+namespace bvhlab::glsl {
+template <uint W>
+struct WideWhole {
+  template <class Tests = FastTests>
+  static bool traceClosest(const Storage& s, Ray ray, float tMin, float tMax, MeshHit& hit, Counters& c) {
+    return wide_stack::traverseWide<Tests, W>(s, ray, tMin, tMax, false, hit, c);
+  }
+  template <class Tests = FastTests>
+  static bool traceAny(const Storage& s, Ray ray, float tMin, float tMax, Counters& c) {
+    MeshHit hit;
+    return wide_stack::traverseWide<Tests, W>(s, ray, tMin, tMax, true, hit, c);
+  }
+};
+}  // namespace bvhlab::glsl

@@ -73,14 +73,14 @@ const std::vector<KernelInfo>& wideKernels(uint32_t width) {
       {"bvh4-stack-ordered", "explicit stack: every child box of a 4-wide node tested, hits pushed nearest on top",
        "kernel_wide_stack.glsl", "bvh4", BVHLAB_KERNEL_MIRRORS(glsl::wide_stack)},
       withDefines({"bvh4-fetch-whole", "bvh4-stack-ordered's walk with each node's child slots fetched before its tests",
-                   "kernel_wide_stack.glsl", "bvh4", BVHLAB_KERNEL_MIRRORS(glsl::wide_whole4)},
+                   "kernel_wide_stack.glsl", "bvh4", BVHLAB_KERNEL_MIRRORS(glsl::WideWhole<4>)},
                   "#define WIDE_FETCH_WHOLE 4\n"),
   };
   static const std::vector<KernelInfo> bvh8 = {
       {"bvh8-stack-ordered", "explicit stack: every child box of an 8-wide node tested, hits pushed nearest on top",
        "kernel_wide_stack.glsl", "bvh8", BVHLAB_KERNEL_MIRRORS(glsl::wide_stack)},
       withDefines({"bvh8-fetch-whole", "bvh8-stack-ordered's walk with each node's child slots fetched before its tests",
-                   "kernel_wide_stack.glsl", "bvh8", BVHLAB_KERNEL_MIRRORS(glsl::wide_whole8)},
+                   "kernel_wide_stack.glsl", "bvh8", BVHLAB_KERNEL_MIRRORS(glsl::WideWhole<8>)},
                   "#define WIDE_FETCH_WHOLE 8\n"),
   };
   return width == 4 ? bvh4 : bvh8;

@@ -13,6 +13,8 @@
 
 #include "builders/gpu/gpu_compute.hpp"
 #include "builders/gpu/gpu_lbvh.hpp"  // GpuPhaseTimes
+#include "builders/gpu/gpu_pack.hpp"
+#include "builders/gpu/gpu_radix_sort.hpp"
 #include "datasets/scene.hpp"         // InputError
 
 namespace bvhlab::gpubuild {
@@ -36,6 +38,21 @@ inline void checkBuildLimits(const char* builder, size_t n, const GpuLimits& lim
                      std::to_string(groupsFor(n)) + " workgroups of " + std::to_string(kGroup) +
                      " in one dispatch; GL_MAX_COMPUTE_WORK_GROUP_COUNT (x) is " +
                      std::to_string(limits.maxWorkGroupsX) + " here");
+}
+
+// The storage buffers both GPU builders bind for n primitives (what each holds, its bytes), plus the GPU
+// pack's with `pack`: each builder adds its own and checks them all with checkBuildLimits.
+inline std::vector<std::pair<const char*, uint64_t>> sharedBuildBuffers(uint64_t n, bool pack) {
+  const uint64_t nodes = 2 * n - 1;
+  std::vector<std::pair<const char*, uint64_t>> buffers = {{"node boxes", nodes * 24},
+                                                           {"primitive boxes", n * 24},
+                                                           {"node costs", nodes * 8},
+                                                           {"node counts", nodes * 8},
+                                                           {"sort keys", n * 12},
+                                                           {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}};
+  if (pack)
+    for (const auto& buffer : GpuPacker::buffers(n)) buffers.push_back(buffer);
+  return buffers;
 }
 
 template <class T>

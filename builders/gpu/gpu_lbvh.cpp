@@ -32,17 +32,7 @@ GpuLbvh::GpuLbvh(std::optional<GpuLimits> limits)
       collapse_("gpubuild_collapse.glsl") {}
 
 void GpuLbvh::checkLimits(size_t n, bool pack) const {
-  const uint64_t nodes = 2 * uint64_t(n) - 1;
-  // The largest storage buffers a build binds, by what they hold.
-  std::vector<std::pair<const char*, uint64_t>> buffers = {{"node boxes", nodes * 24},
-                                                              {"primitive boxes", uint64_t(n) * 24},
-                                                              {"node costs", nodes * 8},
-                                                              {"node counts", nodes * 8},
-                                                              {"sort keys", uint64_t(n) * 12},
-                                                              {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}};
-  if (pack)
-    for (const auto& buffer : GpuPacker::buffers(n)) buffers.push_back(buffer);
-  checkBuildLimits("lbvh-gpu", n, limits_, buffers);
+  checkBuildLimits("lbvh-gpu", n, limits_, sharedBuildBuffers(n, pack));
 }
 
 Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times,

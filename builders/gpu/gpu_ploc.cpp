@@ -52,17 +52,8 @@ GpuPloc::GpuPloc(std::optional<GpuLimits> limits)
       collapse_("gpubuild_collapse.glsl") {}
 
 void GpuPloc::checkLimits(size_t n, bool pack) const {
-  const uint64_t nodes = 2 * uint64_t(n) - 1;
-  // The largest storage buffers a build binds, by what they hold.
-  std::vector<std::pair<const char*, uint64_t>> buffers = {{"node boxes", nodes * 24},
-                                                              {"primitive boxes", uint64_t(n) * 24},
-                                                              {"clusters", uint64_t(n) * kClusterBytes},
-                                                              {"node costs", nodes * 8},
-                                                              {"node counts", nodes * 8},
-                                                              {"sort keys", uint64_t(n) * 12},
-                                                              {"radix digit counts", GpuRadixSort::countBytes(uint32_t(n))}};
-  if (pack)
-    for (const auto& buffer : GpuPacker::buffers(n)) buffers.push_back(buffer);
+  std::vector<std::pair<const char*, uint64_t>> buffers = sharedBuildBuffers(n, pack);
+  buffers.push_back({"clusters", uint64_t(n) * kClusterBytes});
   checkBuildLimits("ploc-gpu", n, limits_, buffers);
 }
 
