@@ -16,7 +16,7 @@ namespace bvhlab {
 
 namespace {
 
-constexpr GLuint kLocalSize = 64;  // trace_rays.glsl's local_size_x
+constexpr GLuint kLocalSize = kComputeLanes;  // trace_rays.glsl's local_size_x (shaders/assemble.hpp)
 // Work groups of a persistent-threads dispatch: 4096 x 64 = 262,144 invocations, about the resident
 // thread count of the largest GPUs in use (an H100 or H200: 132 SMs x 2,048 threads = 270,336), so
 // every resident slot gets an invocation and a group launched late finds the rays taken and exits.

@@ -250,7 +250,8 @@ AssembledShader assembleTraversal(const std::string& kernel, Storage storage, Ro
 AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
                                   bool anyHit, bool countStats, const std::string& layout,
                                   const std::string& triangles, bool twoLevel, bool persistentThreads) {
-  std::string defines;
+  // The workgroup size; kernels that keep per-invocation data in shared memory index it by lane.
+  std::string defines = "#define COMPUTE_LANES " + std::to_string(kComputeLanes) + "\n";
   if (anyHit) defines += "#define ANY_HIT 1\n";
   if (countStats) defines += "#define COUNT_STATS 1\n";
   if (persistentThreads) {

@@ -115,8 +115,10 @@ AssembledShader assembleTracer(const SceneFeatures& features, const ShaderOption
 // (checkTriangleFormat).
 // twoLevel: over a two-level tree (layout/pack_two_level.hpp); refused (std::invalid_argument) for a
 // layout or kernel without a two-level walk (checkTwoLevel).
+// COMPUTE_LANES = kComputeLanes is trace_rays.glsl's workgroup size.
 // persistentThreads: trace_rays.glsl's persistent-threads loop (the caller decides: persistentThreadsOn,
 // traversal/kernels.hpp).
+constexpr int kComputeLanes = 64;
 AssembledShader assembleRayTracer(const std::string& kernel, Storage storage, Robustness robust, int bvhStackSize,
                                   bool anyHit, bool countStats, const std::string& layout = "v1",
                                   const std::string& triangles = "raw", bool twoLevel = false,

@@ -17,7 +17,7 @@
 // one invocation with the per-ray counters reset, so results and counts are those of one invocation per
 // ray.
 
-layout(local_size_x = 64) in;
+layout(local_size_x = COMPUTE_LANES) in;  // COMPUTE_LANES: assembleRayTracer (render/ray_tracer_gl.cpp's kLocalSize)
 layout(std430, binding = 0) readonly buffer RayBuffer { vec4 rays[]; };
 layout(std430, binding = 1) writeonly buffer ResultBuffer { uvec4 results[]; };
 #ifdef COUNT_STATS

@@ -212,7 +212,7 @@ TEST(BytesFetched, ConsistentWithTheOtherCounters) {
         kernel == "bvh8-fetch-whole")
       return {0, 2 * kTexelBytes, 0, 12};
     if (kernel == "cwbvh-stack-ordered") return {5 * kTexelBytes, 0, kTexelBytes, 12};
-    if (kernel == "cwbvh-groups") return {5 * kTexelBytes, 0, kTexelBytes, 8};
+    if (kernel == "cwbvh-groups" || kernel == "cwbvh-groups-shared") return {5 * kTexelBytes, 0, kTexelBytes, 8};
     ADD_FAILURE() << "no byte sizes stated here for kernel " << kernel;
     return {0, 0, 0, 0};
   };

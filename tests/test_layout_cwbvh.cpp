@@ -6,6 +6,7 @@
 // kernel against its C++ mirror per ray (answer, visits, triangle tests, box tests).
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -20,6 +21,7 @@
 #include "layout/layout_cwbvh.hpp"
 #include "layout/layouts.hpp"
 #include "layout/triangle_formats.hpp"
+#include "gl_compute.hpp"
 #include "layout_test_util.hpp"
 #include "shaders/assemble.hpp"
 #include "traversal/kernel_cwbvh_groups.hpp"
@@ -392,6 +394,88 @@ TEST(CwbvhKernelsGlsl, EqualTheMirrorPerRay) {
             EXPECT_GT(found, cs.rays.size() / 10) << "too few hits for the comparison to mean much";
           }
         }
+}
+
+// The short shared stack of cwbvh-groups-shared (kernel_cwbvh_groups.glsl, SHARED_STACK_ENTRIES) with
+// ONE entry in shared memory, so that every push past the first spills and every pop past it restores:
+// the same answers and counters as the mirror (the registered variant keeps 8, more than these trees
+// need, so its spill path is checked here).
+const char* const kShortStackMain = R"(
+layout(local_size_x = COMPUTE_LANES) in;
+layout(std430, binding = 0) readonly buffer RayBuffer { vec4 rays[]; };
+layout(std430, binding = 1) writeonly buffer ResultBuffer { uvec4 results[]; };
+uniform int u_count;
+void main() {
+  int i = int(gl_GlobalInvocationID.x);
+  if (i >= u_count) return;
+  MeshHit hit;
+  bool found = traceClosest(Ray(rays[2 * i].xyz, rays[2 * i + 1].xyz), rays[2 * i].w, rays[2 * i + 1].w, hit);
+  results[2 * i] = uvec4(found ? 1u : 0u, uint(hit.tri), floatBitsToUint(hit.t), g_stackOverflow ? 1u : 0u);
+  results[2 * i + 1] = uvec4(g_nodeVisits, g_triTests, g_boxTests, 0u);
+}
+)";
+
+TEST(CwbvhKernelsGlsl, ShortSharedStackSpillsAndRestoresAsTheMirrorWalks) {
+  auto ctx = contextOrNull();
+  if (!ctx) BVHLAB_SKIP_OR_FAIL("no OpenGL 4.5 context");
+  const TestMesh& m = testMeshes()[1];
+  const PackedBvh packed = packCwbvh(build("sah-binned", m.soup), m.soup);
+  const std::vector<BatchRay> rays = testRays(m.soup, 800, 11);
+  const int stack = stackSizeFor(packed);
+  const AssembledShader shader = assembleTraversal("cwbvh-groups", Storage::Tbo, Robustness::Fast, stack,
+                                                   "#define SHARED_STACK_ENTRIES 1\n#define COMPUTE_LANES 64\n",
+                                                   kLayoutCwbvh);
+  GLuint program = 0;
+  try {
+    program = test::compileCompute(shader.source + kShortStackMain);
+  } catch (const std::exception& e) {
+    FAIL() << shader.mapLog(e.what());
+  }
+  const std::vector<glm::uvec4>* streams[3] = {&packed.nodes, &packed.triangles, &packed.attributes};
+  GLuint buffers[3], textures[3];
+  glCreateBuffers(3, buffers);
+  glCreateTextures(GL_TEXTURE_BUFFER, 3, textures);
+  for (GLuint unit = 0; unit < 3; ++unit) {
+    glNamedBufferData(buffers[unit], GLsizeiptr(streams[unit]->size() * sizeof(glm::uvec4)), streams[unit]->data(),
+                      GL_STATIC_DRAW);
+    glTextureBuffer(textures[unit], GL_RGBA32UI, buffers[unit]);
+    glBindTextureUnit(unit, textures[unit]);
+  }
+  glUseProgram(program);
+  const char* names[3] = {"u_nodes", "u_triangles", "u_attributes"};
+  for (int unit = 0; unit < 3; ++unit) glUniform1i(glGetUniformLocation(program, names[unit]), unit);
+  std::vector<glm::vec4> in;
+  for (const BatchRay& r : rays) {
+    in.emplace_back(r.origin, r.tMin);
+    in.emplace_back(r.dir, r.tMax);
+  }
+  const std::vector<glm::uvec4> out =
+      test::dispatchCompute<glm::uvec4>(program, in, 2 * rays.size(), rays.size(), "short-stack dispatch");
+  glDeleteTextures(3, textures);
+  glDeleteBuffers(3, buffers);
+  glDeleteProgram(program);
+  const KernelInfo& k = findKernel(kLayoutCwbvh, "cwbvh-groups");
+  size_t spilled = 0, hits = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    glsl::Counters c;
+    glsl::MeshHit hit;
+    const bool found = k.closest(Robustness::Fast)(packed, glsl::Ray{rays[i].origin, rays[i].dir}, rays[i].tMin,
+                                                   rays[i].tMax, hit, c);
+    ASSERT_EQ(out[2 * i].x != 0, found) << "ray " << i;
+    ASSERT_EQ(out[2 * i].w, 0u) << "ray " << i << " overflowed";
+    if (found) {
+      ASSERT_EQ(int(out[2 * i].y), hit.tri) << "ray " << i;
+      ASSERT_TRUE(nearlyEqual(std::bit_cast<float>(out[2 * i].z), hit.t)) << "ray " << i;  // as expectGlslEqualsMirror
+    }
+    ASSERT_EQ(out[2 * i + 1].x, c.nodeVisits) << "ray " << i;
+    ASSERT_EQ(out[2 * i + 1].y, c.triTests) << "ray " << i;
+    ASSERT_EQ(out[2 * i + 1].z, c.boxTests) << "ray " << i;
+    // Each group pushed and popped is 16 stack bytes: more than one push, some entry went to the spill.
+    spilled += c.stackBytes > 16u;
+    hits += found;
+  }
+  EXPECT_GT(spilled, rays.size() / 20) << "too few rays pushed twice: the spill path is barely tested";
+  EXPECT_GT(hits, rays.size() / 10);
 }
 
 // The slot order cwbvh-groups takes a group's bits in: the slots s ^ octant for s = 0, 1, ..., 7

@@ -104,6 +104,38 @@ uint cwbvhLeafFirst(CwNode n, uint c) {
   return first;
 }
 
+// The stack. In `bvhlab trace`'s compute path (COMPUTE_LANES invocations a workgroup) with
+// SHARED_STACK_ENTRIES = K defined (registered as cwbvh-groups-shared), a SHORT STACK: the top K
+// entries in shared memory, a ring (entry i in slot i mod K, one column per invocation: slot j of
+// invocation l at j * COMPUTE_LANES + l, so a warp's invocations touch consecutive words), and the
+// entries below them spilled to a local array: a push onto K entries first moves the oldest of them
+// out, a pop brings it back. Elsewhere (the renderer's fragment shader, or without the define) a local
+// array of BVH_STACK_SIZE. Where an entry lives changes neither the walk nor its counts.
+#if defined(SHARED_STACK_ENTRIES) && defined(COMPUTE_LANES)
+shared uvec2 s_cwStack[SHARED_STACK_ENTRIES * COMPUTE_LANES];
+const int kCwStackSpill = BVH_STACK_SIZE > SHARED_STACK_ENTRIES ? BVH_STACK_SIZE - SHARED_STACK_ENTRIES : 1;
+uvec2 g_cwStackSpill[kCwStackSpill];
+uint cwStackSlot(int i) { return uint(i % SHARED_STACK_ENTRIES) * uint(COMPUTE_LANES) + gl_LocalInvocationIndex; }
+// Pushes entry `sp` (the stack holds 0 .. sp - 1, sp < BVH_STACK_SIZE): entry sp - K leaves its slot.
+void cwStackPush(int sp, uvec2 v) {
+  if (sp >= SHARED_STACK_ENTRIES) g_cwStackSpill[sp - SHARED_STACK_ENTRIES] = s_cwStack[cwStackSlot(sp)];
+  s_cwStack[cwStackSlot(sp)] = v;
+}
+// Pops entry sp - 1: entry sp - 1 - K comes back from the spill into the slot it frees.
+uvec2 cwStackPop(int sp) {
+  uvec2 v = s_cwStack[cwStackSlot(sp - 1)];
+  if (sp - 1 >= SHARED_STACK_ENTRIES) s_cwStack[cwStackSlot(sp - 1)] = g_cwStackSpill[sp - 1 - SHARED_STACK_ENTRIES];
+  return v;
+}
+#define CW_STACK_DECLARE
+#define CW_STACK_PUSH(sp, v) cwStackPush(sp, v)
+#define CW_STACK_POP(sp) cwStackPop(sp)
+#else
+#define CW_STACK_DECLARE uvec2 stack[BVH_STACK_SIZE];  // node groups below the current one
+#define CW_STACK_PUSH(sp, v) stack[sp] = (v)
+#define CW_STACK_POP(sp) stack[(sp) - 1]
+#endif
+
 bool traverseCwbvhGroups(Ray ray, float tMin, float tMax, bool anyHit, out MeshHit hit) {
   hit = MeshHit(tMax, -1, vec2(0.0));
   vec3 invDir = rayInverseDirection(ray.dir);
@@ -113,7 +145,7 @@ bool traverseCwbvhGroups(Ray ray, float tMin, float tMax, bool anyHit, out MeshH
   bvec3 parallel = greaterThanEqual(abs(invDir), vec3(kParallelInverse));
   bool anyParallel = any(parallel);
 #endif
-  uvec2 stack[BVH_STACK_SIZE];  // node groups below the current one
+  CW_STACK_DECLARE
   int sp = 0;
 
   vec3 bmin, bmax;
@@ -138,7 +170,8 @@ bool traverseCwbvhGroups(Ray ray, float tMin, float tMax, bool anyHit, out MeshH
         g_stackOverflow = true;  // stop: the result so far is incomplete, the flag says so
         return hit.tri >= 0;
       }
-      stack[sp++] = group;
+      CW_STACK_PUSH(sp, group);
+      sp++;
     }
     g_nodeVisits++;
     CwNode node = loadCwNode(child);
@@ -219,7 +252,8 @@ bool traverseCwbvhGroups(Ray ray, float tMin, float tMax, bool anyHit, out MeshH
     bit = nearestBit;
     while ((group.y & 0xFFu) == 0u || cwbvhEnterBound(group.y >> 16) > hit.t) {
       if (sp == 0) return hit.tri >= 0;
-      group = stack[--sp];
+      group = CW_STACK_POP(sp);
+      sp--;
       bit = uint(findMSB(group.y & 0xFFu));
     }
   }

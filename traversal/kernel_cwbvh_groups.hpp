@@ -97,7 +97,8 @@ inline bool traverseCwbvhGroups(const Storage& s, Ray ray, float tMin, float tMa
         c.stackOverflow = true;
         return hit.tri >= 0;
       }
-      stack[sp++] = group;
+      stack[sp] = group;  // CW_STACK_PUSH (kernel_cwbvh_groups.glsl: a local or a short shared stack)
+      sp++;
       c.stackBytes += kStackEntryBytes;
     }
     c.nodeVisits++;
@@ -173,7 +174,8 @@ inline bool traverseCwbvhGroups(const Storage& s, Ray ray, float tMin, float tMa
     bit = nearestBit;
     while ((group.y & 0xFFu) == 0u || cwbvhEnterBound(group.y >> 16) > hit.t) {
       if (sp == 0) return hit.tri >= 0;
-      group = stack[--sp];
+      group = stack[sp - 1];  // CW_STACK_POP
+      sp--;
       c.stackBytes += kStackEntryBytes;
       bit = uint(findMSB(group.y & 0xFFu));
     }

@@ -94,6 +94,10 @@ const std::vector<KernelInfo>& cwbvhKernels() {
       {"cwbvh-groups",
        "Ylitie et al. 2017: node groups by octant order (findMSB), lazy triangle groups, quantised plane tests",
        "kernel_cwbvh_groups.glsl", "cwbvh", BVHLAB_KERNEL_MIRRORS(glsl::cwbvh_groups)},
+      withDefines({"cwbvh-groups-shared",
+                   "cwbvh-groups with a short stack in the compute path: the top 8 entries in shared memory, older ones spilled",
+                   "kernel_cwbvh_groups.glsl", "cwbvh", BVHLAB_KERNEL_MIRRORS(glsl::cwbvh_groups)},
+                  "#define SHARED_STACK_ENTRIES 8\n"),
   };
   return table;
 }
