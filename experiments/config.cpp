@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <limits>
 #include <optional>
 #include <set>
 #include <tuple>
@@ -13,12 +12,12 @@
 #include <toml++/toml.h>
 
 #include "experiments/config_reader.hpp"
+#include "experiments/config_settings.hpp"
 #include "datasets/toml_guard.hpp"
 
 #include "builders/builder.hpp"
 #include "datasets/scene.hpp"  // InputError
 #include "experiments/generated_scenes.hpp"
-#include "render/fly_camera.hpp"
 #if __has_include("traversal/kernels.hpp")
 #include "traversal/kernels.hpp"
 #define BVHLAB_HAVE_KERNEL_REGISTRY 1
@@ -151,10 +150,8 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
   std::vector<Sweep> sweeps;
   std::vector<Exclusion> exclusions;
   const toml::table* referenceTable = nullptr;
-  const toml::node* cameraPathNode = nullptr;
-  const toml::node *framesNode = nullptr, *measureMinNode = nullptr, *maxFramesNode = nullptr,
-                   *programCopiesNode = nullptr;
-  std::optional<int> measureMin;
+  SettingNodes settingNodes;
+  const toml::node*& cameraPathNode = settingNodes.cameraPath;
   std::vector<std::tuple<std::string, std::string, const toml::node*, std::string>> baselineNodes;  // axis label node key
 
   auto readAxes = [&](const toml::table& t, const std::string& section, Sweep& into,
@@ -193,113 +190,11 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         else r.fail(ek.source(), key, "unknown key; [experiment] has name, description, reference, seed_figures, replicates");
       }
     } else if (section == "render") {
-      for (auto&& [rk, rv] : r.table(v, section)) {
-        const std::string key = "render." + std::string(rk.str());
-        RunRender& out = cfg.render;
-        // The size bound is the texture limit measured on llvmpipe (NOTES.md).
-        if (rk == "width") out.width = int(r.integer(rv, key, 1, 16384));
-        else if (rk == "height") out.height = int(r.integer(rv, key, 1, 16384));
-        else if (rk == "warmup") out.warmup = int(r.integer(rv, key, 0, 1000000));
-        else if (rk == "frames") {
-          framesNode = &rv;
-          out.frames = int(r.integer(rv, key, 1, 1000000));
-        }
-        else if (rk == "backend") out.backend = r.oneOf(rv, key, kBackends, "backend");
-        else if (rk == "heatmaps") out.heatmaps = r.boolean(rv, key);
-        else if (rk == "gpu_builds") out.gpuBuilds = int(r.integer(rv, key, 0, 1000));
-        else if (rk == "timeout_s") {
-          out.timeoutSeconds = r.number(rv, key);
-          if (!(out.timeoutSeconds > 0.0)) r.fail(rv.source(), key, "must be > 0 seconds");
-        } else if (rk == "env") {
-          for (auto&& [name, value] : r.table(rv, key))
-            out.env[std::string(name.str())] = r.string(value, key + "." + std::string(name.str()));
-        } else if (rk == "camera_path") {
-          out.cameraPath = r.string(rv, key);
-          if (out.cameraPath.empty()) r.fail(rv.source(), key, "empty path");
-          const fs::path resolved =
-              (fs::path(out.cameraPath).is_absolute() ? fs::path(out.cameraPath) : r.dir() / out.cameraPath)
-                  .lexically_normal();
-          std::ifstream in(resolved, std::ios::binary);
-          if (!in) r.fail(rv.source(), key, "camera path '" + out.cameraPath + "' not found (looked at " +
-                                                resolved.string() + ")");
-          std::ostringstream bytes;
-          bytes << in.rdbuf();
-          try {
-            parseCameraPath(bytes.str(), resolved.string());  // validated now, not when the run starts
-          } catch (const InputError& e) {
-            r.fail(rv.source(), key, e.what());
-          }
-          out.cameraPathFile = resolved;
-          out.cameraPathHash = hashHex(bytes.str());
-          cameraPathNode = &rv;
-        } else if (rk == "args") {
-          const toml::array* a = rv.as_array();
-          if (!a) r.fail(rv.source(), key, "expected an array of strings, got " + typeName(rv));
-          for (const toml::node& arg : *a) out.args.push_back(r.string(arg, key));
-        } else
-          r.fail(rk.source(), key,
-                 "unknown key; [render] has width, height, warmup, frames, backend, heatmaps, timeout_s, env, args, "
-                 "camera_path, gpu_builds");
-      }
+      readRenderSection(r, v, cfg.render, settingNodes);
     } else if (section == "measure") {
-      for (auto&& [mk, mv] : r.table(v, section)) {
-        const std::string key = "measure." + std::string(mk.str());
-        RunRender& out = cfg.render;
-        if (mk == "min_frames") {
-          measureMinNode = &mv;
-          measureMin = int(r.integer(mv, key, 1, 1000000));
-        } else if (mk == "max_frames") {
-          maxFramesNode = &mv;
-          out.maxFrames = int(r.integer(mv, key, 1, 1000000));
-        } else if (mk == "target_ci_pct") {
-          out.targetCiPct = r.number(mv, key);
-          if (!(out.targetCiPct > 0.0 && out.targetCiPct <= 100.0)) r.fail(mv.source(), key, "must be in (0, 100]");
-        } else if (mk == "max_seconds") {
-          out.maxSeconds = r.number(mv, key);
-          if (!(out.maxSeconds > 0.0)) r.fail(mv.source(), key, "must be > 0 seconds");
-        } else if (mk == "group_size") {
-          out.groupSize = int(r.integer(mv, key, 1, 100000));
-        } else if (mk == "aa_control") {
-          out.aaControl = r.boolean(mv, key);
-        } else if (mk == "share_programs") {
-          out.sharePrograms = r.boolean(mv, key);
-        } else if (mk == "program_copies") {
-          programCopiesNode = &mv;
-          out.programCopies = int(r.integer(mv, key, 1, 64));
-        } else if (mk == "interleave") {
-          out.interleave = r.boolean(mv, key);
-        } else {
-          r.fail(mk.source(), key,
-                 "unknown key; [measure] has min_frames, max_frames, target_ci_pct, max_seconds, group_size, "
-                 "aa_control, share_programs, program_copies, interleave");
-        }
-      }
+      readMeasureSection(r, v, cfg.render, settingNodes);
     } else if (section == "trace") {
-      for (auto&& [tk, tv] : r.table(v, section)) {
-        const std::string key = "trace." + std::string(tk.str());
-        RunRender& out = cfg.render;
-        // Bounds: render/workloads.hpp's kMaxTraceRays (2^24) and its (0, 1] ao radius.
-        if (tk == "count") out.traceCount = int(r.integer(tv, key, 1, int64_t(1) << 24));
-        else if (tk == "seed") out.traceSeed = uint64_t(r.integer(tv, key, 0, std::numeric_limits<int64_t>::max()));
-        else if (tk == "ao_radius") {
-          out.aoRadius = r.number(tv, key);
-          if (!(out.aoRadius > 0.0 && out.aoRadius <= 1.0)) r.fail(tv.source(), key, "must be in (0, 1]");
-        } else if (tk == "clip_frames") {
-          out.clipFrames = int(r.integer(tv, key, 0, 1 << 20));
-        } else if (tk == "clip_step") {
-          out.clipStep = int(r.integer(tv, key, 1, 1 << 20));
-        } else if (tk == "update_repeats") {
-          out.updateRepeats = int(r.integer(tv, key, 1, 64));
-        } else if (tk == "embree_threads") {
-          out.embreeThreads = int(r.integer(tv, key, 0, 256));
-        } else if (tk == "min_sample_ms") {
-          out.minSampleMs = r.number(tv, key);
-          if (!(out.minSampleMs >= 0.0 && out.minSampleMs <= 10000.0)) r.fail(tv.source(), key, "must be in [0, 10000] ms");
-        } else {
-          r.fail(tk.source(), key, "unknown key; [trace] has count, seed, ao_radius, embree_threads, min_sample_ms, clip_frames, "
-                              "clip_step, update_repeats");
-        }
-      }
+      readTraceSection(r, v, cfg.render);
     } else if (section == "findings") {
       for (auto&& [fk, fv] : r.table(v, section)) {
         const std::string key = "findings." + std::string(fk.str());
@@ -359,21 +254,7 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
     }
   }
 
-  // [measure] min_frames is [render] frames by another name: one value, given in one place.
-  if (measureMin) {
-    if (framesNode && *measureMin != cfg.render.frames)
-      r.fail(measureMinNode->source(), "measure.min_frames",
-             "[render] frames = " + std::to_string(cfg.render.frames) + " says otherwise; give it in one place");
-    cfg.render.frames = *measureMin;
-  }
-  if (!maxFramesNode) cfg.render.maxFrames = std::max(cfg.render.maxFrames, cfg.render.frames);
-  if (cfg.render.maxFrames < cfg.render.frames)
-    r.fail(maxFramesNode->source(), "measure.max_frames",
-           std::to_string(cfg.render.maxFrames) + " is below min_frames " + std::to_string(cfg.render.frames));
-
-  if (programCopiesNode && cfg.render.programCopies > 1 && !cfg.render.interleave)
-    r.fail(programCopiesNode->source(), "measure.program_copies",
-           "needs interleave = true (program copies are drawn in one `bvhlab measure` process)");
+  checkRunSettings(r, cfg.render, settingNodes);
 
   if (sweeps.empty()) sweeps.push_back(Sweep{"main", {}, {}, {}, {}});
   for (Sweep& s : sweeps) {

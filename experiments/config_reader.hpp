@@ -1,10 +1,12 @@
 // The typed reading of an experiment config's TOML nodes: every getter checks the node's type and
 // range and throws InputError "FILE:LINE: KEY: what is wrong" (experiments/config.cpp uses it to
-// parse whole configs). Header-only: only config.cpp includes it (toml++ is heavy to compile).
+// parse whole configs). Header-only: only config.cpp and config_settings.cpp include it (toml++ is
+// heavy to compile).
 #pragma once
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
