@@ -55,6 +55,18 @@
 // The count of the entry past the stack's bottom: the walk is over. A leaf's count is below it, an inner
 // child's is kBvh2cbInner (above it).
 const uint kAlDone = 0xFFFFFFFEu;
+// The next entry into (link, count): entries entered beyond the closest hit are dropped (they would
+// fail their box test now), then the top is popped, or count = kAlDone when none is left. A macro, not
+// a function: GLSL would copy the stack arrays in and out of an inout parameter.
+#define AL_TAKE_NEXT_ENTRY()                             \
+  while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;     \
+  if (sp == 0) {                                         \
+    count = kAlDone;                                     \
+  } else {                                               \
+    sp--;                                                \
+    link = stackLink[sp];                                \
+    count = stackCount[sp];                              \
+  }
 #endif
 
 bool KERNEL_WALK(Ray ray, int root, float tMin, float tMax, bool anyHit, out MeshHit hit) {
@@ -100,28 +112,14 @@ bool KERNEL_WALK(Ray ray, int root, float tMin, float tMax, bool anyHit, out Mes
         link = hitA ? aLink : bLink;
         count = hitA ? aCount : bCount;
       } else {  // neither: pop (entries entered beyond the closest hit would fail their box test now: dropped)
-        while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
-        if (sp == 0) {
-          count = kAlDone;
-        } else {
-          sp--;
-          link = stackLink[sp];
-          count = stackCount[sp];
-        }
+        AL_TAKE_NEXT_ENTRY();
       }
       // The first leaf (reached or popped): postpone it and go on with the next entry.
       if (count < kAlDone && leafCount == kAlDone) {
         searchingLeaf = false;
         leafLink = link;
         leafCount = count;
-        while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
-        if (sp == 0) {
-          count = kAlDone;
-        } else {
-          sp--;
-          link = stackLink[sp];
-          count = stackCount[sp];
-        }
+        AL_TAKE_NEXT_ENTRY();
       }
       // The paper's warp vote (__any(searchingLeaf)), taken per ray: see the header.
       if (!searchingLeaf) break;
@@ -145,14 +143,7 @@ bool KERNEL_WALK(Ray ray, int root, float tMin, float tMax, bool anyHit, out Mes
       leafLink = link;
       leafCount = isLeaf ? count : kAlDone;
       if (isLeaf) {
-        while (sp > 0 && stackEnter[sp - 1] > hit.t) sp--;
-        if (sp == 0) {
-          count = kAlDone;
-        } else {
-          sp--;
-          link = stackLink[sp];
-          count = stackCount[sp];
-        }
+        AL_TAKE_NEXT_ENTRY();
       }
     }
   }

@@ -38,6 +38,22 @@ inline bool traverseBvh2cbAilaLaine(const Storage& s, Ray ray, int root, float t
   uint count = kBvh2cbInner;
   uint leafLink = 0u;
   uint leafCount = kAlDone;
+  // AL_TAKE_NEXT_ENTRY: entries beyond the closest hit dropped, then the top popped into (link, count),
+  // or count = kAlDone when none is left; each entry leaving the stack counted.
+  auto takeNextEntry = [&] {
+    while (sp > 0 && stackEnter[sp - 1] > hit.t) {
+      sp--;
+      c.stackBytes += kStackEntryBytes;
+    }
+    if (sp == 0) {
+      count = kAlDone;
+    } else {
+      sp--;
+      c.stackBytes += kStackEntryBytes;
+      link = stackLink[sp];
+      count = stackCount[sp];
+    }
+  };
   while (count != kAlDone) {
     bool searchingLeaf = true;
     while (count == kBvh2cbInner) {
@@ -70,36 +86,14 @@ inline bool traverseBvh2cbAilaLaine(const Storage& s, Ray ray, int root, float t
         link = hitA ? aLink : bLink;
         count = hitA ? aCount : bCount;
       } else {  // neither: pop (entries entered beyond the closest hit would fail their box test now: dropped)
-        while (sp > 0 && stackEnter[sp - 1] > hit.t) {
-          sp--;
-          c.stackBytes += kStackEntryBytes;
-        }
-        if (sp == 0) {
-          count = kAlDone;
-        } else {
-          sp--;
-          c.stackBytes += kStackEntryBytes;
-          link = stackLink[sp];
-          count = stackCount[sp];
-        }
+        takeNextEntry();  // AL_TAKE_NEXT_ENTRY
       }
       // The first leaf (reached or popped): postpone it and go on with the next entry.
       if (count < kAlDone && leafCount == kAlDone) {
         searchingLeaf = false;
         leafLink = link;
         leafCount = count;
-        while (sp > 0 && stackEnter[sp - 1] > hit.t) {
-          sp--;
-          c.stackBytes += kStackEntryBytes;
-        }
-        if (sp == 0) {
-          count = kAlDone;
-        } else {
-          sp--;
-          c.stackBytes += kStackEntryBytes;
-          link = stackLink[sp];
-          count = stackCount[sp];
-        }
+        takeNextEntry();  // AL_TAKE_NEXT_ENTRY
       }
       if (!searchingLeaf) break;
     }
@@ -122,18 +116,7 @@ inline bool traverseBvh2cbAilaLaine(const Storage& s, Ray ray, int root, float t
       leafLink = link;
       leafCount = isLeaf ? count : kAlDone;
       if (isLeaf) {
-        while (sp > 0 && stackEnter[sp - 1] > hit.t) {
-          sp--;
-          c.stackBytes += kStackEntryBytes;
-        }
-        if (sp == 0) {
-          count = kAlDone;
-        } else {
-          sp--;
-          c.stackBytes += kStackEntryBytes;
-          link = stackLink[sp];
-          count = stackCount[sp];
-        }
+        takeNextEntry();  // AL_TAKE_NEXT_ENTRY
       }
     }
   }
