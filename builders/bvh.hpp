@@ -122,7 +122,28 @@ constexpr uint32_t kMaxPlocTopDown = 1024;
 constexpr uint32_t kMaxPlocRadius = 1024;
 
 // SAH cost of a built tree with the given model (recomputed from the tree, not trusted from a builder).
+// The sums run over the nodes in builders/refit.hpp refitOrder (children before their parent), the
+// order refitBvh visits them in, so a refit that gathers them (SahSums) gives this cost bit for bit.
 double sahCost(const Bvh& bvh, const CostModel& cost);
+// What sahCost sums over the nodes reachable from the root, node by node in refitOrder.
+struct SahSums {
+  double innerArea = 0.0;   // inner nodes' half areas
+  double leafArea = 0.0;    // leaves' half areas x their primitive counts
+  double innerNodes = 0.0;  // counts, for a root of zero area
+  double references = 0.0;
+  void add(const BvhNode& node) {
+    const double area = node.bounds.halfArea();
+    if (node.isLeaf()) {
+      leafArea += area * node.count;
+      references += node.count;
+    } else {
+      innerArea += area;
+      innerNodes += 1.0;
+    }
+  }
+};
+// The cost from the sums and the root's half area. Throws std::runtime_error when that is not finite.
+double sahCost(const SahSums& sums, double rootHalfArea, const CostModel& cost);
 // Node/leaf/depth/leaf-size statistics of a built tree (sahCost included; buildMs/bytes left 0).
 BuildStats computeStats(const Bvh& bvh, const CostModel& cost);
 

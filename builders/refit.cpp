@@ -45,7 +45,7 @@ bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y
 
 }  // namespace
 
-void refitBvh(Bvh& bvh, std::span<const uint32_t> order, const FrameTriangles& frame) {
+void refitBvh(Bvh& bvh, std::span<const uint32_t> order, const FrameTriangles& frame, SahSums* sums) {
   const size_t n = frame.v0.size();
   if (frame.v1.size() != n || frame.v2.size() != n)
     throw std::invalid_argument("refit: " + std::to_string(n) + "/" + std::to_string(frame.v1.size()) + "/" +
@@ -58,6 +58,7 @@ void refitBvh(Bvh& bvh, std::span<const uint32_t> order, const FrameTriangles& f
       Aabb box = nodes[node.left].bounds;
       box.grow(nodes[node.right].bounds);
       node.bounds = box;
+      if (sums) sums->add(node);
       continue;
     }
     if (size_t(node.first) + node.count > bvh.primIndices.size())
@@ -82,6 +83,7 @@ void refitBvh(Bvh& bvh, std::span<const uint32_t> order, const FrameTriangles& f
           throw InputError("refit: triangle " + std::to_string(prim) + " has a non-finite vertex");
       }
     node.bounds = box;
+    if (sums) sums->add(node);
   }
 }
 

@@ -35,8 +35,10 @@ std::vector<uint32_t> refitOrder(const Bvh& bvh);
 // Recomputes the boxes of the nodes in `order` (refitOrder(bvh)) from `frame`. Throws
 // std::invalid_argument when the spans differ in length or a leaf references a triangle past their
 // end, and InputError (datasets/scene.hpp) naming the triangle when a vertex is not finite (the tree
-// is left partly refit then).
-void refitBvh(Bvh& bvh, std::span<const uint32_t> order, const FrameTriangles& frame);
+// is left partly refit then). With `sums`, also adds every refit node to it (builders/bvh.hpp
+// SahSums, zeroed by the caller): over refitOrder(bvh), sahCost(*sums, root half area, cost) is then
+// sahCost(bvh, cost) bit for bit, without a second pass over the tree.
+void refitBvh(Bvh& bvh, std::span<const uint32_t> order, const FrameTriangles& frame, SahSums* sums = nullptr);
 // The same with the order computed here.
 void refitBvh(Bvh& bvh, const FrameTriangles& frame);
 

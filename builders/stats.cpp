@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "builders/bvh.hpp"
+#include "builders/refit.hpp"
 
 namespace bvhlab {
 
@@ -35,32 +36,26 @@ void walkNodes(const Bvh& bvh, Visit&& visit) {
 
 }  // namespace
 
-double sahCost(const Bvh& bvh, const CostModel& cost) {
-  if (bvh.nodes.empty()) return 0.0;
-  const double rootArea = bvh.nodes[0].bounds.halfArea();
-  if (!std::isfinite(rootArea))  // builders reject such input; a hand-made tree must not turn NaN into a cost
+double sahCost(const SahSums& sums, double rootHalfArea, const CostModel& cost) {
+  if (!std::isfinite(rootHalfArea))  // builders reject such input; a hand-made tree must not turn NaN into a cost
     throw std::runtime_error("sahCost: the root box is not finite");
-  double inner = 0.0, leaf = 0.0;
-  walkNodes(bvh, [&](const BvhNode& node, uint32_t) {
-    const double area = node.bounds.halfArea();
-    if (node.isLeaf())
-      leaf += area * node.count;
-    else
-      inner += area;
-  });
   // A root of zero area (all primitives are one point) has no meaningful ratio: every node has the
   // root's box then, so each area ratio is 1 and the cost is the plain node/reference count.
-  if (rootArea <= 0.0) {
-    double innerCount = 0.0, refCount = 0.0;
-    walkNodes(bvh, [&](const BvhNode& node, uint32_t) {
-      if (node.isLeaf())
-        refCount += node.count;
-      else
-        innerCount += 1.0;
-    });
-    return cost.traversalCost * innerCount + cost.intersectionCost * refCount;
+  if (rootHalfArea <= 0.0) return cost.traversalCost * sums.innerNodes + cost.intersectionCost * sums.references;
+  return (cost.traversalCost * sums.innerArea + cost.intersectionCost * sums.leafArea) / rootHalfArea;
+}
+
+double sahCost(const Bvh& bvh, const CostModel& cost) {
+  if (bvh.nodes.empty()) return 0.0;
+  std::vector<uint32_t> order;
+  try {
+    order = refitOrder(bvh);
+  } catch (const std::invalid_argument&) {
+    throw std::runtime_error("malformed BVH: child index out of range or node reached twice");
   }
-  return (cost.traversalCost * inner + cost.intersectionCost * leaf) / rootArea;
+  SahSums sums;
+  for (const uint32_t index : order) sums.add(bvh.nodes[index]);
+  return sahCost(sums, bvh.nodes[0].bounds.halfArea(), cost);
 }
 
 BuildStats computeStats(const Bvh& bvh, const CostModel& cost) {

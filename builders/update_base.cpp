@@ -37,6 +37,8 @@ void UpdateStrategyBase::rebuild(const FrameTriangles& frame) {
   count_ = n;
 }
 
-void UpdateStrategyBase::refit(const FrameTriangles& frame) { refitBvh(tree_, order_, frame); }
+void UpdateStrategyBase::refit(const FrameTriangles& frame, SahSums* sums) {
+  refitBvh(tree_, order_, frame, sums);
+}
 
 }  // namespace bvhlab::detail

@@ -24,8 +24,9 @@ class UpdateStrategyBase : public UpdateStrategy {
   // app gives a builder: layout/layout.hpp triangleBoxes and triangleCentroids; the triangles too, so
   // a builder that splits primitives clips them). Keeps the refit order of the new tree.
   void rebuild(const FrameTriangles& frame);
-  // Refit with the order kept since the last rebuild (the topology has not changed since).
-  void refit(const FrameTriangles& frame);
+  // Refit with the order kept since the last rebuild (the topology has not changed since); with
+  // `sums`, the refit tree's SahSums gathered in the same pass (builders/refit.hpp).
+  void refit(const FrameTriangles& frame, SahSums* sums = nullptr);
 
   Bvh tree_;
   size_t count_ = 0;  // triangles per frame (the first frame's)

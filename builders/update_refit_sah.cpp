@@ -1,7 +1,8 @@
 // Update strategy `refit+rebuild:sah>R`: refit, and rebuild when the refit tree's SAH exceeds R x the
 // SAH of the tree the last rebuild made (builders/update.hpp). The SAH is builders/bvh.hpp sahCost
 // with UpdateOptions::build.cost, computed on every refit frame as part of the update (it is what
-// decides): a frame kept without a rebuild has SAH <= R x the last rebuild's, by construction.
+// decides), from the sums the refit gathers as it goes (no second pass over the tree; the same
+// value bit for bit): a frame kept without a rebuild has SAH <= R x the last rebuild's, by construction.
 #include "builders/update_base.hpp"
 
 namespace bvhlab {
@@ -15,9 +16,11 @@ class RefitRebuildSah final : public detail::UpdateStrategyBase {
   bool update(const FrameTriangles& frame) override {
     checkCount(frame);
     if (!first()) {
-      refit(frame);
+      SahSums sums;
+      refit(frame, &sums);
+      const double sah = sahCost(sums, tree_.nodes[0].bounds.halfArea(), options().build.cost);
       // Not "> ratio x last" negated: a NaN (never produced from finite boxes) would rebuild.
-      if (sahCost(tree_, options().build.cost) <= ratio_ * rebuiltSah_) return false;
+      if (sah <= ratio_ * rebuiltSah_) return false;
     }
     rebuild(frame);
     rebuiltSah_ = sahCost(tree_, options().build.cost);

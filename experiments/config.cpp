@@ -330,6 +330,11 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         const std::string name(present[i]->singular);
         run.axes.emplace_back(name, s.axes.at(name)[digit[i]]);
       }
+      // A scene may trace its clip at its own step and length ([trace] clip_step, clip_frames).
+      if (const AxisValue* scene = run.axis("scene")) {
+        run.render.clipStep = scene->value.value("clip_step", run.render.clipStep);
+        run.render.clipFrames = scene->value.value("clip_frames", run.render.clipFrames);
+      }
       const AxisValue* written = run.axis("kernel");
       const std::string kernelLabel = written ? written->label : "";
       const bool formatOk = formatRuns(run, r.names());

@@ -117,7 +117,7 @@ void appendTopLevel(PackedTwoLevel& p, const std::vector<Instance>& instances, c
     for (int i = 0; i < 3; ++i) nodes.push_back(row(toObject, i));
     for (int i = 0; i < 3; ++i) nodes.push_back(row(toWorld, i));
     nodes.push_back({bits(toWorld[3].x), bits(toWorld[3].y), bits(toWorld[3].z), p.blasRoot[inst.blas]});
-    nodes.push_back({id, inst.blas, p.blasFirstTriangle[inst.blas], 0u});
+    nodes.push_back({id, inst.blas, p.blasFirstTriangle[inst.blas], inst.material});
     p.recordInstance.push_back(id);
   }
   const uint32_t units = nodeTexels(layout);

@@ -20,7 +20,7 @@
 //               texel 8r+0..2 = world->object rows: (row i of L^-1, row i of -L^-1 T)  (float bits)
 //               texel 8r+3..5 = object->world rows: (row i of L, T_i)
 //               texel 8r+6    = (T.x, T.y, T.z, BLAS root node)
-//               texel 8r+7    = (instance id, BLAS id, BLAS first triangle, 0)
+//               texel 8r+7    = (instance id, BLAS id, BLAS first triangle, material)
 //             where object->world = [L | T]. A kernel's walk reads texels 0..2 and 6 (64 bytes): the ray
 //             goes into object space as o' = L^-1 (o - T), d' = L^-1 d, translation first (its error
 //             stays that of |o - T|, not of |o|: docs/layouts.md), d' not renormalised, so t is world t.
@@ -32,7 +32,8 @@
 //
 // TRIANGLE / ATTRIBUTE streams: the BLASes' raw streams concatenated in BLAS order; triangle ids
 // (texel .w) stay each mesh's own (the BLAS soup's triangle index), so a hit is named by (instance
-// id, triangle id).
+// id, triangle id). A BLAS shared by instances of one mesh with different materials stores one of
+// them in its triangles: shading takes the instance's (record texel 7.w; as DXR's instance data).
 //
 // PackedBvh::depth = the larger of the TLAS's and the deepest BLAS's depths, so stackSizeFor(streams)
 // sizes the one BVH_STACK_SIZE both walks use.
@@ -59,6 +60,7 @@ constexpr uint32_t kInstanceTestTexels = 4;
 struct Instance {
   uint32_t blas = 0;
   glm::mat4x3 objectToWorld{1.0f};
+  uint32_t material = 0;  // the scene material its triangles are shaded with (record texel 7.w)
 };
 
 // The inverse of a 3x4 affine map, computed in double and rounded once. Throws std::invalid_argument

@@ -1,6 +1,7 @@
 // TwoLevelUpdater (layout/two_level_update.hpp): the `two-level` update strategy.
 #include "layout/two_level_update.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <stdexcept>
@@ -85,7 +86,7 @@ TwoLevelUpdater::Step TwoLevelUpdater::update(const Scene& scene, int frame) {
         blases_.push_back(std::move(blas));
         if (shared) byLocalMesh[o->localMesh] = b;
       }
-      instances_.push_back({b, affineOf(o->transform)});
+      instances_.push_back({b, affineOf(o->transform), uint32_t(std::max(0, scene.meshes[size_t(o->mesh)].material))});
       instanceObject_.push_back(o->object);
       instanceFirst_.push_back(o->firstTriangle);
       instanceCount_.push_back(o->triangleCount);

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "datasets/animation.hpp"
+#include "shaders/assemble.hpp"
 
 namespace bvhlab {
 
@@ -56,6 +57,53 @@ ClipUpdater::Step ClipUpdater::update(const TriangleSoup& soup) {
     }
   }
   return s;
+}
+
+ClipTwoLevel::ClipTwoLevel(const RenderCommand& cmd, const BuildOptions& build, const std::string& layout,
+                           const std::string& kernel, const std::string& triangleFormat)
+    : cost_(build.cost) {
+  const UpdateSpec spec = parseUpdateSpec(cmd.update);
+  try {
+    if (triangleFormat != "raw")
+      throw std::invalid_argument("a two-level tree takes raw triangles, not --triangles " + triangleFormat);
+    checkTwoLevel(layout, kernel);
+    for (int k = 0; k < cmd.updateRepeats; ++k)
+      copies_.push_back(std::make_unique<TwoLevelUpdater>(spec, UpdateOptions{cmd.builder, build}, layout));
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("--update " + cmd.update + ": " + e.what());
+  }
+}
+
+ClipTwoLevel::Step ClipTwoLevel::update(const Scene& scene, int frame) {
+  Step s;
+  for (size_t k = 0; k < copies_.size(); ++k) {
+    const TwoLevelUpdater::Step step = copies_[k]->update(scene, frame);
+    s.blasMs.push_back(step.blasMs);
+    s.tlasMs.push_back(step.tlasMs);
+    s.ms.push_back(step.blasMs + step.tlasMs);
+    const double sah = copies_[k]->sahCost();
+    if (k == 0) {
+      s.built = step.blasBuilt;
+      s.sah = sah;
+      s.packMs = step.packMs;
+      s.blasUpdated = step.blasUpdated;
+    } else if (step.blasBuilt != s.built || sah != s.sah) {
+      s.agree = false;
+    }
+  }
+  return s;
+}
+
+BuildStats twoLevelStats(const TwoLevelUpdater& tree, const std::string& builder) {
+  BuildStats b;
+  b.builder = builder;
+  b.nodes = tree.nodeCount();
+  b.sahCost = tree.sahCost();
+  b.sahBeforeOptimize = b.sahCost;
+  const PackedTwoLevel& p = tree.packed();
+  b.depth = p.streams.depth;
+  b.bytes = p.streams.bytes();
+  return b;
 }
 
 }  // namespace bvhlab

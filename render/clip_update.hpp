@@ -1,6 +1,6 @@
 // What `trace --update` and `render --update` share (render/trace_clip.hpp, render/render_clip.hpp):
 // the clip's frames to visit, and the update strategy's copies that keep the tree over them, each
-// update timed.
+// update timed: a flat tree's (ClipUpdater) or a two-level tree's (ClipTwoLevel).
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -9,6 +9,7 @@
 #include "builders/update.hpp"
 #include "datasets/scene.hpp"
 #include "layout/layout.hpp"
+#include "layout/two_level_update.hpp"
 #include "render/render_command.hpp"
 
 namespace bvhlab {
@@ -42,5 +43,34 @@ class ClipUpdater {
   UpdateOptions options_;
   std::vector<std::unique_ptr<UpdateStrategy>> copies_;
 };
+
+// cmd.updateRepeats copies of a two-level strategy (cmd.update is `two-level[:...]`; layout/
+// two_level_update.hpp) over `layout` with the kernel `kernel` (std::invalid_argument naming --update
+// for a layout or kernel without a two-level walk, or a triangle format other than raw).
+class ClipTwoLevel {
+ public:
+  ClipTwoLevel(const RenderCommand& cmd, const BuildOptions& build, const std::string& layout,
+               const std::string& kernel, const std::string& triangleFormat);
+  struct Step {
+    bool built = false;          // copy 0 built some BLAS from scratch
+    bool agree = true;           // every copy built alike and reached the same SAH
+    double sah = 0.0;            // copy 0's sahCost()
+    uint32_t blasUpdated = 0;    // copy 0's
+    double packMs = 0.0;         // copy 0's BLAS pack
+    std::vector<double> blasMs, tlasMs, ms;  // each copy's parts and their sums (update_ms)
+  };
+  // Every copy brought to `scene` at `frame` (setFrame done by the caller), each timed.
+  Step update(const Scene& scene, int frame);
+  const TwoLevelUpdater& first() const { return *copies_.front(); }
+  const CostModel& cost() const { return cost_; }
+
+ private:
+  CostModel cost_;
+  std::vector<std::unique_ptr<TwoLevelUpdater>> copies_;
+};
+
+// A two-level frame's tree statistics for a PreparedScene (render/prepared_scene.hpp): its nodes (the
+// TLAS's and each BLAS's once), the two-level SAH estimate (TwoLevelUpdater::sahCost), depth and bytes.
+BuildStats twoLevelStats(const TwoLevelUpdater& tree, const std::string& builder);
 
 }  // namespace bvhlab

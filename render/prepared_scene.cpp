@@ -37,7 +37,9 @@ std::string PreparedScene::treeHash() const {
 }
 
 double PreparedScene::endPointOverlap() const {
-  if (epo_ < 0.0) epo_ = soup.size() > 0 ? bvhlab::endPointOverlap(bvh, soup.v0, soup.v1, soup.v2, cost) : 0.0;
+  // No tree (a two-level frame's streams: render/render_clip.cpp): no EPO either.
+  if (epo_ < 0.0)
+    epo_ = soup.size() > 0 && !bvh.nodes.empty() ? bvhlab::endPointOverlap(bvh, soup.v0, soup.v1, soup.v2, cost) : 0.0;
   return epo_;
 }
 

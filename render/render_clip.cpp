@@ -47,9 +47,18 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
   RenderSetup setup = setupRender(cmd);
   for (const std::string& w : setup.buildReview.warnings) std::cerr << "bvhlab: warning: " << w << '\n';
   const ClipPlan plan = planClip(cmd, setup.scene);
-  ClipUpdater updater(cmd, setup.build);
   const LayoutInfo& packer = findLayout(setup.shader.layout);
   const std::string triangleFormat = findTriangleFormat(setup.shader.triangles).name;
+  // The strategy: a flat tree's copies, or a two-level tree's drawn by the kernel's two-level walk.
+  std::unique_ptr<ClipUpdater> updater;
+  std::unique_ptr<ClipTwoLevel> twoLevel;
+  if (parseUpdateSpec(cmd.update).name == "two-level") {
+    twoLevel = std::make_unique<ClipTwoLevel>(cmd, setup.build, packer.name, setup.shader.kernel, triangleFormat);
+    setup.shader.twoLevel = true;
+  } else {
+    updater = std::make_unique<ClipUpdater>(cmd, setup.build);
+  }
+  const CostModel cost = setup.build.cost;
   Scene scene = std::move(setup.scene);
 
   std::unique_ptr<GlContext> ctx = createContext(setup.backend);
@@ -67,20 +76,41 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
     frame->scene = scene;
     frame->data = buildSceneData(frame->scene);
     frame->soup = gatherTriangles(frame->scene);
-    frame->cost = updater.cost();
+    frame->cost = cost;
     if (frame->soup.size() == 0) throw InputError(cmd.input + ": --update needs triangles (a mesh object)");
     ClipFrameSamples& sm = samples[size_t(f)];
-    const ClipUpdater::Step step = updater.update(frame->soup);
-    sm.update = step.ms;
-    frame->bvh = updater.tree();
-
+    nlohmann::json parts;  // a two-level frame's own keys
+    bool rebuilt = false, agree = true;
+    double packMs = 0.0;
     auto start = Clock::now();
-    frame->packed = packer.pack(frame->bvh, frame->soup);
-    packTriangles(frame->packed, frame->soup, triangleFormat);
-    const double packMs = msSince(start);
-    frame->stats = computeStats(frame->bvh, frame->cost);
-    frame->stats.builder = cmd.builder;
-    frame->stats.bytes = frame->packed.bytes();
+    if (!twoLevel) {
+      const ClipUpdater::Step step = updater->update(frame->soup);
+      sm.update = step.ms;
+      rebuilt = step.rebuilt;
+      agree = step.agree;
+      frame->bvh = updater->tree();
+      start = Clock::now();
+      frame->packed = packer.pack(frame->bvh, frame->soup);
+      packTriangles(frame->packed, frame->soup, triangleFormat);
+      packMs = msSince(start);
+      frame->stats = computeStats(frame->bvh, frame->cost);
+      frame->stats.builder = cmd.builder;
+      frame->stats.bytes = frame->packed.bytes();
+    } else {
+      const ClipTwoLevel::Step step = twoLevel->update(frame->scene, sceneFrame);
+      sm.update = step.ms;
+      rebuilt = step.built;
+      agree = step.agree;
+      packMs = step.packMs;
+      frame->packed = twoLevel->first().packed().streams;  // frame->bvh stays empty: no single tree
+      frame->stats = twoLevelStats(twoLevel->first(), cmd.builder);
+      parts["blas_updated"] = step.blasUpdated;
+      putTimes(parts, "blas_update_ms", step.blasMs);
+      putTimes(parts, "tlas_update_ms", step.tlasMs);
+      parts["tlas_sah_cost"] = twoLevel->first().tlasSahCost();
+      parts["instances"] = twoLevel->first().instanceCount();
+      parts["blases"] = twoLevel->first().blasCount();
+    }
     stack = std::max(stack, stackSizeFor(frame->packed));
     const size_t cached = programs->size();
     glFinish();
@@ -105,10 +135,10 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
     frameCmd.visitsOutput.clear();
     const nlohmann::json r = finishRender(frameCmd, setup, *frame, job.frameOptions(), std::move(job.image), job.stats,
                                           job.boxTests, times, renderer, false);
-    nlohmann::json j;
+    nlohmann::json j = std::move(parts);
     j["frame"] = sceneFrame;
-    j["rebuilt"] = step.rebuilt;
-    j["rotations"] = updater.rotations();
+    j["rebuilt"] = rebuilt;
+    j["rotations"] = updater ? updater->rotations() : 0u;
     putTimes(j, "update_ms", sm.update);
     putTimes(j, "upload_ms", sm.upload);
     j["pack_ms"] = packMs;
@@ -116,8 +146,9 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
     for (const char* k : {"sah_cost", "epo", "ray_cost", "node_visits_per_ray", "triangle_tests_per_ray", "tree_hash",
                           "nodes", "mesh_rays"})
       if (r.contains(k)) j[k] = r[k];
+    if (twoLevel) j["epo"] = nullptr;  // EPO is a single tree's measure: a two-level frame has none
     j["programs_compiled"] = compiled;
-    j["repeats_agree"] = step.agree;
+    j["repeats_agree"] = agree;
     frameList.push_back(std::move(j));
     last = r;
   }
@@ -145,6 +176,7 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
                         "leaf_size", "warnings", "backend", "renderer", "gpu"})
     if (last.contains(k)) j[k] = last[k];
   j["update"] = cmd.update;
+  j["two_level"] = twoLevel != nullptr;
   j["update_repeats"] = cmd.updateRepeats;
   j["warmup"] = cmd.warmup;
   j["timed_frames"] = cmd.frames;

@@ -99,15 +99,7 @@ TraceClip::TraceClip(const TraceCommand& command) : c(command) {
   s.tracer.anyHit = isAnyHit(s.workload);
   const UpdateSpec spec = parseUpdateSpec(rc.update);  // planClip checked it
   if (spec.name == "two-level") {
-    try {
-      if (triangleFormat != "raw")
-        throw std::invalid_argument("a two-level tree takes raw triangles, not --triangles " + triangleFormat);
-      checkTwoLevel(packer->name, s.tracer.kernel);
-      for (int k = 0; k < rc.updateRepeats; ++k)
-        twoLevel.push_back(std::make_unique<TwoLevelUpdater>(spec, UpdateOptions{rc.builder, s.setup.build}, packer->name));
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument("--update " + rc.update + ": " + e.what());
-    }
+    twoLevel = std::make_unique<ClipTwoLevel>(rc, s.setup.build, packer->name, s.tracer.kernel, triangleFormat);
     s.tracer.twoLevel = true;
     cost = s.setup.build.cost;
   } else {
@@ -143,7 +135,7 @@ void TraceClip::step(int f, const std::string& renderer) {
   double sah0 = 0.0, packMs = 0.0;
   PackedBvh flatPacked;
   const Bvh* tree = nullptr;
-  if (twoLevel.empty()) {
+  if (!twoLevel) {
     const ClipUpdater::Step step = updater->update(soup);
     sm.update = step.ms;
     rebuilt = step.rebuilt;
@@ -155,29 +147,20 @@ void TraceClip::step(int f, const std::string& renderer) {
     packTriangles(flatPacked, soup, triangleFormat);
     packMs = msSince(start);
   } else {
-    std::vector<double> blasMs, tlasMs;
-    for (size_t k = 0; k < twoLevel.size(); ++k) {
-      const TwoLevelUpdater::Step step = twoLevel[k]->update(scene, sceneFrame);
-      blasMs.push_back(step.blasMs);
-      tlasMs.push_back(step.tlasMs);
-      sm.update.push_back(step.blasMs + step.tlasMs);
-      const double sah = twoLevel[k]->sahCost();
-      if (k == 0) {
-        rebuilt = step.blasBuilt;
-        sah0 = sah;
-        packMs = step.packMs;
-        j["blas_updated"] = step.blasUpdated;
-      } else if (step.blasBuilt != rebuilt || sah != sah0) {
-        agree = false;
-      }
-    }
-    putTimes(j, "blas_update_ms", blasMs);
-    putTimes(j, "tlas_update_ms", tlasMs);
-    j["tlas_sah_cost"] = twoLevel[0]->tlasSahCost();
-    j["instances"] = twoLevel[0]->instanceCount();
-    j["blases"] = twoLevel[0]->blasCount();
+    const ClipTwoLevel::Step step = twoLevel->update(scene, sceneFrame);
+    sm.update = step.ms;
+    rebuilt = step.built;
+    agree = step.agree;
+    sah0 = step.sah;
+    packMs = step.packMs;
+    j["blas_updated"] = step.blasUpdated;
+    putTimes(j, "blas_update_ms", step.blasMs);
+    putTimes(j, "tlas_update_ms", step.tlasMs);
+    j["tlas_sah_cost"] = twoLevel->first().tlasSahCost();
+    j["instances"] = twoLevel->first().instanceCount();
+    j["blases"] = twoLevel->first().blasCount();
   }
-  const PackedBvh& packed = twoLevel.empty() ? flatPacked : twoLevel[0]->packed().streams;
+  const PackedBvh& packed = twoLevel ? twoLevel->first().packed().streams : flatPacked;
 
   // The re-upload (GL), timed with the pack as upload_ms; repeated as often as the update is.
   Clock::time_point start;
@@ -219,10 +202,10 @@ void TraceClip::step(int f, const std::string& renderer) {
     instanceTests += k.y;
     tlasBoxTests += k.w;
   }
-  if (!twoLevel.empty() && !s.tracer.anyHit) {  // (instance, its triangle) -> the flat scene's triangle
+  if (twoLevel && !s.tracer.anyHit) {  // (instance, its triangle) -> the flat scene's triangle
     const std::vector<uint32_t> instances = gl->instances();
     for (size_t i = 0; i < hits.size(); ++i)
-      if (hits[i].hit) hits[i].prim = twoLevel[0]->flatTriangle(instances[i], hits[i].prim);
+      if (hits[i].hit) hits[i].prim = twoLevel->first().flatTriangle(instances[i], hits[i].prim);
   }
   for (const BatchHit& h : hits) found += h.hit;
   const HitAgreement agreement = compareHits(hits, y.hits(), y.anyHit());
@@ -244,7 +227,7 @@ void TraceClip::step(int f, const std::string& renderer) {
   j["node_visits_per_ray"] = double(visits + tlasVisits) / n;
   j["triangle_tests_per_ray"] = double(tests) / n;
   j["box_tests_per_ray"] = double(boxTests + tlasBoxTests) / n;
-  if (!twoLevel.empty()) {
+  if (twoLevel) {
     j["tlas_node_visits_per_ray"] = double(tlasVisits) / n;
     j["blas_node_visits_per_ray"] = double(visits) / n;
     j["instance_tests_per_ray"] = double(instanceTests) / n;
@@ -256,7 +239,7 @@ void TraceClip::step(int f, const std::string& renderer) {
   j["hit_ties"] = agreement.ties;
   j["stack_overflow_rays"] = overflows;
   j["tree_hash"] = packedTreeHash(packed);
-  j["nodes"] = tree ? tree->nodes.size() : twoLevel[0]->nodeCount();
+  j["nodes"] = tree ? tree->nodes.size() : twoLevel->first().nodeCount();
   j["programs_compiled"] = recompiled;
   j["repeats_agree"] = agree;  // every copy of the strategy rebuilt alike and reached the same SAH
   frameList.push_back(std::move(j));

@@ -89,7 +89,7 @@ class TraceClip {
   std::unique_ptr<ClipUpdater> updater;
   // `--update two-level...`: one updater per --update-repeats copy (copy 0's tree is traced) instead
   // of `updater`.
-  std::vector<std::unique_ptr<TwoLevelUpdater>> twoLevel;
+  std::unique_ptr<ClipTwoLevel> twoLevel;  // with --update two-level[:...] (else updater)
   const LayoutInfo* packer = nullptr;
   std::string triangleFormat;
   CostModel cost;

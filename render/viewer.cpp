@@ -354,6 +354,7 @@ ShaderOptions Viewer::shaderOptions(bool countStats) const {
   so.ssaaGrid = ssaaGridOf(aa_);
   so.robust = parseRobustness(robust_);
   so.textureLod = parseTextureLod(opt_.textureLod);
+  so.twoLevel = twoLevel_ != nullptr && prepared_->bvh.nodes.empty() && !prepared_->packed.nodes.empty();
   return so;
 }
 

@@ -24,6 +24,7 @@
 #include <nlohmann/json.hpp>
 
 #include "builders/update.hpp"
+#include "layout/two_level_update.hpp"
 #include "render/fly_camera.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/program_cache.hpp"
@@ -169,6 +170,7 @@ class Viewer {
   // uploaded into a fresh renderer whose program comes from programs_ (compiled once per source).
   std::string update_;  // the strategy's spec ("" for a static scene)
   std::unique_ptr<UpdateStrategy> strategy_;
+  std::unique_ptr<TwoLevelUpdater> twoLevel_;  // instead of strategy_ while update_ is two-level[:...]
   std::unique_ptr<ProgramCache> programs_;  // clip playback only
   Scene clipScene_;                         // the scene at clipFrame_
   int clipFrames_ = 1, clipFrame_ = 0, clipStack_ = 0;

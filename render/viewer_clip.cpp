@@ -17,6 +17,7 @@
 #include "datasets/animation.hpp"
 #include "layout/layouts.hpp"
 #include "layout/triangle_formats.hpp"
+#include "render/clip_update.hpp"
 
 namespace bvhlab::viewer_detail {
 
@@ -84,7 +85,11 @@ void Viewer::updateClipFrame() {
   uo.builder = builder_;
   uo.build.maxLeafSize = uint32_t(leafSize_);
   uo.build.optimize = optimize_;
-  if (!strategy_ || needStrategy_ || needRebuild_) strategy_ = makeUpdateStrategy(update_, uo);
+  const UpdateSpec spec = parseUpdateSpec(update_);
+  const bool twoLevel = spec.name == "two-level";
+  if (!twoLevel && (!strategy_ || needStrategy_ || needRebuild_)) strategy_ = makeUpdateStrategy(update_, uo);
+  if (twoLevel && (!twoLevel_ || needStrategy_ || needRebuild_)) twoLevel_ = std::make_unique<TwoLevelUpdater>(spec, uo, layout_);
+  if (!twoLevel) twoLevel_.reset();
   needStrategy_ = needRebuild_ = false;
 
   setFrame(clipScene_, clipFrame_);
@@ -97,7 +102,15 @@ void Viewer::updateClipFrame() {
   const std::string& format = findTriangleFormat(triangles_).name;
   lastUpdateMs_ = packMs_ = 0.0;
   lastRebuilt_ = false;
-  if (frame->soup.size() > 0) {
+  if (frame->soup.size() > 0 && twoLevel) {
+    // The two-level tree (BLASes per the policy, the TLAS rebuilt), drawn by the kernel's two-level walk.
+    const TwoLevelUpdater::Step step = twoLevel_->update(frame->scene, clipFrame_);
+    lastRebuilt_ = step.blasBuilt;
+    lastUpdateMs_ = step.blasMs + step.tlasMs;
+    packMs_ = step.packMs;
+    frame->packed = twoLevel_->packed().streams;
+    frame->stats = twoLevelStats(*twoLevel_, builder_);
+  } else if (frame->soup.size() > 0) {
     const FrameTriangles tris{frame->soup.v0, frame->soup.v1, frame->soup.v2};
     auto start = Clock::now();
     lastRebuilt_ = strategy_->update(tris);

@@ -9,6 +9,8 @@
 #include <cstdlib>
 
 #include "builders/builder.hpp"
+#include "layout/layouts.hpp"
+#include "layout/pack_two_level.hpp"
 #include "layout/triangle_formats.hpp"
 #include "traversal/kernels.hpp"
 
@@ -32,7 +34,13 @@ std::vector<std::string> choices(const std::string& what, const std::string& lay
     for (const KernelInfo& k : kernelsFor(layout)) names.push_back(k.name);
   if (what == "view") names = kViews;
   if (what == "aa") names = kAaModes;
-  if (what == "update") names = kUpdateSpecs;
+  if (what == "update") {
+    names = kUpdateSpecs;
+    // Two-level trees: with a layout that has a two-level walk and raw triangles (blas=refit takes
+    // every scene: rigid objects' BLASes are built once whatever the policy).
+    if (twoLevelLayoutSupported(findLayout(layout).name) && findTriangleFormat(triangles).name == "raw")
+      names.push_back("two-level:blas=refit");
+  }
   if (what == "robust") {
     // Only the variants the session's triangle format can run (precomputed: no watertight test).
     const bool watertightOk = findTriangleFormat(triangles).watertight;
@@ -65,9 +73,11 @@ std::string settingError(const std::string& what, const std::string& value, cons
   }
   if (what == "update") {  // any spec the strategies take, not only those U cycles through
     try {
-      // The renderer draws one tree: a two-level tree is traced by `bvhlab trace --update` only.
-      if (parseUpdateSpec(value).name == "two-level")
-        return "update '" + value + "': the viewer draws a single tree; trace two-level clips with `bvhlab trace --update`";
+      if (parseUpdateSpec(value).name != "two-level") return "";
+      if (!twoLevelLayoutSupported(findLayout(layout).name))
+        return "update '" + value + "': layout '" + layout + "' has no two-level walk (layouts with one: v1, bvh2-cb)";
+      if (findTriangleFormat(triangles).name != "raw")
+        return "update '" + value + "': a two-level tree takes raw triangles, not " + triangles;
       return "";
     } catch (const std::invalid_argument& e) {
       return e.what();

@@ -111,6 +111,12 @@ void main() {
 #endif
   o_color = vec4(color, 1.0);
 #ifdef COUNT_STATS
+#if defined(TWO_LEVEL) && defined(HAS_MESH)
+  // Node visits and box tests of the TLAS walk with the BLAS walks' (as `trace --update` counts them);
+  // instance tests are not triangle tests.
+  g_nodeVisits += g_tlasNodeVisits;
+  g_boxTests += g_tlasBoxTests;
+#endif
   o_stats = uvec4(g_nodeVisits, g_triTests, g_meshRays | (g_stackOverflow ? 0x80000000u : 0u),
                   uint(primaryId + 1) | (nonFiniteValue ? 0x80000000u : 0u));
   o_boxTests = g_boxTests;

@@ -170,14 +170,30 @@ bool intersectScene(Ray ray, float tMax, out Hit hit) {
       vec3 shadingNormal;
       vec2 uv;
       loadAttributes(mh.tri, mh.bary, shadingNormal, uv);
+#ifdef TWO_LEVEL
+      // The BLAS's triangle and normal are in its instance's object space (traversal/two_level.glsl):
+      // the vertices placed in the world as the flat tree stores them, so the geometric normal (its
+      // orientation included, under a mirroring transform too) is the flat tree's; the shading normal
+      // by the inverse transpose. The instance's material (a shared BLAS holds one instance's), and
+      // an id telling instances of one mesh apart (SMAA's geometry edges, the ids view).
+      v0 = instancePointToWorld(g_instance, v0);
+      v1 = instancePointToWorld(g_instance, v1);
+      v2 = instancePointToWorld(g_instance, v2);
+      shadingNormal = instanceNormalToWorld(g_instance, shadingNormal);
+#endif
       vec3 geomNormal = normalize(cross(v1 - v0, v2 - v0));
       hit.t = mh.t;
       hit.geomNormal = geomNormal;
       // A shading normal on the other side of the surface than the geometric one is not usable.
       hit.normal = dot(shadingNormal, geomNormal) > 0.0 ? normalize(shadingNormal) : geomNormal;
       hit.uv = uv;
+#ifdef TWO_LEVEL
+      hit.material = int(instanceMaterial(g_instance));
+      hit.id = NUM_OBJECTS + int((uint(triangleId(mh.tri)) + instanceId(g_instance) * 0x9E3779B9u) & 0x7FFFFFFFu);
+#else
       hit.material = triangleMaterial(mh.tri);
       hit.id = NUM_OBJECTS + triangleId(mh.tri);
+#endif
 #ifdef TEXTURE_LOD
       meshSurface(mh.tri, v0, v1, v2, hit.dpdu, hit.dpdv, hit.curvature);
 #endif

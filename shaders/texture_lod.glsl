@@ -158,6 +158,12 @@ void meshSurface(int tri, vec3 v0, vec3 v1, vec3 v2, out vec3 dpdu, out vec3 dpd
   loadAttributes(tri, vec2(0.0, 0.0), n0, t0);
   loadAttributes(tri, vec2(1.0, 0.0), n1, t1);
   loadAttributes(tri, vec2(0.0, 1.0), n2, t2);
+#ifdef TWO_LEVEL
+  // v0..v2 are in world space (scene.glsl); the normals of a BLAS are in its instance's object space.
+  n0 = normalize(instanceNormalToWorld(g_instance, n0));
+  n1 = normalize(instanceNormalToWorld(g_instance, n1));
+  n2 = normalize(instanceNormalToWorld(g_instance, n2));
+#endif
   vec3 e1 = v1 - v0, e2 = v2 - v0;
   vec2 d1 = t1 - t0, d2 = t2 - t0;
   float det = d1.x * d2.y - d1.y * d2.x;

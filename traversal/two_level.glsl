@@ -93,3 +93,16 @@ vec3 instanceNormalToWorld(int record, vec3 n) {
 
 // The caller's instance id of a record (its index in the instance list packTwoLevel was given).
 uint instanceId(int record) { return fetchNode(kInstanceTexels * record + 7).x; }
+
+// The scene material the instance's triangles are shaded with (a shared BLAS's triangles hold one
+// instance's).
+uint instanceMaterial(int record) { return fetchNode(kInstanceTexels * record + 7).w; }
+
+// An object-space point of instance `record` in world space: L p + T (texels 3..5: row i of L, T_i).
+vec3 instancePointToWorld(int record, vec3 p) {
+  int base = kInstanceTexels * record;
+  vec4 r0 = uintBitsToFloat(fetchNode(base + 3));
+  vec4 r1 = uintBitsToFloat(fetchNode(base + 4));
+  vec4 r2 = uintBitsToFloat(fetchNode(base + 5));
+  return vec3(dot(r0.xyz, p) + r0.w, dot(r1.xyz, p) + r1.w, dot(r2.xyz, p) + r2.w);
+}
