@@ -5,7 +5,8 @@
 // triangles that did not move gives back the builder's boxes (bit for bit up to the sign of a zero
 // coordinate: min(-0, +0) keeps whichever came first, and the builder and the refit may meet the two
 // in different orders). One thread: the work is a single pass over the nodes, and its result cannot
-// depend on a thread count.
+// depend on a thread count. (A refit on several threads, refitSchedule below, splits the nodes
+// into subtrees refit side by side: min and max are exact, so the boxes are the same bit for bit.)
 //
 // A tree whose builder splits primitives (sbvh) references a triangle from several leaves, each box
 // holding a clipped part of it; a refit cannot know the clip regions of moved triangles and gives each
@@ -13,6 +14,7 @@
 #pragma once
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -41,6 +43,24 @@ std::vector<uint32_t> refitOrder(const Bvh& bvh);
 void refitBvh(Bvh& bvh, std::span<const uint32_t> order, const FrameTriangles& frame, SahSums* sums = nullptr);
 // The same with the order computed here.
 void refitBvh(Bvh& bvh, const FrameTriangles& frame);
+
+// refitOrder cut for `threads` threads: the post-order puts every subtree in a contiguous range ending
+// at its root, so subtrees of at most max(kRefitTaskNodes, nodes / (8 x threads)) nodes are tasks
+// that threads refit side by side, and the few nodes above them (`top`) follow, in order, on one.
+// Depends on the topology only, as refitOrder. One task (the whole order) for one thread or a tree
+// too small to split.
+constexpr uint32_t kRefitTaskNodes = 256;  // below this a task costs less than handing it to a thread
+struct RefitSchedule {
+  std::vector<uint32_t> order;                       // refitOrder(bvh)
+  std::vector<std::pair<uint32_t, uint32_t>> tasks;  // [begin, end) ranges of `order`, ascending
+  std::vector<uint32_t> top;                         // positions in `order` outside every task, ascending
+};
+RefitSchedule refitSchedule(const Bvh& bvh, unsigned threads);
+// refitBvh over a schedule on up to `threads` threads. The same boxes, errors and sums (added in
+// `order`, after the refit) as refitBvh(bvh, schedule.order, frame, sums) for any thread count: of
+// several bad leaves the one first in `order` is reported.
+void refitBvh(Bvh& bvh, const RefitSchedule& schedule, const FrameTriangles& frame, unsigned threads,
+              SahSums* sums = nullptr);
 
 // The box of triangle i of the frame (the one builders get: layout/layout.hpp triangleBoxes).
 inline Aabb triangleBox(const FrameTriangles& frame, size_t i) {

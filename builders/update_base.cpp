@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "builders/build_util.hpp"  // resolveThreads
 #include "builders/builder.hpp"
 #include "datasets/scene.hpp"  // InputError
 
@@ -33,12 +34,12 @@ void UpdateStrategyBase::rebuild(const FrameTriangles& frame) {
   }
   BuildInput input{boxes_, centroids_, frame.v0, frame.v1, frame.v2};
   tree_ = buildBvh(options_.builder, input, options_.build);
-  order_ = refitOrder(tree_);
+  schedule_ = refitSchedule(tree_, resolveThreads(options_.build.threads));
   count_ = n;
 }
 
 void UpdateStrategyBase::refit(const FrameTriangles& frame, SahSums* sums) {
-  refitBvh(tree_, order_, frame, sums);
+  refitBvh(tree_, schedule_, frame, resolveThreads(options_.build.threads), sums);
 }
 
 }  // namespace bvhlab::detail

@@ -24,8 +24,8 @@ class UpdateStrategyBase : public UpdateStrategy {
   // app gives a builder: layout/layout.hpp triangleBoxes and triangleCentroids; the triangles too, so
   // a builder that splits primitives clips them). Keeps the refit order of the new tree.
   void rebuild(const FrameTriangles& frame);
-  // Refit with the order kept since the last rebuild (the topology has not changed since); with
-  // `sums`, the refit tree's SahSums gathered in the same pass (builders/refit.hpp).
+  // Refit with the schedule kept since the last rebuild (the topology has not changed since), on
+  // options_.build.threads threads; with `sums`, the refit tree's SahSums (builders/refit.hpp).
   void refit(const FrameTriangles& frame, SahSums* sums = nullptr);
 
   Bvh tree_;
@@ -34,7 +34,7 @@ class UpdateStrategyBase : public UpdateStrategy {
  private:
   UpdateSpec spec_;
   UpdateOptions options_;
-  std::vector<uint32_t> order_;
+  RefitSchedule schedule_;  // the refit's order and its tasks for the build's threads (since the last rebuild)
   std::vector<Aabb> boxes_;  // scratch kept between rebuilds (no reallocation per frame)
   std::vector<glm::vec3> centroids_;
 };
