@@ -330,8 +330,10 @@ ExperimentConfig parseExperimentConfig(std::string_view text, const fs::path& fi
         const std::string name(present[i]->singular);
         run.axes.emplace_back(name, s.axes.at(name)[digit[i]]);
       }
-      // A scene may trace its clip at its own step and length ([trace] clip_step, clip_frames).
+      // A scene may have its own rays per workload and trace its clip at its own step and length
+      // ([trace] count, clip_step, clip_frames).
       if (const AxisValue* scene = run.axis("scene")) {
+        run.render.traceCount = scene->value.value("count", run.render.traceCount);
         run.render.clipStep = scene->value.value("clip_step", run.render.clipStep);
         run.render.clipFrames = scene->value.value("clip_frames", run.render.clipFrames);
       }

@@ -195,6 +195,7 @@ class ConfigReader {
         } else if (k == "seed") value["seed"] = integer(v, sub, 0, std::numeric_limits<int64_t>::max());
         else if (k == "clip_step") value["clip_step"] = integer(v, sub, 1, 1 << 20);  // [trace]'s, for this scene
         else if (k == "clip_frames") value["clip_frames"] = integer(v, sub, 0, 1 << 20);
+        else if (k == "count") value["count"] = integer(v, sub, 1, int64_t(1) << 24);
         else if (k == "name") label = string(v, sub);
         else if (k == "eye" || k == "target" || k == "up") value[std::string(k.str())] = vec3(v, sub);
         else if (k == "fov") {
@@ -203,7 +204,7 @@ class ConfigReader {
           value["fov"] = fov;
         } else
           fail(k.source(), sub, "unknown key; a scene table has file or generate (+ triangles, seed), name, eye, "
-                                "target, up, fov, clip_step, clip_frames");
+                                "target, up, fov, count, clip_step, clip_frames");
       }
       if (generateNode) {
         if (fileNode) fail(fileNode->source(), key, "a scene has `file` or `generate`, not both");

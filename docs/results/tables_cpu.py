@@ -339,9 +339,21 @@ def cpu_dynamic():
                 raise DataError(f"{rel(rpath)}: no clip and frames in the run's result")
             mine.append((r, clip, frames, rpath))
         mine.sort(key=lambda m: num(m[1], "total_ms", m[3]))
+        # Per-frame rebuild's update time and mean ray cost, per builder: what the mixed strategies trade against.
+        rebuilt = {}
+        for r, clip, frames, rpath in mine:
+            if r.get("update") == "rebuild":
+                rebuilt[r.get("builder")] = (num(clip, "update_ms_total", rpath),
+                                             sum(num(f, "ray_cost", rpath) for f in frames) / len(frames))
         for r, clip, frames, rpath in mine:
             first, last = num(frames[0], "ray_cost", rpath), num(frames[-1], "ray_cost", rpath)
             peak = max(num(f, "ray_cost", rpath) for f in frames)
+            mean = sum(num(f, "ray_cost", rpath) for f in frames) / len(frames)
+            base = rebuilt.get(r.get("builder"))
+            if r.get("update") == "rebuild" or base is None or base[0] <= 0 or base[1] <= 0:
+                versus = "–"
+            else:
+                versus = f"{num(clip, 'update_ms_total', rpath) / base[0]:.2f} / {mean / base[1]:.2f}"
             c = verdicts.get(r.get("key"))
             if c is None or c.get("ci_low") is None:
                 vs = "baseline" if r.get("update") == findings.get("baselines", {}).get("update") else "–"
@@ -352,10 +364,12 @@ def cpu_dynamic():
                         with_ci(num(clip, "total_ms", rpath), num(clip, "total_ms_ci_low", rpath),
                                 num(clip, "total_ms_ci_high", rpath), lambda x: f"{x:.0f}"), vs,
                         f"{num(clip, 'update_ms_total', rpath):.0f}", f"{num(clip, 'upload_ms_total', rpath):.0f}",
-                        f"{num(clip, 'trace_ms_total', rpath):.0f}", str(clip.get("rebuilds")),
-                        f"{first:.1f}", f"{last:.1f}", f"{last / first:.2f}", f"{peak:.1f}"])
+                        f"{num(clip, 'trace_ms_total', rpath):.0f}",
+                        f"{clip.get('rebuilds')} of {clip.get('frames')} (step {clip.get('step')})",
+                        f"{first:.1f}", f"{last:.1f}", f"{last / first:.2f}", f"{peak:.1f}", f"{mean:.1f}", versus])
     header = ["scene", "update", "builder", "clip ms [95%]", "vs rebuild [95%], verdict", "update ms", "upload ms",
-              "trace ms", "rebuilds", "ray cost, frame 0", "ray cost, last frame", "last / frame 0", "peak ray cost"]
+              "trace ms", "rebuilds of traced frames", "ray cost, frame 0", "ray cost, last frame", "last / frame 0",
+              "peak ray cost", "mean ray cost", "update / mean ray cost vs rebuild"]
     lines = table(header, out)
     band_text = "; ".join(f"{sc} {num(n, 'ratio', fpath):.3f} [{num(n, 'ci_low', fpath):.3f}, {num(n, 'ci_high', fpath):.3f}]"
                           for sc, n in bands.items())
@@ -370,6 +384,9 @@ def cpu_dynamic():
               f"{', '.join(mixed.get('scenes_beats_both_beyond_band', [])) or 'no scene'} "
               "(findings.json `clip_mixed`)."]
     r0 = runs[0]
+    lines += ["", "Update / mean ray cost vs rebuild: the clip's update time and its mean ray cost over the traced "
+              "frames, each over those of the same builder's `rebuild` clip (what a mixed strategy saves in updates "
+              "and pays in rays). Frames are traced every `step` frames of the scene's clip, from frame 0."]
     lines += ["", "Each row is one clip traced frame by frame (docs/animation.md): the traced frames' update, upload "
               "(pack + GL re-upload) and trace medians summed; the interval is the bootstrap over each frame's "
               "samples. The clips of a scene ran in lockstep in one process (frame f of every strategy, in a shuffled "
