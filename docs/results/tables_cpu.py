@@ -326,6 +326,7 @@ def cpu_dynamic():
         if n.get("control") == "clip":
             bands[n.get("scene")] = n
     out = []
+    rays = {}  # rays a frame, per scene
     scenes = list(dict.fromkeys(r.get("scene") for r in runs))
     for s in scenes:
         mine = []
@@ -338,6 +339,7 @@ def cpu_dynamic():
             if not isinstance(clip, dict) or not isinstance(frames, list) or not frames:
                 raise DataError(f"{rel(rpath)}: no clip and frames in the run's result")
             mine.append((r, clip, frames, rpath))
+            rays[s] = frames[0].get("rays")
         mine.sort(key=lambda m: num(m[1], "total_ms", m[3]))
         # Per-frame rebuild's update time and mean ray cost, per builder: what the mixed strategies trade against.
         rebuilt = {}
@@ -390,7 +392,8 @@ def cpu_dynamic():
     lines += ["", "Each row is one clip traced frame by frame (docs/animation.md): the traced frames' update, upload "
               "(pack + GL re-upload) and trace medians summed; the interval is the bootstrap over each frame's "
               "samples. The clips of a scene ran in lockstep in one process (frame f of every strategy, in a shuffled "
-              f"order, before frame f + 1 of any). {r0.get('workload')} rays, {r0.get('kernel')} kernel, leaf size {r0.get('leaf_size')}; "
+              f"order, before frame f + 1 of any). {r0.get('workload')} rays "
+              f"({', '.join(f'{sc} {n}' for sc, n in rays.items())} a frame), {r0.get('kernel')} kernel, leaf size {r0.get('leaf_size')}; "
               "ray cost = node visits + triangle tests per ray, from the kernel's counters. Per-frame values: "
               f"`{rel(result_path(DYN, 'runs'))}/KEY.json` (the run's `trace --json` object)."]
     return lines + provenance([(cpath, rows)], src, commands(DYN, src))
