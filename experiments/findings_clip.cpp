@@ -32,6 +32,8 @@ size_t lowRank(size_t count) { return size_t(0.5 * (1.0 - kConfidence) * double(
 
 std::vector<double> clipFrameTotals(const json& row) { return listIn(row, "clip", "frame_total_ms"); }
 std::vector<double> clipControlTotals(const json& row) { return listIn(row, "aa_clip_control", "frame_total_ms"); }
+std::vector<double> clipFrameUpdates(const json& row) { return listIn(row, "clip", "frame_update_ms"); }
+std::vector<double> clipFrameRayCosts(const json& row) { return listIn(row, "clip", "frame_ray_cost"); }
 
 std::optional<ClipRatio> clipRatio(const std::vector<double>& a, const std::vector<double>& b, uint64_t seed) {
   const size_t n = a.size();
@@ -112,13 +114,22 @@ json side(const json& mixed, const json& pure, const std::map<std::string, doubl
   const bool hasBand = band != bands.end() && session(mixed) == session(pure);
   below = r && r->ratio.high < 1.0;
   beyond = below && hasBand && r->ratio.high < std::exp(-band->second);
+  // A part of the clips, per frame, compared as the totals are.
+  const auto part = [&](std::vector<double> (*values)(const json&), const char* name) -> json {
+    const auto p = clipRatio(values(mixed), values(pure),
+                             seedOf(label(mixed, "key") + "/" + label(pure, "key") + "/" + name));
+    if (!p) return json();
+    return {{"ratio", p->ratio.estimate}, {"ci_low", p->ratio.low}, {"ci_high", p->ratio.high}};
+  };
   return {{"b", pure["key"]},
           {"ratio", r ? json(r->ratio.estimate) : json()},
           {"ci_low", r ? json(r->ratio.low) : json()},
           {"ci_high", r ? json(r->ratio.high) : json()},
           {"n", r ? json(r->ratio.n) : json()},
           {"band", hasBand ? json(band->second) : json()},
-          {"p_value", r && hasBand ? json(r->test(band->second).p()) : json()}};
+          {"p_value", r && hasBand ? json(r->test(band->second).p()) : json()},
+          {"update", part(clipFrameUpdates, "update")},
+          {"ray_cost", part(clipFrameRayCosts, "ray_cost")}};
 }
 
 }  // namespace

@@ -32,6 +32,9 @@ constexpr int kClipRatioResamples = 2000;
 
 // clip.frame_total_ms of a clip row (empty when the row is not a clip or lacks it).
 std::vector<double> clipFrameTotals(const nlohmann::json& row);
+// clip.frame_update_ms and clip.frame_ray_cost: per traced frame, the update's median and the ray cost.
+std::vector<double> clipFrameUpdates(const nlohmann::json& row);
+std::vector<double> clipFrameRayCosts(const nlohmann::json& row);
 // aa_clip_control.frame_total_ms of a clip row (empty without a control).
 std::vector<double> clipControlTotals(const nlohmann::json& row);
 
@@ -54,7 +57,9 @@ std::vector<nlohmann::json> clipNoiseEntries(const std::string& scene, const std
 // (`bands`, by session; none: band null). An entry {scene, strategies: [{update, key, context,
 // vs_refit, vs_rebuild, beats_both, beats_both_beyond_band}], beats_both, beats_both_beyond_band},
 // where beats_both = both intervals lie below 1 and beats_both_beyond_band = both lie below e^-band;
-// an empty object when the scene has no such context.
+// an empty object when the scene has no such context. Each vs_* also compares two parts of the clips,
+// each a clipRatio of its per-frame values: `update` (the clip's update time: what the mixed strategy
+// saves) and `ray_cost` (its mean ray cost: what it pays), {ratio, ci_low, ci_high}, null without them.
 nlohmann::json clipMixed(const std::string& scene, const std::vector<const nlohmann::json*>& rows,
                          const std::map<std::string, double>& bands);
 // Over the scenes' clipMixed entries: the scenes where some mixed strategy beats both, with and

@@ -6,6 +6,8 @@
 #include <string>
 
 #include "datasets/animation.hpp"
+#include "layout/triangle_formats.hpp"
+#include "render/frame_stats.hpp"
 #include "shaders/assemble.hpp"
 
 namespace bvhlab {
@@ -104,6 +106,36 @@ BuildStats twoLevelStats(const TwoLevelUpdater& tree, const std::string& builder
   b.depth = p.streams.depth;
   b.bytes = p.streams.bytes();
   return b;
+}
+
+double packClipFrame(PreparedScene& frame, const Bvh& tree, const LayoutInfo& packer, const std::string& triangleFormat,
+                     const std::string& builder) {
+  frame.bvh = tree;
+  const auto start = std::chrono::steady_clock::now();
+  frame.packed = packer.pack(frame.bvh, frame.soup);
+  packTriangles(frame.packed, frame.soup, triangleFormat);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  frame.stats = computeStats(frame.bvh, frame.cost);
+  frame.stats.builder = builder;
+  frame.stats.bytes = frame.packed.bytes();
+  return ms;
+}
+
+void putClipTimes(nlohmann::json& j, const std::string& key, const std::vector<double>& ms) {
+  const auto ci = medianInterval(ms);
+  j[key] = medianOf(ms);
+  j[key + "_ci_low"] = ci ? nlohmann::json(ci->low) : nlohmann::json();
+  j[key + "_ci_high"] = ci ? nlohmann::json(ci->high) : nlohmann::json();
+  j[key + "_all"] = ms;
+}
+
+void putTwoLevelFrame(nlohmann::json& j, const ClipTwoLevel::Step& step, const TwoLevelUpdater& tree) {
+  j["blas_updated"] = step.blasUpdated;
+  putClipTimes(j, "blas_update_ms", step.blasMs);
+  putClipTimes(j, "tlas_update_ms", step.tlasMs);
+  j["tlas_sah_cost"] = tree.tlasSahCost();
+  j["instances"] = tree.instanceCount();
+  j["blases"] = tree.blasCount();
 }
 
 }  // namespace bvhlab

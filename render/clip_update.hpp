@@ -6,10 +6,14 @@
 #include <memory>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "builders/update.hpp"
 #include "datasets/scene.hpp"
 #include "layout/layout.hpp"
 #include "layout/two_level_update.hpp"
+#include "layout/layouts.hpp"
+#include "render/prepared_scene.hpp"
 #include "render/render_command.hpp"
 
 namespace bvhlab {
@@ -72,5 +76,17 @@ class ClipTwoLevel {
 // A two-level frame's tree statistics for a PreparedScene (render/prepared_scene.hpp): its nodes (the
 // TLAS's and each BLAS's once), the two-level SAH estimate (TwoLevelUpdater::sahCost), depth and bytes.
 BuildStats twoLevelStats(const TwoLevelUpdater& tree, const std::string& builder);
+
+// A flat frame made ready to draw from the strategy's tree: frame.bvh = tree, packed by `packer` into
+// `triangleFormat` (returns the pack's ms: steady_clock), frame.stats computed (with frame.cost) and
+// named after `builder`. frame.scene and frame.soup are the frame's already.
+double packClipFrame(PreparedScene& frame, const Bvh& tree, const LayoutInfo& packer, const std::string& triangleFormat,
+                     const std::string& builder);
+
+// A part's samples as the JSON keys KEY, KEY_ci_low, KEY_ci_high (null below 6 samples) and KEY_all.
+void putClipTimes(nlohmann::json& j, const std::string& key, const std::vector<double>& ms);
+// A two-level frame's own keys of `trace --json` and `render --json`: blas_updated, blas_update_ms,
+// tlas_update_ms (putClipTimes), tlas_sah_cost, instances, blases.
+void putTwoLevelFrame(nlohmann::json& j, const ClipTwoLevel::Step& step, const TwoLevelUpdater& tree);
 
 }  // namespace bvhlab

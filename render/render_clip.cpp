@@ -30,14 +30,6 @@ double msSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-void putTimes(nlohmann::json& j, const std::string& key, const std::vector<double>& ms) {
-  const auto ci = medianInterval(ms);
-  j[key] = medianOf(ms);
-  j[key + "_ci_low"] = ci ? nlohmann::json(ci->low) : nlohmann::json();
-  j[key + "_ci_high"] = ci ? nlohmann::json(ci->high) : nlohmann::json();
-  j[key + "_all"] = ms;
-}
-
 }  // namespace
 
 nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
@@ -82,20 +74,12 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
     nlohmann::json parts;  // a two-level frame's own keys
     bool rebuilt = false, agree = true;
     double packMs = 0.0;
-    auto start = Clock::now();
     if (!twoLevel) {
       const ClipUpdater::Step step = updater->update(frame->soup);
       sm.update = step.ms;
       rebuilt = step.rebuilt;
       agree = step.agree;
-      frame->bvh = updater->tree();
-      start = Clock::now();
-      frame->packed = packer.pack(frame->bvh, frame->soup);
-      packTriangles(frame->packed, frame->soup, triangleFormat);
-      packMs = msSince(start);
-      frame->stats = computeStats(frame->bvh, frame->cost);
-      frame->stats.builder = cmd.builder;
-      frame->stats.bytes = frame->packed.bytes();
+      packMs = packClipFrame(*frame, updater->tree(), packer, triangleFormat, cmd.builder);
     } else {
       const ClipTwoLevel::Step step = twoLevel->update(frame->scene, sceneFrame);
       sm.update = step.ms;
@@ -104,17 +88,12 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
       packMs = step.packMs;
       frame->packed = twoLevel->first().packed().streams;  // frame->bvh stays empty: no single tree
       frame->stats = twoLevelStats(twoLevel->first(), cmd.builder);
-      parts["blas_updated"] = step.blasUpdated;
-      putTimes(parts, "blas_update_ms", step.blasMs);
-      putTimes(parts, "tlas_update_ms", step.tlasMs);
-      parts["tlas_sah_cost"] = twoLevel->first().tlasSahCost();
-      parts["instances"] = twoLevel->first().instanceCount();
-      parts["blases"] = twoLevel->first().blasCount();
+      putTwoLevelFrame(parts, step, twoLevel->first());
     }
     stack = std::max(stack, stackSizeFor(frame->packed));
     const size_t cached = programs->size();
     glFinish();
-    start = Clock::now();
+    const auto start = Clock::now();
     GpuJob job(cmd, setup, frame, programs.get(), stack);
     glFinish();
     sm.upload.push_back(packMs + msSince(start));
@@ -139,10 +118,10 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
     j["frame"] = sceneFrame;
     j["rebuilt"] = rebuilt;
     j["rotations"] = updater ? updater->rotations() : 0u;
-    putTimes(j, "update_ms", sm.update);
-    putTimes(j, "upload_ms", sm.upload);
+    putClipTimes(j, "update_ms", sm.update);
+    putClipTimes(j, "upload_ms", sm.upload);
     j["pack_ms"] = packMs;
-    putTimes(j, "ms", sm.trace);
+    putClipTimes(j, "ms", sm.trace);
     for (const char* k : {"sah_cost", "epo", "ray_cost", "node_visits_per_ray", "triangle_tests_per_ray", "tree_hash",
                           "nodes", "mesh_rays"})
       if (r.contains(k)) j[k] = r[k];

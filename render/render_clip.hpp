@@ -12,6 +12,10 @@
 // render's frame_ms), and one frame with the counters (ray_cost, as `render --json` gives it; the
 // frame's epo too, a pass over its tree). -o writes the last frame's image.
 // A camera path (--camera-path) is refused with --update: the clip moves the camera.
+// --update two-level[:...]: the two-level tree (render/clip_update.hpp ClipTwoLevel) drawn through the
+// kernel's two-level walk (ShaderOptions::twoLevel; shading in world space: shaders/scene.glsl), with
+// trace's per-frame two-level keys (blas_update_ms, tlas_update_ms, tlas_sah_cost, instances, blases)
+// and no epo; the counters' node visits are the TLAS's and the BLASes' together.
 #pragma once
 #include <cstdint>
 

@@ -35,15 +35,6 @@ double msSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-// A part's samples as the JSON keys KEY, KEY_ci_low, KEY_ci_high (null below 6 samples) and KEY_all.
-void putTimes(nlohmann::json& j, const std::string& key, const std::vector<double>& ms) {
-  const auto ci = medianInterval(ms);
-  j[key] = medianOf(ms);
-  j[key + "_ci_low"] = ci ? nlohmann::json(ci->low) : nlohmann::json();
-  j[key + "_ci_high"] = ci ? nlohmann::json(ci->high) : nlohmann::json();
-  j[key + "_all"] = ms;
-}
-
 double medianOfResample(const std::vector<double>& v, std::mt19937_64& rng, std::vector<double>& scratch) {
   if (v.size() <= 1) return v.empty() ? 0.0 : v[0];
   std::uniform_int_distribution<size_t> pick(0, v.size() - 1);
@@ -153,12 +144,7 @@ void TraceClip::step(int f, const std::string& renderer) {
     agree = step.agree;
     sah0 = step.sah;
     packMs = step.packMs;
-    j["blas_updated"] = step.blasUpdated;
-    putTimes(j, "blas_update_ms", step.blasMs);
-    putTimes(j, "tlas_update_ms", step.tlasMs);
-    j["tlas_sah_cost"] = twoLevel->first().tlasSahCost();
-    j["instances"] = twoLevel->first().instanceCount();
-    j["blases"] = twoLevel->first().blasCount();
+    putTwoLevelFrame(j, step, twoLevel->first());
   }
   const PackedBvh& packed = twoLevel ? twoLevel->first().packed().streams : flatPacked;
 
@@ -216,11 +202,11 @@ void TraceClip::step(int f, const std::string& renderer) {
   j["frame"] = sceneFrame;
   j["rebuilt"] = rebuilt;
   j["rotations"] = updater ? updater->rotations() : 0u;
-  putTimes(j, "update_ms", sm.update);
-  putTimes(j, "upload_ms", sm.upload);
+  putClipTimes(j, "update_ms", sm.update);
+  putClipTimes(j, "upload_ms", sm.upload);
   j["pack_ms"] = packMs;
   j["gl_upload_ms_all"] = glUpload;
-  putTimes(j, "ms", sm.trace);
+  putClipTimes(j, "ms", sm.trace);
   j["sah_cost"] = sah0;
   // EPO is a single tree's measure: a two-level frame has none.
   if (rc.epo) j["epo"] = tree ? nlohmann::json(endPointOverlap(*tree, soup.v0, soup.v1, soup.v2, cost)) : nlohmann::json();
@@ -265,6 +251,13 @@ nlohmann::json TraceClip::result(const std::string& renderer, uint64_t& overflow
   nlohmann::json frameTotals = nlohmann::json::array();
   for (const ClipFrameSamples& f : samples) frameTotals.push_back(medianOf(f.update) + medianOf(f.upload) + medianOf(f.trace));
   clip["frame_total_ms"] = frameTotals;
+  // Per traced frame, two of its parts (findings compare them paired over frames, as the totals): the
+  // update's median and the ray cost.
+  nlohmann::json frameUpdates = nlohmann::json::array(), frameRayCosts = nlohmann::json::array();
+  for (const ClipFrameSamples& f : samples) frameUpdates.push_back(medianOf(f.update));
+  for (const nlohmann::json& f : frameList) frameRayCosts.push_back(f["ray_cost"]);
+  clip["frame_update_ms"] = frameUpdates;
+  clip["frame_ray_cost"] = frameRayCosts;
   clip["rebuilds"] = std::count_if(frameList.begin(), frameList.end(), [](const nlohmann::json& j) { return j["rebuilt"].get<bool>(); });
   clip["hit_mismatches"] = mismatchesTotal;
   clip["stack_overflow_rays"] = overflowsTotal;

@@ -112,17 +112,10 @@ void Viewer::updateClipFrame() {
     frame->stats = twoLevelStats(*twoLevel_, builder_);
   } else if (frame->soup.size() > 0) {
     const FrameTriangles tris{frame->soup.v0, frame->soup.v1, frame->soup.v2};
-    auto start = Clock::now();
+    const auto start = Clock::now();
     lastRebuilt_ = strategy_->update(tris);
     lastUpdateMs_ = msSince(start);
-    frame->bvh = strategy_->tree();
-    start = Clock::now();
-    frame->packed = packer.pack(frame->bvh, frame->soup);
-    packTriangles(frame->packed, frame->soup, format);
-    packMs_ = msSince(start);
-    frame->stats = computeStats(frame->bvh, frame->cost);
-    frame->stats.builder = builder_;
-    frame->stats.bytes = frame->packed.bytes();
+    packMs_ = packClipFrame(*frame, strategy_->tree(), packer, format, builder_);
     frame->stats.buildMs = lastRebuilt_ ? lastUpdateMs_ : 0.0;
   } else {
     frame->packed.layout = packer.name;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -324,6 +325,34 @@ TEST(DynamicConfig, UpdatesAxisValuesAreCheckedAtLoad) {
                                          clitest::scene("bench/anim-explode.toml").string() +
                                          "\"]\nupdates = [\"refit\"]\n");
   EXPECT_NE(noRays.find("rays axis"), std::string::npos) << noRays;
+}
+
+// A scene entry's own count, clip_step and clip_frames replace [trace]'s for its runs (and their
+// keys); out-of-range values are refused naming the file, line and key.
+TEST(DynamicConfig, ASceneMayTraceItsClipAtItsOwnStepLengthAndRays) {
+  const std::string scene = clitest::scene("bench/anim-explode.toml").string();
+  const auto file = writeTemp("own_clip.toml", "[experiment]\nname = \"t\"\n[trace]\ncount = 512\nclip_step = 4\n"
+                                               "clip_frames = 15\n[axes]\nscenes = [\"" + scene + "\",\n"
+                                               "  { file = \"" + scene + "\", name = \"fine\", clip_step = 1, "
+                                               "clip_frames = 30, count = 2048 }]\nrays = [\"primary\"]\n"
+                                               "updates = [\"refit\"]\n");
+  const ExperimentConfig cfg = loadExperimentConfig(file);
+  ASSERT_EQ(cfg.runs.size(), 2u);
+  std::set<std::string> keys;
+  for (const RunSpec& run : cfg.runs) {
+    keys.insert(run.key);
+    const bool fine = run.axis("scene")->label == "fine";
+    EXPECT_EQ(run.render.clipStep, fine ? 1 : 4);
+    EXPECT_EQ(run.render.clipFrames, fine ? 30 : 15);
+    EXPECT_EQ(run.render.traceCount, fine ? 2048 : 512);
+  }
+  EXPECT_EQ(keys.size(), 2u);
+  for (const std::string field : {"clip_step = 0", "clip_frames = -1", "count = 0"}) {
+    const std::string bad = configError("[experiment]\nname = \"t\"\n[axes]\nscenes = [\n  { file = \"" + scene +
+                                        "\", " + field + " }]\nrays = [\"primary\"]\nupdates = [\"refit\"]\n");
+    EXPECT_NE(bad.find("dynamic.toml:5:"), std::string::npos) << field << ": " << bad;
+    EXPECT_NE(bad.find(field.substr(0, field.find(' '))), std::string::npos) << field << ": " << bad;
+  }
 }
 
 }  // namespace

@@ -106,5 +106,44 @@ TEST(FindingsClip, StrategiesAreCalledOnlyBeyondTheClipControlsBand) {
     if (c["axis"] == "update") EXPECT_EQ(c["verdict"], "not called: no noise band") << c.dump();
 }
 
+// The mixed question also compares the clips' update time and ray cost (what a mixed strategy saves
+// and pays), each a paired ratio over frames with its interval; null where the rows lack them.
+TEST(FindingsClip, MixedStrategiesCompareUpdateTimeAndRayCostOverFrames) {
+  std::mt19937_64 rng(5);
+  auto withParts = [&](json row, double update, double rayCost, double growth) {
+    row["clip"]["frame_update_ms"] = clipFrames(rng, update, 0.0, 0.05);
+    row["clip"]["frame_ray_cost"] = clipFrames(rng, rayCost, growth, 0.0);
+    return row;
+  };
+  json rebuild = withParts(clipRow("rebuild", clipFrames(rng, 1.0, 0.0, 0.03)), 1.0, 1.0, 0.0);
+  rebuild["aa_clip_control"] = {{"frame_total_ms", clipFrames(rng, 1.0, 0.0, 0.03)}};
+  const json rows = json::array({rebuild, withParts(clipRow("refit", clipFrames(rng, 0.9, 0.08, 0.03)), 0.1, 1.0, 0.2),
+                                 withParts(clipRow("refit+rebuild:sah>1.5", clipFrames(rng, 0.8, 0.0, 0.03)), 0.3, 1.1, 0.0),
+                                 clipRow("refit+rotate", clipFrames(rng, 1.0, 0.0, 0.03))});
+  const json f = computeFindings(rows, json::object(), json{{"update", "rebuild"}});
+  ASSERT_EQ(f["clip_mixed"].size(), 1u);
+  bool seen = false;
+  for (const json& s : f["clip_mixed"][0]["strategies"]) {
+    if (s["update"] == "refit+rotate") {  // no parts on its row
+      EXPECT_TRUE(s["vs_rebuild"]["update"].is_null());
+      EXPECT_TRUE(s["vs_rebuild"]["ray_cost"].is_null());
+      continue;
+    }
+    seen = true;
+    const json& u = s["vs_rebuild"]["update"];
+    const json& c = s["vs_rebuild"]["ray_cost"];
+    ASSERT_TRUE(u.is_object() && c.is_object()) << s.dump();
+    EXPECT_NEAR(u["ratio"].get<double>(), 0.3, 0.03);
+    EXPECT_LT(u["ci_low"].get<double>(), u["ratio"].get<double>());
+    EXPECT_GT(u["ci_high"].get<double>(), u["ratio"].get<double>());
+    EXPECT_LT(u["ci_high"].get<double>(), 1.0);
+    EXPECT_NEAR(c["ratio"].get<double>(), 1.1, 1e-9);  // noise-free ray costs: the ratio of the sums exactly
+    // Against refit: 3x its update time, under its growing ray cost.
+    EXPECT_GT(s["vs_refit"]["update"]["ci_low"].get<double>(), 1.0);
+    EXPECT_LT(s["vs_refit"]["ray_cost"]["ratio"].get<double>(), 1.0);
+  }
+  EXPECT_TRUE(seen);
+}
+
 }  // namespace
 }  // namespace bvhlab

@@ -119,15 +119,40 @@ TEST(ViewClip, RefusesAStaticSceneABadSpecAndAFramePastTheClip) {
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.err.find(past + ":1: clip_frame 12 is past the clip (12 frames)"), std::string::npos) << r.err;
 
+  // Two-level trees: a layout without a two-level walk, and a static BLAS under a deforming mesh.
+  r = view(*prefix, scene + " --update two-level:blas=refit --layout bvh4 --frames 1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("no two-level walk"), std::string::npos) << r.err;
   r = view(*prefix, scene + " --update two-level --frames 1");
   EXPECT_NE(r.code, 0);
-  EXPECT_NE(r.err.find("single tree"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("deforms"), std::string::npos) << r.err;
 
   const std::string bad = writeTemp("bad.txt", "1 set update sometimes\n").string();
   r = view(*prefix, scene + " --script " + bad + " --frames 2");
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.err.find(bad + ":1: "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("'sometimes'"), std::string::npos) << r.err;
+}
+
+// The viewer plays a clip through a two-level tree (its BLAS refit, the TLAS rebuilt every frame):
+// every clip frame made and drawn, the first one building, the later ones updating.
+TEST(ViewClip, PlaysAClipThroughATwoLevelTree) {
+  REQUIRE_VIEWER(prefix);
+  const std::string script = writeTemp("two_level.txt", "3 key SPACE\n").string();  // scripted: a clip frame a frame
+  const clitest::Result r =
+      view(*prefix, explodingScene() + " --update two-level:blas=refit --script " + script + " --frames 4 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json out = json::parse(r.out);
+  EXPECT_EQ(out["update"], "two-level:blas=refit");
+  const json& clip = out["clip"];
+  ASSERT_EQ(clip.size(), 3u) << clip.dump();  // paused at frame 3 before it advanced
+  for (size_t i = 0; i < clip.size(); ++i) {
+    EXPECT_EQ(clip[i]["clip_frame"], int(i));
+    EXPECT_EQ(clip[i]["update"], "two-level:blas=refit");
+    EXPECT_EQ(clip[i]["rebuilt"].get<bool>(), i == 0) << clip[i].dump();
+    EXPECT_GT(clip[i]["sah_cost"].get<double>(), 0.0);
+    EXPECT_GT(clip[i]["nodes"].get<int>(), 1);
+  }
 }
 
 TEST(ViewClip, AJumpStartsTheStrategyAgainAtThatFrame) {

@@ -321,6 +321,12 @@ def cpu_dynamic():
     for c in findings.get("comparisons", []):
         if c.get("axis") == "update" and c.get("interval_over") == "clip frames":
             verdicts[c.get("a")] = c
+    # A mixed strategy's update time and mean ray cost over its builder's rebuild clip, with intervals
+    # (findings.json clip_mixed: paired over frames).
+    parts = {}
+    for entry in findings.get("clip_mixed", []):
+        for st in entry.get("strategies", []):
+            parts[st.get("key")] = (st.get("vs_rebuild") or {})
     bands = {}
     for n in findings.get("noise", []):
         if n.get("control") == "clip":
@@ -352,7 +358,14 @@ def cpu_dynamic():
             peak = max(num(f, "ray_cost", rpath) for f in frames)
             mean = sum(num(f, "ray_cost", rpath) for f in frames) / len(frames)
             base = rebuilt.get(r.get("builder"))
-            if r.get("update") == "rebuild" or base is None or base[0] <= 0 or base[1] <= 0:
+            mixed = parts.get(r.get("key")) or {}
+            if isinstance(mixed.get("update"), dict) and isinstance(mixed.get("ray_cost"), dict):
+                u, c = mixed["update"], mixed["ray_cost"]
+                versus = (with_ci(num(u, "ratio", fpath), num(u, "ci_low", fpath), num(u, "ci_high", fpath),
+                                  lambda x: f"{x:.2f}") + " / " +
+                          with_ci(num(c, "ratio", fpath), num(c, "ci_low", fpath), num(c, "ci_high", fpath),
+                                  lambda x: f"{x:.2f}"))
+            elif r.get("update") == "rebuild" or base is None or base[0] <= 0 or base[1] <= 0:
                 versus = "–"
             else:
                 versus = f"{num(clip, 'update_ms_total', rpath) / base[0]:.2f} / {mean / base[1]:.2f}"
@@ -388,7 +401,9 @@ def cpu_dynamic():
     r0 = runs[0]
     lines += ["", "Update / mean ray cost vs rebuild: the clip's update time and its mean ray cost over the traced "
               "frames, each over those of the same builder's `rebuild` clip (what a mixed strategy saves in updates "
-              "and pays in rays). Frames are traced every `step` frames of the scene's clip, from frame 0."]
+              "and pays in rays); for the mixed strategies with their 95% intervals, paired over frames as the "
+              "clip totals are (findings.json `clip_mixed`, `vs_rebuild.update` and `.ray_cost`). Frames are traced "
+              "every `step` frames of the scene's clip, from frame 0."]
     lines += ["", "Each row is one clip traced frame by frame (docs/animation.md): the traced frames' update, upload "
               "(pack + GL re-upload) and trace medians summed; the interval is the bootstrap over each frame's "
               "samples. The clips of a scene ran in lockstep in one process (frame f of every strategy, in a shuffled "
