@@ -194,7 +194,7 @@ void TraceClip::step(int f, const std::string& renderer) {
       if (hits[i].hit) hits[i].prim = twoLevel->first().flatTriangle(instances[i], hits[i].prim);
   }
   for (const BatchHit& h : hits) found += h.hit;
-  const HitAgreement agreement = compareHits(hits, y.hits(), y.anyHit());
+  const HitAgreement agreement = compareHits(hits, y.hits(), y.anyHit(), y.rays().rays);
   overflowsTotal += overflows;
   mismatchesTotal += agreement.mismatches;
   const double n = double(std::max<size_t>(1, y.rays().rays.size()));

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <limits>
+#include <stdexcept>
+#include <string>
 #include <string_view>
 
 #include "render/frame_stats.hpp"
@@ -15,12 +18,38 @@ namespace bvhlab {
 
 // Two tracers' closest hits on different triangles at the same distance are a tie, not a mismatch:
 // rays through a shared edge or vertex, or coplanar overlapping triangles. "Same distance" allows
-// the two intersection algorithms' rounding of t: each is within a few ulps of the exact value
-// (Woop et al. 2013 for the watertight test), so 2^-16 relative is far above it and far below any
-// gap between distinct surfaces the scenes have.
+// the two intersection algorithms' rounding of t, which has two parts:
+//  - relative to t: each t is within a few ulps of the exact value along the ray (Woop et al. 2013
+//    for the watertight test); 2^-16 relative is far above that and far below any gap between
+//    distinct surfaces the scenes have;
+//  - absolute, at the magnitude of the coordinates: the tests subtract the ray origin from the
+//    vertices (or the vertices from each other), which rounds at ulps of |origin| and |vertex|, so a
+//    short ray from a surface next to another (a diffuse ray leaving a room's corner: t = 0.006 at
+//    coordinates ~5) carries an error of ulps of 5, not of 0.006. kTieUlps ulps of the larger of
+//    the origin's and the hit point's largest coordinate, over |dir|, bound the two tests' rounding
+//    with room (each t comes from ~10 float operations on values of that magnitude).
 constexpr double kTieRelativeT = 0x1.0p-16;
+constexpr double kTieUlps = 16.0;
 
-HitAgreement compareHits(const std::vector<BatchHit>& a, const std::vector<BatchHit>& b, bool anyHit) {
+namespace {
+
+double maxAbs(const glm::vec3& v) { return std::max({std::abs(double(v.x)), std::abs(double(v.y)), std::abs(double(v.z))}); }
+
+}  // namespace
+
+double tieTolerance(const BatchRay& ray, double ta, double tb) {
+  const double t = std::max(std::abs(ta), std::abs(tb));
+  const double length = glm::length(glm::dvec3(ray.dir));
+  const double magnitude = std::max(maxAbs(ray.origin), maxAbs(ray.origin) + t * maxAbs(ray.dir));
+  const double absolute = length > 0.0 ? kTieUlps * double(std::numeric_limits<float>::epsilon()) * magnitude / length : 0.0;
+  return std::max(kTieRelativeT * t, absolute);
+}
+
+HitAgreement compareHits(const std::vector<BatchHit>& a, const std::vector<BatchHit>& b, bool anyHit,
+                         const std::vector<BatchRay>& rays) {
+  if (rays.size() != a.size() || b.size() != a.size())
+    throw std::invalid_argument("compareHits: " + std::to_string(a.size()) + " and " + std::to_string(b.size()) +
+                                " answers for " + std::to_string(rays.size()) + " rays");
   HitAgreement r;
   for (size_t i = 0; i < a.size(); ++i) {
     if (a[i].hit != b[i].hit) {
@@ -29,7 +58,7 @@ HitAgreement compareHits(const std::vector<BatchHit>& a, const std::vector<Batch
     } else if (!anyHit && a[i].hit && a[i].prim != b[i].prim) {
       const double ta = a[i].t, tb = b[i].t;
       // NaN compares false here and counts as a mismatch.
-      if (std::abs(ta - tb) <= kTieRelativeT * std::max(std::abs(ta), std::abs(tb)))
+      if (std::abs(ta - tb) <= tieTolerance(rays[i], ta, tb))
         ++r.ties;
       else
         ++r.mismatches;
@@ -37,7 +66,6 @@ HitAgreement compareHits(const std::vector<BatchHit>& a, const std::vector<Batch
   }
   return r;
 }
-
 
 BytesFetched mirrorBytesFetched(const PackedBvh& packed, const std::string& kernel, Robustness robust, bool anyHit,
                                 const std::vector<BatchRay>& rays, size_t maxRays) {
@@ -163,7 +191,7 @@ nlohmann::json traceResult(const TraceCommand& c, const TraceSetup& s, const Tra
   const std::vector<BatchHit> glHits = gl.results();
   const std::vector<BatchHit>& embreeHits = y.hits();
   const bool anyHit = y.anyHit();
-  const HitAgreement agree = compareHits(glHits, embreeHits, anyHit);
+  const HitAgreement agree = compareHits(glHits, embreeHits, anyHit, y.rays().rays);
   const std::vector<glm::uvec4> counts = gl.traceCounted();
   uint64_t visits = 0, tests = 0, boxTests = 0, glFound = 0, embreeFound = 0;
   overflows = 0;

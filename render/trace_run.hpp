@@ -70,13 +70,18 @@ class TraceYardstick {
 };
 
 // Two tracers' answers to the same rays, ray by ray (closest hits on different triangles at the same
-// distance, within kTieRelativeT, are ties; any-hit answers compare hit or miss only).
+// distance, within tieTolerance, are ties; any-hit answers compare hit or miss only).
 struct HitAgreement {
   uint64_t mismatches = 0;  // hit vs miss, or different triangles at different distances
   uint64_t ties = 0;        // different triangles at the same distance
   uint64_t hitMiss = 0;     // of the mismatches: one found a hit, the other none
 };
-HitAgreement compareHits(const std::vector<BatchHit>& a, const std::vector<BatchHit>& b, bool anyHit);
+// `rays`: the rays both answered (std::invalid_argument when the three lengths differ).
+HitAgreement compareHits(const std::vector<BatchHit>& a, const std::vector<BatchHit>& b, bool anyHit,
+                         const std::vector<BatchRay>& rays);
+// How far apart two closest hits' distances along `ray` may be and still be a tie: 2^-16 of t, or 16
+// ulps (float) of the coordinates' magnitude along the ray, whichever is larger (render/trace_run.cpp).
+double tieTolerance(const BatchRay& ray, double ta, double tb);
 
 // The default sample length on a GPU: 10 ms is 20 dispatches of the bunny's 1M primary rays on an
 // H200 (0.4-0.5 ms each), so the untimed leading dispatch and the one glFinish are small beside it.

@@ -203,15 +203,36 @@ TEST(TraceWorkloads, EmbreeAnswersEveryRayWhateverItsThreads) {
 // Rays answered differently: hit vs miss, or (closest hit) different triangles at different distances;
 // different triangles at the same distance (through a shared edge) are a tie, not a mismatch. 1e-5
 // relative: far above both tracers' rounding of t (a few ulps), far below any gap between surfaces here.
-size_t mismatches(const std::vector<BatchHit>& ours, const std::vector<BatchHit>& theirs, bool anyHit) {
-  size_t n = 0;
-  for (size_t i = 0; i < ours.size(); ++i) {
-    if (ours[i].hit != theirs[i].hit)
-      ++n;
-    else if (!anyHit && ours[i].hit && ours[i].prim != theirs[i].prim)
-      n += !(std::abs(ours[i].t - theirs[i].t) <= 1e-5f * std::max(ours[i].t, theirs[i].t));
-  }
-  return n;
+// The product's comparison (render/trace_run.hpp compareHits): ties within the rounding of t aside.
+size_t mismatches(const std::vector<BatchHit>& ours, const std::vector<BatchHit>& theirs, bool anyHit,
+                  const std::vector<BatchRay>& rays) {
+  return compareHits(ours, theirs, anyHit, rays).mismatches;
+}
+
+// Ties: two closest hits on different triangles whose distances differ by the rounding of t, which
+// is relative to t for long rays and absolute, at the coordinates' magnitude, for short ones.
+TEST(CompareHits, TiesAllowTheRoundingOfTAtTheCoordinatesMagnitude) {
+  auto hit = [](uint32_t prim, float t) { BatchHit h; h.hit = true; h.prim = prim; h.t = t; return h; };
+  const BatchRay corner{glm::vec3(5.0f, 2.0f, -4.0f), 0.0f, glm::vec3(0.0f, 0.0f, 1.0f), 1e30f};
+  const BatchRay origin{glm::vec3(0.0f), 0.0f, glm::vec3(0.0f, 0.0f, 1.0f), 1e30f};
+  // A short ray at coordinates ~5: 3.7e-7 apart is ~3 ulps of 5 (a tie); 1e-4 apart is not.
+  HitAgreement a = compareHits({hit(3, 0.0061351f)}, {hit(9, 0.0061355f)}, false, {corner});
+  EXPECT_EQ(a.ties, 1u);
+  EXPECT_EQ(a.mismatches, 0u);
+  a = compareHits({hit(3, 0.0061f)}, {hit(9, 0.0062f)}, false, {corner});
+  EXPECT_EQ(a.mismatches, 1u);
+  // From the origin: relative to t (2^-16).
+  a = compareHits({hit(3, 100.0f)}, {hit(9, 100.001f)}, false, {origin});
+  EXPECT_EQ(a.ties, 1u);
+  a = compareHits({hit(3, 100.0f)}, {hit(9, 100.01f)}, false, {origin});
+  EXPECT_EQ(a.mismatches, 1u);
+  // Hit against miss, any-hit answers, NaN, and lengths that differ.
+  BatchHit miss;
+  a = compareHits({hit(3, 1.0f)}, {miss}, false, {origin});
+  EXPECT_EQ(a.hitMiss, 1u);
+  EXPECT_EQ(compareHits({hit(3, 1.0f)}, {hit(9, 5.0f)}, true, {origin}).mismatches, 0u);
+  EXPECT_EQ(compareHits({hit(3, std::nanf(""))}, {hit(9, 1.0f)}, false, {origin}).mismatches, 1u);
+  EXPECT_THROW(compareHits({hit(3, 1.0f)}, {hit(9, 1.0f)}, false, {}), std::invalid_argument);
 }
 
 std::unique_ptr<GlContext> contextOrSkip() {
@@ -309,7 +330,7 @@ TEST(TraceGlsl, AgreesWithEmbree) {
       o.anyHit ? embree.occluded(rays.rays, theirs) : embree.closest(rays.rays, theirs);
       size_t hits = 0;
       for (const BatchHit& h : ours) hits += h.hit;
-      EXPECT_EQ(mismatches(ours, theirs, o.anyHit), 0u);
+      EXPECT_EQ(mismatches(ours, theirs, o.anyHit, rays.rays), 0u);
       hitsPerWorkload[workloadName(w)] += hits;
     }
   }
@@ -345,7 +366,7 @@ TEST_P(BenchSceneTrace, GlslAgreesWithEmbree) {
     const std::vector<BatchHit> ours = gl.results();
     std::vector<BatchHit> theirs;
     o.anyHit ? embree.occluded(rays.rays, theirs) : embree.closest(rays.rays, theirs);
-    EXPECT_EQ(mismatches(ours, theirs, o.anyHit), 0u);
+    EXPECT_EQ(mismatches(ours, theirs, o.anyHit, rays.rays), 0u);
   }
 }
 
