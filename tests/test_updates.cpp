@@ -1,7 +1,6 @@
 // Update strategies over animation clips (builders/update.hpp, builders/refit.hpp,
-// builders/rotate.hpp), on synthetic clips made here: a grid whose height is a travelling wave (smooth
-// deformation, the triangles keep their neighbours) and a sphere whose triangles fly apart, each on
-// its own random velocity (an explosion: spatial coherence breaks down).
+// builders/rotate.hpp), on the synthetic clips of tests/update_test_clips.hpp: a smooth travelling wave
+// and an explosion. Refit on several threads: tests/test_refit_threads.cpp.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -19,6 +18,7 @@
 #include "builders/rotate.hpp"
 #include "builders/update.hpp"
 #include "builder_test_util.hpp"
+#include "update_test_clips.hpp"
 #include "datasets/scene.hpp"
 #include "layout/layout.hpp"
 #include "layout/tree_hash.hpp"
@@ -29,78 +29,9 @@ namespace {
 using testing::builderNames;
 using testing::identical;
 using testing::sameBox;
-
-// ---- synthetic clips ------------------------------------------------------------------------------
-
-struct Clip {
-  std::vector<std::vector<glm::vec3>> v0, v1, v2;  // per frame
-  size_t frames() const { return v0.size(); }
-  FrameTriangles frame(size_t f) const { return {v0[f], v1[f], v2[f]}; }
-  std::vector<FrameTriangles> all() const {
-    std::vector<FrameTriangles> out;
-    for (size_t f = 0; f < frames(); ++f) out.push_back(frame(f));
-    return out;
-  }
-  void add(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b, const std::vector<glm::vec3>& c) {
-    v0.push_back(a), v1.push_back(b), v2.push_back(c);
-  }
-};
-
-// An nx x nz grid over [1, 2]^2 in x and z (2 triangles per cell), height 1 + a travelling wave. No
-// coordinate is ever zero: min/max of -0 and +0 keeps whichever comes first (builders/refit.hpp), and
-// the bit-for-bit comparisons here are about boxes, not signs of zero.
-Clip waveClip(uint32_t nx, uint32_t nz, uint32_t frames) {
-  Clip clip;
-  for (uint32_t f = 0; f < frames; ++f) {
-    const float t = 0.25f * float(f);
-    auto p = [&](uint32_t i, uint32_t k) {
-      const float x = 1.0f + float(i) / float(nx), z = 1.0f + float(k) / float(nz);
-      return glm::vec3(x, 1.0f + 0.15f * std::sin(9.0f * x - t) * std::cos(7.0f * z + 0.5f * t), z);
-    };
-    std::vector<glm::vec3> a, b, c;
-    for (uint32_t k = 0; k < nz; ++k)
-      for (uint32_t i = 0; i < nx; ++i) {
-        a.push_back(p(i, k)), b.push_back(p(i + 1, k)), c.push_back(p(i + 1, k + 1));
-        a.push_back(p(i, k)), b.push_back(p(i + 1, k + 1)), c.push_back(p(i, k + 1));
-      }
-    clip.add(a, b, c);
-  }
-  return clip;
-}
-
-// A UV sphere (nu x nv quads, centre (3, 3, 3), radius 1) whose triangles move rigidly, each with its
-// own velocity: random direction, speed 0..`speed` per frame.
-Clip explodeClip(uint32_t nu, uint32_t nv, uint32_t frames, float speed = 0.2f, uint32_t seed = 5) {
-  std::vector<glm::vec3> a, b, c;
-  const float pi = 3.14159265358979f;
-  auto p = [&](uint32_t i, uint32_t k) {
-    const float phi = 2.0f * pi * float(i % nu) / float(nu), theta = pi * (0.05f + 0.9f * float(k) / float(nv));
-    return glm::vec3(3.0f) + glm::vec3(std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi));
-  };
-  for (uint32_t k = 0; k < nv; ++k)
-    for (uint32_t i = 0; i < nu; ++i) {
-      a.push_back(p(i, k)), b.push_back(p(i + 1, k)), c.push_back(p(i + 1, k + 1));
-      a.push_back(p(i, k)), b.push_back(p(i + 1, k + 1)), c.push_back(p(i, k + 1));
-    }
-  std::mt19937 rng(seed);
-  std::normal_distribution<float> normal;
-  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-  std::vector<glm::vec3> velocity(a.size());
-  for (glm::vec3& v : velocity) {
-    const float z = normal(rng), y = normal(rng), x = normal(rng);  // sequenced: same draws on every compiler
-    v = glm::normalize(glm::vec3(x, y, z) + glm::vec3(1e-3f)) * (speed * unit(rng));
-  }
-  Clip clip;
-  for (uint32_t f = 0; f < frames; ++f) {
-    std::vector<glm::vec3> fa(a.size()), fb(a.size()), fc(a.size());
-    for (size_t i = 0; i < a.size(); ++i) {
-      const glm::vec3 d = float(f) * velocity[i];
-      fa[i] = a[i] + d, fb[i] = b[i] + d, fc[i] = c[i] + d;
-    }
-    clip.add(fa, fb, fc);
-  }
-  return clip;
-}
+using testing::Clip;
+using testing::explodeClip;
+using testing::waveClip;
 
 // ---- checks -------------------------------------------------------------------------------------
 
@@ -351,100 +282,6 @@ TEST(Rotations, ApplyRelinksTheNamedSubtrees) {
   small.nodes[2].first = 1;
   EXPECT_THROW(applyRotation(small, 0, Rotation::LeftWithRightLeft), std::invalid_argument);
   EXPECT_EQ(bestRotation(small, 0), Rotation::None);
-}
-
-// ---- refit on several threads --------------------------------------------------------------------------
-
-// A refit schedule (refitSchedule) cuts the post-order into subtrees: every task a contiguous range
-// that is exactly one subtree (its root last, its size the subtree's), the tasks and `top` together
-// every position once, and `top` only inner nodes whose children come before them.
-TEST(RefitThreads, ScheduleTasksAreWholeSubtreesCoveringTheOrderOnce) {
-  const Clip clip = explodeClip(80, 40, 1);  // 6,400 triangles
-  UpdateOptions options;
-  const auto strategy = makeUpdateStrategy("refit", options);
-  strategy->update(clip.frame(0));
-  const Bvh& tree = strategy->tree();
-  for (unsigned threads : {1u, 2u, 4u, 16u}) {
-    SCOPED_TRACE("threads " + std::to_string(threads));
-    const RefitSchedule s = refitSchedule(tree, threads);
-    EXPECT_EQ(s.order, refitOrder(tree));
-    if (threads == 1) {
-      ASSERT_EQ(s.tasks.size(), 1u);
-      EXPECT_TRUE(s.top.empty());
-      continue;
-    }
-    EXPECT_GT(s.tasks.size(), size_t(threads)) << "too few tasks to share";
-    std::vector<int> covered(s.order.size(), 0);
-    std::vector<uint32_t> size(tree.nodes.size(), 1);
-    for (const uint32_t i : s.order)
-      if (!tree.nodes[i].isLeaf()) size[i] = 1 + size[tree.nodes[i].left] + size[tree.nodes[i].right];
-    for (size_t t = 0; t < s.tasks.size(); ++t) {
-      const auto [begin, end] = s.tasks[t];
-      ASSERT_LT(begin, end);
-      if (t > 0) EXPECT_LE(s.tasks[t - 1].second, begin) << "tasks overlap or are out of order";
-      EXPECT_EQ(size[s.order[end - 1]], end - begin) << "task " << t << " is not one whole subtree";
-      for (uint32_t p = begin; p < end; ++p) ++covered[p];
-    }
-    std::vector<int> position(tree.nodes.size(), -1);
-    for (size_t p = 0; p < s.order.size(); ++p) position[s.order[p]] = int(p);
-    for (const uint32_t p : s.top) {
-      ++covered[p];
-      const BvhNode& node = tree.nodes[s.order[p]];
-      ASSERT_FALSE(node.isLeaf());
-      EXPECT_LT(position[node.left], int(p));
-      EXPECT_LT(position[node.right], int(p));
-    }
-    EXPECT_EQ(std::count(covered.begin(), covered.end(), 1), std::ptrdiff_t(covered.size()));
-  }
-}
-
-// The boxes and SAH sums of a refit on 2, 4 or 16 threads are the one-thread refit's bit for bit, at
-// every frame of an explosion, and equal sahCost of the refit tree; of two bad triangles in
-// different tasks the error names the one first in the refit order, for any thread count.
-TEST(RefitThreads, SameBoxesSumsAndErrorsForAnyThreadCount) {
-  const Clip clip = explodeClip(80, 40, 5);
-  UpdateOptions options;
-  const auto strategy = makeUpdateStrategy("rebuild", options);
-  strategy->update(clip.frame(2));  // a tree whose leaves list triangles in an order unlike the frame's
-  const Bvh base = strategy->tree();
-  const CostModel cost;
-  for (uint32_t f = 0; f < clip.frames(); ++f) {
-    SCOPED_TRACE("frame " + std::to_string(f));
-    Bvh one = base;
-    SahSums oneSums;
-    refitBvh(one, refitOrder(one), clip.frame(f), &oneSums);
-    for (unsigned threads : {2u, 4u, 16u}) {
-      Bvh many = base;
-      SahSums manySums;
-      refitBvh(many, refitSchedule(many, threads), clip.frame(f), threads, &manySums);
-      EXPECT_TRUE(identical(one, many)) << threads << " threads";
-      EXPECT_EQ(manySums.innerArea, oneSums.innerArea);
-      EXPECT_EQ(manySums.leafArea, oneSums.leafArea);
-    }
-    EXPECT_EQ(sahCost(oneSums, one.nodes[0].bounds.halfArea(), cost), sahCost(one, cost));
-  }
-  // Two non-finite triangles, in the first and in the last task of a 4-thread schedule.
-  const RefitSchedule s = refitSchedule(base, 4);
-  ASSERT_GT(s.tasks.size(), 1u);
-  auto leafTriangle = [&](uint32_t position) {
-    for (uint32_t p = position;; ++p)
-      if (base.nodes[s.order[p]].isLeaf()) return base.primIndices[base.nodes[s.order[p]].first];
-  };
-  const uint32_t first = leafTriangle(s.tasks.front().first), last = leafTriangle(s.tasks.back().first);
-  std::vector<glm::vec3> v0(clip.v0[0]);
-  v0[first].y = std::numeric_limits<float>::quiet_NaN();
-  v0[last].x = std::numeric_limits<float>::infinity();
-  const FrameTriangles bad{v0, clip.v1[0], clip.v2[0]};
-  for (unsigned threads : {1u, 4u}) {
-    Bvh tree = base;
-    try {
-      refitBvh(tree, refitSchedule(tree, threads), bad, threads);
-      ADD_FAILURE() << "a non-finite vertex was refit, " << threads << " threads";
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("triangle " + std::to_string(first) + " "), std::string::npos)
-          << threads << " threads: " << e.what();
-    }
-  }
 }
 
 // ---- rebuild policies -------------------------------------------------------------------------------
