@@ -178,4 +178,11 @@ void refitBvh(Bvh& bvh, const FrameTriangles& frame) {
   refitBvh(bvh, order, frame);
 }
 
+void checkFiniteVertices(const FrameTriangles& frame) {
+  auto finite = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+  for (size_t i = 0; i < frame.size(); ++i)
+    if (!finite(frame.v0[i]) || !finite(frame.v1[i]) || !finite(frame.v2[i]))
+      throw InputError("update: triangle " + std::to_string(i) + " has a non-finite vertex");
+}
+
 }  // namespace bvhlab

@@ -71,4 +71,9 @@ inline Aabb triangleBox(const FrameTriangles& frame, size_t i) {
   return box;
 }
 
+// Throws InputError ("update: triangle i has a non-finite vertex") for the frame's first triangle with
+// a NaN or infinite vertex coordinate. Checked on the vertices: min/max drop a NaN silently, so a box
+// alone (which validateBuildInput checks) may hide one.
+void checkFiniteVertices(const FrameTriangles& frame);
+
 }  // namespace bvhlab

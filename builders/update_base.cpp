@@ -22,13 +22,10 @@ void UpdateStrategyBase::rebuild(const FrameTriangles& frame) {
   if (frame.v1.size() != n || frame.v2.size() != n)
     throw std::invalid_argument("update: " + std::to_string(n) + "/" + std::to_string(frame.v1.size()) + "/" +
                                 std::to_string(frame.v2.size()) + " triangle vertices (v0/v1/v2 differ in length)");
+  checkFiniteVertices(frame);
   boxes_.resize(n);
   centroids_.resize(n);
-  auto finite = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
   for (size_t i = 0; i < n; ++i) {
-    // Checked here: min/max drop a NaN silently, so the box alone (which buildBvh checks) may hide one.
-    if (!finite(frame.v0[i]) || !finite(frame.v1[i]) || !finite(frame.v2[i]))
-      throw InputError("update: triangle " + std::to_string(i) + " has a non-finite vertex");
     boxes_[i] = triangleBox(frame, i);
     centroids_[i] = 0.5f * boxes_[i].min + 0.5f * boxes_[i].max;  // as triangleCentroids: halves first (no overflow)
   }

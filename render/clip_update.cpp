@@ -6,6 +6,7 @@
 #include <string>
 
 #include "datasets/animation.hpp"
+#include "layout/tree_hash.hpp"
 #include "layout/triangle_formats.hpp"
 #include "render/frame_stats.hpp"
 #include "shaders/assemble.hpp"
@@ -58,6 +59,37 @@ ClipUpdater::Step ClipUpdater::update(const TriangleSoup& soup) {
       s.agree = false;
     }
   }
+  return s;
+}
+
+std::unique_ptr<ClipGpuRebuild> ClipGpuRebuild::make(const RenderCommand& cmd, const BuildOptions& build,
+                                                     const std::string& layout, const std::string& triangleFormat,
+                                                     Storage storage) {
+  if (parseUpdateSpec(cmd.update).name != "rebuild" || storage == Storage::Tex2D) return nullptr;
+  std::unique_ptr<GpuClipBuilder> builder = makeGpuClipBuilder(cmd.builder, build, layout, triangleFormat);
+  if (!builder) return nullptr;
+  return std::unique_ptr<ClipGpuRebuild>(new ClipGpuRebuild(std::move(builder), cmd.updateRepeats, build.cost));
+}
+
+ClipGpuRebuild::Step ClipGpuRebuild::update(const TriangleSoup& soup) {
+  Step s;
+  std::string firstHash;
+  std::vector<std::vector<double>> phases;
+  for (int k = 0; k < repeats_; ++k) {
+    last_ = builder_->build(soup);
+    s.ms.push_back(last_.buildMs);
+    s.uploadMs.push_back(last_.uploadMs);
+    s.gpuMs.push_back(last_.gpuMs);
+    phases.resize(last_.phases.size());
+    for (size_t p = 0; p < last_.phases.size(); ++p) phases[p].push_back(last_.phases[p].second);
+    const std::string hash = packedTreeHash(last_.packed);
+    if (k == 0)
+      firstHash = hash;
+    else if (hash != firstHash)
+      s.agree = false;
+  }
+  for (size_t p = 0; p < last_.phases.size(); ++p) s.phases.emplace_back(last_.phases[p].first, medianOf(phases[p]));
+  s.sah = sahCost(last_.tree, cost_);
   return s;
 }
 

@@ -13,8 +13,10 @@
 #include "layout/layout.hpp"
 #include "layout/two_level_update.hpp"
 #include "layout/layouts.hpp"
+#include "render/gpu_clip_build.hpp"
 #include "render/prepared_scene.hpp"
 #include "render/render_command.hpp"
+#include "shaders/assemble.hpp"  // Storage
 
 namespace bvhlab {
 
@@ -46,6 +48,36 @@ class ClipUpdater {
  private:
   UpdateOptions options_;
   std::vector<std::unique_ptr<UpdateStrategy>> copies_;
+};
+
+// `--update rebuild` with a GPU builder that builds and packs the run's layout on the GPU, traced from
+// the streams it leaves there (render/gpu_clip_build.hpp): each frame built cmd.updateRepeats times, each
+// build uploading the frame's triangles and building from them; the last build's streams are traced.
+class ClipGpuRebuild {
+ public:
+  // The GPU path for this run, or nullptr where it does not apply: another strategy, a CPU builder, a
+  // layout the GPU does not pack, another triangle format, or `storage` tex2d (which would copy).
+  static std::unique_ptr<ClipGpuRebuild> make(const RenderCommand& cmd, const BuildOptions& build,
+                                              const std::string& layout, const std::string& triangleFormat,
+                                              Storage storage);
+  struct Step {
+    bool agree = true;  // every build gave the same streams (tree_hash)
+    double sah = 0.0;   // the tree's, with the build's cost model
+    std::vector<double> ms, uploadMs, gpuMs;  // per build: GpuClipFrame's buildMs, uploadMs, gpuMs
+    std::vector<std::pair<std::string, double>> phases;  // per phase, its median over the builds
+  };
+  // Needs the GL context every frame of the clip is built in.
+  Step update(const TriangleSoup& soup);
+  const GpuClipFrame& frame() const { return last_; }  // the last build's: the tree to trace
+  const CostModel& cost() const { return cost_; }
+
+ private:
+  ClipGpuRebuild(std::unique_ptr<GpuClipBuilder> builder, int repeats, const CostModel& cost)
+      : builder_(std::move(builder)), repeats_(repeats), cost_(cost) {}
+  std::unique_ptr<GpuClipBuilder> builder_;
+  int repeats_ = 1;
+  CostModel cost_;
+  GpuClipFrame last_;
 };
 
 // cmd.updateRepeats copies of a two-level strategy (cmd.update is `two-level[:...]`; layout/

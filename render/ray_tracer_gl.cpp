@@ -72,23 +72,57 @@ void GlRayTracer::upload(const PackedBvh& packed) {
   streams_[3] = uploadBvhStream(packed.vertices, options_.storage, "vertex", &streamBuffers_[3]);  // indexed only
 }
 
-void GlRayTracer::setTree(const PackedBvh& packed) {
+void GlRayTracer::checkSameProgram(const PackedBvh& packed, const char* what) const {
   if (packed.layout != layout_ || packed.triangleFormat != triangleFormat_ || stackSizeFor(packed) > stack_)
-    throw std::invalid_argument("GlRayTracer::setTree: the tree needs another program (layout " + packed.layout +
-                                ", triangles " + packed.triangleFormat + ", stack " +
+    throw std::invalid_argument(std::string("GlRayTracer::") + what + ": the tree needs another program (layout " +
+                                packed.layout + ", triangles " + packed.triangleFormat + ", stack " +
                                 std::to_string(stackSizeFor(packed)) + " > " + std::to_string(stack_) + ")");
+}
+
+void GlRayTracer::releaseStreams() {
   glDeleteTextures(4, streams_);
-  glDeleteBuffers(4, streamBuffers_);
+  glDeleteBuffers(borrowed_ ? 0 : 3, streamBuffers_);
+  glDeleteBuffers(1, &streamBuffers_[3]);
   for (int k = 0; k < 4; ++k) streams_[k] = streamBuffers_[k] = 0;
+  borrowed_ = false;
+}
+
+void GlRayTracer::setTree(const PackedBvh& packed) {
+  checkSameProgram(packed, "setTree");
+  releaseStreams();
   upload(packed);
   checkGl("re-uploading the tree");
+}
+
+void GlRayTracer::setTreeBuffers(const PackedBvh& shape, const unsigned buffers[3]) {
+  checkSameProgram(shape, "setTreeBuffers");
+  if (options_.storage == Storage::Tex2D)
+    throw std::invalid_argument("GlRayTracer::setTreeBuffers: --storage tex2d would copy the streams into textures; "
+                                "streams on the GPU are bound with --storage tbo or ssbo");
+  releaseStreams();
+  borrowed_ = true;
+  const std::vector<glm::uvec4>* sized[3] = {&shape.nodes, &shape.triangles, &shape.attributes};
+  for (int k = 0; k < 3; ++k) {
+    streamBuffers_[k] = buffers[k];
+    if (options_.storage != Storage::Tbo) continue;
+    GLint maxTexels = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &maxTexels);
+    const GLsizeiptr texels = GLsizeiptr(std::max<size_t>(1, sized[k]->size()));
+    if (texels > maxTexels)
+      throw std::runtime_error("GlRayTracer::setTreeBuffers: a stream of " + std::to_string(texels) +
+                               " texels is above GL_MAX_TEXTURE_BUFFER_SIZE = " + std::to_string(maxTexels));
+    glCreateTextures(GL_TEXTURE_BUFFER, 1, &streams_[k]);
+    glTextureBufferRange(streams_[k], GL_RGBA32UI, buffers[k], 0, texels * GLsizeiptr(sizeof(glm::uvec4)));
+  }
+  streams_[3] = uploadBvhStream(shape.vertices, options_.storage, "vertex", &streamBuffers_[3]);  // indexed only
+  glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+  checkGl("binding the tree's streams on the GPU");
 }
 
 GlRayTracer::~GlRayTracer() {
   glDeleteProgram(timed_);
   glDeleteProgram(counted_);
-  glDeleteTextures(4, streams_);
-  glDeleteBuffers(4, streamBuffers_);
+  releaseStreams();
   GLuint buffers[] = {rayBuffer_, resultBuffer_, countBuffer_, rayCounter_};
   glDeleteBuffers(4, buffers);
 }

@@ -39,6 +39,15 @@ class GlRayTracer {
   // tree must have the constructor's layout and triangle format and need no deeper stack than
   // stackSize() (std::invalid_argument otherwise; build a new tracer then). Not waited for.
   void setTree(const PackedBvh& packed);
+  // Binds streams already on the GPU instead (an animated clip's tree built and packed there,
+  // render/gpu_clip_build.hpp): `buffers` are the node, triangle and attribute storage buffers of uvec4
+  // texels, holding at least `shape`'s streams (its layout, triangle format, depth and texel counts
+  // are the buffers' tree's; its vertex stream, empty for raw triangles, is uploaded). The buffers stay
+  // the caller's, and must live while this tracer uses them. With Storage::Tbo they are viewed as
+  // texture buffers (shape's sizes), with Ssbo bound as they are; Tex2d would need a copy and is
+  // refused (std::invalid_argument), as is a tree needing another program (as setTree). A memory
+  // barrier makes the passes' writes visible to the traces.
+  void setTreeBuffers(const PackedBvh& shape, const unsigned buffers[3]);
   int stackSize() const { return stack_; }
   // Whether the programs run trace_rays.glsl's persistent-threads loop (persistentThreadsOn).
   bool persistentThreads() const { return persistent_; }
@@ -64,11 +73,14 @@ class GlRayTracer {
   unsigned groups() const;       // work groups of one dispatch
   double dispatch(unsigned program);
   void upload(const PackedBvh& packed);
+  void checkSameProgram(const PackedBvh& packed, const char* what) const;
+  void releaseStreams();  // the textures, the vertex buffer, and the others unless borrowed
   RayTracerOptions options_;
   std::string layout_, triangleFormat_;
   int stack_ = 0;
   unsigned timed_ = 0, counted_ = 0;
   unsigned streams_[4] = {0, 0, 0, 0}, streamBuffers_[4] = {0, 0, 0, 0};  // node, triangle, attribute, vertex
+  bool borrowed_ = false;  // streamBuffers_[0..2] are the caller's (setTreeBuffers)
   unsigned rayBuffer_ = 0, resultBuffer_ = 0, countBuffer_ = 0;
   bool persistent_ = false;      // persistentThreadsOn(the kernel) (traversal/kernels.hpp)
   unsigned rayCounter_ = 0;      // trace_rays.glsl's nextRay (persistent threads)

@@ -93,6 +93,8 @@ TraceClip::TraceClip(const TraceCommand& command) : c(command) {
     twoLevel = std::make_unique<ClipTwoLevel>(rc, s.setup.build, packer->name, s.tracer.kernel, triangleFormat);
     s.tracer.twoLevel = true;
     cost = s.setup.build.cost;
+  } else if ((gpuRebuild = ClipGpuRebuild::make(rc, s.setup.build, packer->name, triangleFormat, s.tracer.storage))) {
+    cost = gpuRebuild->cost();
   } else {
     updater = std::make_unique<ClipUpdater>(rc, s.setup.build);
     cost = updater->cost();
@@ -126,7 +128,15 @@ void TraceClip::step(int f, const std::string& renderer) {
   double sah0 = 0.0, packMs = 0.0;
   PackedBvh flatPacked;
   const Bvh* tree = nullptr;
-  if (!twoLevel) {
+  ClipGpuRebuild::Step gpuStep;
+  if (gpuRebuild) {  // built and packed on the GPU; its streams stay there (packMs 0: the pack is in update_ms)
+    gpuStep = gpuRebuild->update(soup);
+    sm.update = gpuStep.ms;
+    rebuilt = true;
+    agree = gpuStep.agree;
+    sah0 = gpuStep.sah;
+    tree = &gpuRebuild->frame().tree;
+  } else if (!twoLevel) {
     const ClipUpdater::Step step = updater->update(soup);
     sm.update = step.ms;
     rebuilt = step.rebuilt;
@@ -146,7 +156,8 @@ void TraceClip::step(int f, const std::string& renderer) {
     packMs = step.packMs;
     putTwoLevelFrame(j, step, twoLevel->first());
   }
-  const PackedBvh& packed = twoLevel ? twoLevel->first().packed().streams : flatPacked;
+  const PackedBvh& packed =
+      twoLevel ? twoLevel->first().packed().streams : gpuRebuild ? gpuRebuild->frame().packed : flatPacked;
 
   // The re-upload (GL), timed with the pack as upload_ms; repeated as often as the update is.
   Clock::time_point start;
@@ -156,7 +167,12 @@ void TraceClip::step(int f, const std::string& renderer) {
     recompiled = true;
   }
   std::vector<double> glUpload;
-  for (int k = 0; k < rc.updateRepeats; ++k) {
+  if (gpuRebuild) {  // the triangles' upload was each build's; the tracer binds the streams the GPU made
+    gl->setTreeBuffers(packed, gpuRebuild->frame().streams);
+    sm.upload = gpuStep.uploadMs;
+    glUpload = gpuStep.uploadMs;
+  }
+  for (int k = 0; k < (gpuRebuild ? 0 : rc.updateRepeats); ++k) {
     glFinish();
     start = Clock::now();
     gl->setTree(packed);
@@ -207,6 +223,13 @@ void TraceClip::step(int f, const std::string& renderer) {
   j["pack_ms"] = packMs;
   j["gl_upload_ms_all"] = glUpload;
   putClipTimes(j, "ms", sm.trace);
+  if (gpuRebuild) {
+    putClipTimes(j, "gpu_update_ms", gpuStep.gpuMs);
+    nlohmann::json phases = nlohmann::json::object();
+    for (const auto& [phase, ms] : gpuStep.phases) phases[phase] = ms;
+    j["gpu_update_phases_ms"] = phases;
+    gpuUpdateMsTotal += medianOf(gpuStep.gpuMs);
+  }
   j["sah_cost"] = sah0;
   // EPO is a single tree's measure: a two-level frame has none.
   if (rc.epo) j["epo"] = tree ? nlohmann::json(endPointOverlap(*tree, soup.v0, soup.v1, soup.v2, cost)) : nlohmann::json();
@@ -247,6 +270,8 @@ nlohmann::json TraceClip::result(const std::string& renderer, uint64_t& overflow
   clip["update_ms_total"] = total.updateMs;
   clip["upload_ms_total"] = total.uploadMs;
   clip["trace_ms_total"] = total.traceMs;
+  // With the GPU rebuild: the GL-timed builds' medians summed (update_ms_total is their wall-clock).
+  clip["gpu_update_ms_total"] = gpuRebuild ? nlohmann::json(gpuUpdateMsTotal) : nlohmann::json();
   // Per traced frame: the sum of its parts' medians (what findings pair clips over: frame f with frame f).
   nlohmann::json frameTotals = nlohmann::json::array();
   for (const ClipFrameSamples& f : samples) frameTotals.push_back(medianOf(f.update) + medianOf(f.upload) + medianOf(f.trace));
@@ -282,6 +307,9 @@ nlohmann::json TraceClip::result(const std::string& renderer, uint64_t& overflow
   j["timed_rounds"] = rc.frames;
   j["dispatches_per_sample"] = dispatches;
   j["upload_timing"] = "glFinish + steady_clock";
+  // Where the tree was updated: "gpu" (built and packed by compute passes, traced from the streams
+  // they left on the GPU: render/gpu_clip_build.hpp) or "cpu" (updated, packed and uploaded).
+  j["update_on"] = gpuRebuild ? "gpu" : "cpu";
   // One run's numbers as the experiment tables read them (results.csv: one row per run): the clip's
   // total as its time, and the per-frame means of the tree's SAH and ray cost.
   double sahMean = 0.0, rayCostMean = 0.0;

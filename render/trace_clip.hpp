@@ -24,6 +24,15 @@
 // to the flat scene's triangles for the comparison with Embree; node_visits_per_ray counts TLAS and
 // BLAS visits together, tlas_node_visits_per_ray and blas_node_visits_per_ray apart.
 //
+// --update rebuild with a GPU builder (lbvh-gpu, ploc-gpu) into layout v1 or bvh2-cb with raw triangles
+// and --storage tbo or ssbo (render/gpu_clip_build.hpp; "update_on": "gpu"): each build uploads the
+// frame's triangles to the GPU (upload_ms) and builds and packs the tree there (update_ms: wall-clock
+// from its first buffer allocation to its last pass done; gpu_update_ms: the same passes by GL
+// timestamps, gpu_update_phases_ms per phase), and the tracer binds the streams the passes left on the
+// GPU. Nothing is packed or re-uploaded on the CPU (pack_ms 0). The tree and its streams are downloaded
+// untimed for the frame's SAH, tree_hash and stack depth. Elsewhere ("update_on": "cpu") a GPU
+// builder's tree is downloaded, packed and uploaded as every builder's.
+//
 // The clip's total_ms is the sum over frames of the medians of update_ms, upload_ms and ms; its
 // interval is a bootstrap (kClipBootstrap resamples, fixed seed): every frame's samples of each part
 // are resampled independently, the medians summed, and the 2.5% and 97.5% quantiles of the sums
@@ -80,7 +89,10 @@ class TraceClip {
   // The object `trace --json --update` prints; `overflows` as traceClip's.
   nlohmann::json result(const std::string& renderer, uint64_t& overflows) const;
   // Frees the GL objects (before the context goes).
-  void release() { gl.reset(); }
+  void release() {
+    gl.reset();
+    gpuRebuild.reset();
+  }
 
  private:
   TraceCommand c;
@@ -90,6 +102,9 @@ class TraceClip {
   // `--update two-level...`: one updater per --update-repeats copy (copy 0's tree is traced) instead
   // of `updater`.
   std::unique_ptr<ClipTwoLevel> twoLevel;  // with --update two-level[:...] (else updater)
+  // `--update rebuild` with a GPU builder packing the layout on the GPU (else updater).
+  std::unique_ptr<ClipGpuRebuild> gpuRebuild;
+  double gpuUpdateMsTotal = 0.0;  // the GL-timed builds, per frame's median, summed
   const LayoutInfo* packer = nullptr;
   std::string triangleFormat;
   CostModel cost;

@@ -13,6 +13,7 @@
 #include <GLFW/glfw3.h>
 
 #include "builders/builder.hpp"
+#include "builders/gpu/gpu_clip_builder.hpp"
 #include "builders/gpu/gpu_lbvh.hpp"
 #include "builders/gpu/gpu_pack.hpp"
 #include "builders/gpu/gpu_ploc.hpp"
@@ -114,6 +115,7 @@ void registerGpuBuilders() {
       const bool pack = gpubuild::gpuPackable(layout) && triangleFormat == "raw";
       return timeGpuBuild(builder, input, options, builds, pack ? layout : std::string(), &soup);
     });
+    setGpuClipBuilderFactory(makeResidentClipBuilder);
     return true;
   }();
   (void)once;

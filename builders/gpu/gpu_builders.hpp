@@ -20,8 +20,9 @@
 
 namespace bvhlab {
 
-// Adds lbvh-gpu and ploc-gpu to builders() and timeGpuBuild as the runs' GPU build timer
-// (render/gpu_build_timing.hpp), once; later calls do nothing.
+// Adds lbvh-gpu and ploc-gpu to builders(), timeGpuBuild as the runs' GPU build timer
+// (render/gpu_build_timing.hpp) and makeResidentClipBuilder as the clips' GPU rebuild
+// (render/gpu_clip_build.hpp), once; later calls do nothing.
 void registerGpuBuilders();
 
 // The registry's entry for lbvh-gpu: gpubuild::GpuLbvh in the current or a headless context.

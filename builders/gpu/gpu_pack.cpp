@@ -23,8 +23,8 @@ static_assert(sizeof(PackState) == 24);
 
 uint32_t bits(float f) { return std::bit_cast<uint32_t>(f); }
 
-// The soup's 7 texels per triangle, in original order: its 3 TRIANGLE texels and 4 ATTRIBUTE texels as
-// layout/pack.cpp writes them.
+}  // namespace
+
 std::vector<glm::uvec4> soupTexels(const TriangleSoup& soup) {
   std::vector<glm::uvec4> t;
   t.reserve(7 * soup.size());
@@ -40,13 +40,17 @@ std::vector<glm::uvec4> soupTexels(const TriangleSoup& soup) {
   return t;
 }
 
-}  // namespace
-
 GLuint uploadSoupTexels(const TriangleSoup& soup) {
   const std::vector<glm::uvec4> texels = soupTexels(soup);
   const GLuint buffer = makeStorageBuffer(texels.size() * 16, texels.data());
   checkGl("GPU pack: uploading the soup");
   return buffer;
+}
+
+void deleteStreams(GpuStreamBuffers& streams) {
+  const GLuint ids[] = {streams.node, streams.triangle, streams.attribute};
+  glDeleteBuffers(3, ids);
+  streams = GpuStreamBuffers{};
 }
 
 bool gpuPackable(const std::string& layout) { return layout == "v1" || layout == kLayoutBvh2cb; }
@@ -55,6 +59,13 @@ void packOnTheCpu(const Bvh& bvh, const GpuPackRequest& request) {
   if (!gpuPackable(request.layout))
     throw std::invalid_argument("GPU pack: layout '" + request.layout + "' is packed on the CPU");
   *request.out = request.layout == "v1" ? packBvh(bvh, *request.soup) : packBvh2cb(bvh, *request.soup);
+  if (request.keep) {
+    deleteStreams(*request.keep);
+    request.keep->node = makeStorageBuffer(request.out->nodes.size() * 16, request.out->nodes.data());
+    request.keep->triangle = makeStorageBuffer(request.out->triangles.size() * 16, request.out->triangles.data());
+    request.keep->attribute = makeStorageBuffer(request.out->attributes.size() * 16, request.out->attributes.data());
+    checkGl("GPU pack: uploading the CPU's pack of one primitive");
+  }
 }
 
 GpuPacker::GpuPacker()
@@ -63,7 +74,8 @@ GpuPacker::GpuPacker()
       gate_("gpubuild_pack_gate.glsl"),
       nodesV1_("gpubuild_pack_nodes.glsl", "#define LAYOUT_V1 1\n"),
       nodesBvh2cb_("gpubuild_pack_nodes.glsl", "#define LAYOUT_BVH2CB 1\n"),
-      triangles_("gpubuild_pack_triangles.glsl") {}
+      triangles_("gpubuild_pack_triangles.glsl"),
+      soupBoxes_("gpubuild_soup_boxes.glsl") {}
 
 std::array<std::pair<const char*, uint64_t>, 6> GpuPacker::buffers(uint64_t n) {
   const uint64_t nodes = 2 * n - 1;
@@ -102,7 +114,20 @@ GpuPackJob::GpuPackJob(const GpuPacker& packer, const GpuPackRequest& request, u
 
 GpuPackJob::~GpuPackJob() {
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+  if (request_.keep) {  // the streams go to the caller
+    deleteStreams(*request_.keep);
+    *request_.keep = {ids_[kNodeStream], ids_[kTriangleStream], ids_[kAttributeStream]};
+    ids_[kNodeStream] = ids_[kTriangleStream] = ids_[kAttributeStream] = 0;
+  }
   glDeleteBuffers(GLsizei(ids_.size()), ids_.data());
+}
+
+void GpuPackJob::soupBoxes(GLuint boxes, GLuint centroids, PhaseStamps& stamps) const {
+  const GLuint buffers[] = {soup_, boxes, centroids};
+  for (GLuint slot = 0; slot < 3; ++slot) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffers[slot]);
+  packer_.soupBoxes_.set("u_count", n_);
+  packer_.soupBoxes_.dispatch(groupsFor(n_), "GPU boxes: triangle boxes from the soup (gpubuild_soup_boxes.glsl)");
+  stamps.mark("boxes");
 }
 
 void GpuPackJob::run(const GpuTreeBuffers& tree, PhaseStamps& stamps) {

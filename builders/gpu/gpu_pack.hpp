@@ -17,6 +17,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "builders/gpu/gpu_compute.hpp"
 #include "layout/layout.hpp"
@@ -31,6 +32,14 @@ bool gpuPackable(const std::string& layout);
 // Rounds of pointer jumping issued: trees up to 2^16 levels deep. A deeper tree is an error at download.
 constexpr uint32_t kMaxJumpRounds = 16;
 
+// A build's streams left on the GPU (GpuPackRequest::keep): storage buffers of uvec4 texels, as the
+// renderer binds them (render/ray_tracer_gl.hpp setTreeBuffers). The holder deletes them
+// (deleteStreams) or hands them to the next build, which deletes them before it fills the struct again.
+struct GpuStreamBuffers {
+  GLuint node = 0, triangle = 0, attribute = 0;
+};
+void deleteStreams(GpuStreamBuffers& streams);
+
 // What a build packs and where the downloaded streams go.
 struct GpuPackRequest {
   std::string layout;                // gpuPackable
@@ -39,9 +48,20 @@ struct GpuPackRequest {
   // The soup's texels already on the GPU (uploadSoupTexels; not owned), for repeated builds of one soup;
   // 0: each build uploads them.
   GLuint soupTexels = 0;
+  // The build takes its boxes and centroids from the soup's texels on the GPU (phase `boxes`,
+  // gpubuild_soup_boxes.glsl: bit for bit the CPU's triangle boxes and centroids) instead of uploading
+  // the input's: triangles that are on the GPU already (an animated clip's frame). The input's boxes
+  // must be the soup's triangles' (the CPU still validates them before the build).
+  bool boxesFromSoup = false;
+  // With keep, the streams stay on the GPU after the build: *keep's old buffers are deleted and the new
+  // ones put there (the caller owns them). The download into `out` happens all the same.
+  GpuStreamBuffers* keep = nullptr;
 };
 
-// A storage buffer holding `soup`'s 7 texels per triangle in original order (the caller deletes it).
+// `soup`'s 7 texels per triangle in original order: its 3 TRIANGLE and 4 ATTRIBUTE texels as
+// layout/pack.cpp writes them for the raw format.
+std::vector<glm::uvec4> soupTexels(const TriangleSoup& soup);
+// A storage buffer holding soupTexels(soup) (the caller deletes it).
 GLuint uploadSoupTexels(const TriangleSoup& soup);
 
 // The build buffers the pack reads, as the GPU builders lay them out: children (2 per inner node),
@@ -53,7 +73,7 @@ struct GpuTreeBuffers {
 };
 
 // The CPU's pack of `bvh` into request.out (layout/pack.cpp, pack_bvh2cb.cpp): what a GPU builder gives
-// for one primitive, where it builds nothing on the GPU.
+// for one primitive, where it builds nothing on the GPU (uploaded into request.keep's buffers with keep).
 void packOnTheCpu(const Bvh& bvh, const GpuPackRequest& request);
 
 // The pack's programs, compiled once per builder object.
@@ -65,7 +85,7 @@ class GpuPacker {
 
  private:
   friend class GpuPackJob;
-  ComputeProgram edges_, jump_, gate_, nodesV1_, nodesBvh2cb_, triangles_;
+  ComputeProgram edges_, jump_, gate_, nodesV1_, nodesBvh2cb_, triangles_, soupBoxes_;
 };
 
 // One build's pack: constructed before the timed phases (checks the request, uploads the soup's
@@ -76,9 +96,12 @@ class GpuPacker {
 class GpuPackJob {
  public:
   GpuPackJob(const GpuPacker& packer, const GpuPackRequest& request, uint32_t primitives);
-  ~GpuPackJob();
+  ~GpuPackJob();  // hands the streams to request.keep, or deletes them
   GpuPackJob(const GpuPackJob&) = delete;
   GpuPackJob& operator=(const GpuPackJob&) = delete;
+  // With request.boxesFromSoup: the primitives' boxes (6 floats each) and centroids (3 floats) from
+  // the soup's texels into the build's buffers (marks `boxes`). Run first, before `morton`.
+  void soupBoxes(GLuint boxes, GLuint centroids, PhaseStamps& stamps) const;
   void run(const GpuTreeBuffers& tree, PhaseStamps& stamps);
   void download() const;
 

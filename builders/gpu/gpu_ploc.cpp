@@ -2,6 +2,7 @@
 #include "builders/gpu/gpu_ploc.hpp"
 
 #include <array>
+#include <chrono>
 #include <optional>
 #include <cmath>
 #include <map>
@@ -87,8 +88,10 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   enum { kBoxes, kCentroids, kBoundKeys, kGrid, kKeys, kScratch, kCounts, kNodeBoxes, kChildren, kParents, kInfo,
          kCosts, kCollapseCounters, kClustersA, kClustersB, kNearest, kSums, kState };
   BuildBuffers<20, 8> b;
-  b.ids[kBoxes] = makeStorageBuffer(uint64_t(n) * 24, input.boxes.data());
-  b.ids[kCentroids] = makeStorageBuffer(uint64_t(n) * 12, input.centroids.data());
+  const auto wallStart = std::chrono::steady_clock::now();
+  const bool soupBoxes = pack && pack->boxesFromSoup;  // the boxes pass fills them (phase `boxes`)
+  b.ids[kBoxes] = makeStorageBuffer(uint64_t(n) * 24, soupBoxes ? nullptr : input.boxes.data());
+  b.ids[kCentroids] = makeStorageBuffer(uint64_t(n) * 12, soupBoxes ? nullptr : input.centroids.data());
   const uint32_t initialKeys[6] = {~0u, ~0u, ~0u, 0u, 0u, 0u};  // min keys from the top, max from the bottom
   b.ids[kBoundKeys] = makeStorageBuffer(sizeof initialKeys, initialKeys);
   b.ids[kGrid] = makeStorageBuffer(6 * 4);
@@ -121,6 +124,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   std::optional<GpuPackJob> packJob;  // the soup uploaded before the timed phases
   if (pack) packJob.emplace(packer_, *pack, n);
   PhaseStamps stamps;
+  if (soupBoxes) packJob->soupBoxes(b.ids[kBoxes], b.ids[kCentroids], stamps);
   // morton
   bind({kCentroids, kBoundKeys});
   bounds_.set("u_count", n);
@@ -203,8 +207,11 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   stamps.mark("collapse");
   if (packJob) packJob->run({b.ids[kChildren], b.ids[kParents], b.ids[kNodeBoxes], b.ids[kInfo], b.ids[kKeys]}, stamps);
   checkGl("ploc-gpu: timer queries");
+  glFinish();
+  const double wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wallStart).count();
   if (times) {
     stamps.read(*times);
+    times->wallMs = wallMs;
     times->passes = state.passes;
     times->passesIssued = issued;
     times->readbacks = readbacks;
