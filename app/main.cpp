@@ -133,6 +133,8 @@ int buildCommand(const BuildCommand& c) {
         j["gpu_passes_issued"] = t.passesIssued;
         j["gpu_readbacks"] = t.readbacks;
       }
+      // plocpp-gpu: fused passes that ran again split, over the timed builds (0 where none gave up).
+      if (c.builder == "plocpp-gpu") j["gpu_fused_fallbacks"] = t.fusedFallbacks;
       j["gpu_renderer"] = t.renderer;
       j["gpu_pack"] = t.packLayout.empty() ? nlohmann::json() : nlohmann::json(t.packLayout);
       if (!packRefused.empty()) j["gpu_pack_refused"] = packRefused;

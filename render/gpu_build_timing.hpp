@@ -30,6 +30,8 @@ struct GpuBuildTiming {
   // ploc-gpu's clustering passes, passes issued and pass-state readbacks per build (the same in every
   // build of one input); 0 for lbvh-gpu.
   uint32_t passes = 0, passesIssued = 0, readbacks = 0;
+  // plocpp-gpu's fused passes run again split (GpuPhaseTimes::fusedFallbacks), summed over the builds.
+  uint32_t fusedFallbacks = 0;
   std::string packLayout;  // the layout the builds packed into on the GPU ("" = none)
   std::string renderer;    // GL_RENDERER of the context that built
 };

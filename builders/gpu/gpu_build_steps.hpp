@@ -16,6 +16,7 @@
 #include "builders/gpu/gpu_pack.hpp"
 #include "builders/gpu/gpu_radix_sort.hpp"
 #include "datasets/scene.hpp"         // InputError
+#include "render/gl_context.hpp"      // isSoftwareRenderer
 
 namespace bvhlab::gpubuild {
 
@@ -76,14 +77,17 @@ struct BuildBuffers {
   }
 };
 
-// GL timestamps between the phases of one build, each followed by glFlush: llvmpipe takes a timestamp
-// when it runs its command queue, not where the query was issued (without the flush, measured: lbvh-gpu's
-// collapse phase read 0.04 ms and its fit phase took its time); on a GPU the flush only submits.
+// GL timestamps between the phases of one build, each followed by glFlush on a software renderer:
+// llvmpipe takes a timestamp when it runs its command queue, not where the query was issued (without
+// the flush, measured: lbvh-gpu's collapse phase read 0.04 ms and its fit phase took its time). A GPU
+// records a timestamp where the command stream reaches it, so there no flush is issued: ploc-gpu marks
+// two phases per clustering pass, and a flush each would submit the passes in small pieces, which
+// costs the CPU time and can leave the GPU idle between them.
 // mark(phase) ends an interval of `phase`; a phase met several times (PLOC's passes) sums its intervals,
 // in the order phases first appear. The queries are deleted on every way out, a GL error's included.
 class PhaseStamps {
  public:
-  PhaseStamps() { stamp(); }
+  PhaseStamps() : flush_(isSoftwareRenderer(reinterpret_cast<const char*>(glGetString(GL_RENDERER)))) { stamp(); }
   ~PhaseStamps() {
     if (!ids_.empty()) glDeleteQueries(GLsizei(ids_.size()), ids_.data());
   }
@@ -110,8 +114,9 @@ class PhaseStamps {
     glGenQueries(1, &id);
     ids_.push_back(id);
     glQueryCounter(id, GL_TIMESTAMP);
-    glFlush();
+    if (flush_) glFlush();
   }
+  bool flush_;
   std::vector<GLuint> ids_;
   std::vector<std::string> phases_;
 };

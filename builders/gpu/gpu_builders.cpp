@@ -86,6 +86,11 @@ Bvh buildPlocGpu(const BuildInput& input, const BuildOptions& options) {
   return gpubuild::GpuPloc().build(input, options);
 }
 
+Bvh buildPlocppGpu(const BuildInput& input, const BuildOptions& options) {
+  BuildContext context;
+  return gpubuild::GpuPloc(std::nullopt, gpubuild::PlocPasses::Fused).build(input, options);
+}
+
 void registerGpuBuilders() {
   static const bool once = [] {
     BuilderInfo info{"lbvh-gpu",
@@ -110,6 +115,17 @@ void registerGpuBuilders() {
                      /*usesMortonSizeBits=*/true};
     ploc.gpu = true;
     registerBuilder(std::move(ploc));
+    BuilderInfo plocpp{"plocpp-gpu",
+                       "ploc-gpu with each clustering pass one kernel, as PLOC++ fuses it (nearest neighbours over "
+                       "a halo, merge and compaction by a decoupled look-back scan): the same tree",
+                       buildPlocppGpu,
+                       false,
+                       false,
+                       /*usesPlocRadius=*/true,
+                       kMaxLeafSize,
+                       /*usesMortonSizeBits=*/true};
+    plocpp.gpu = true;
+    registerBuilder(std::move(plocpp));
     setGpuBuildTimer([](const std::string& builder, const BuildInput& input, const BuildOptions& options, size_t builds,
                         const std::string& layout, const std::string& triangleFormat, const TriangleSoup& soup) {
       const bool pack = gpubuild::gpuPackable(layout) && triangleFormat == "raw";
@@ -155,8 +171,8 @@ GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input,
   timing.renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   std::optional<gpubuild::GpuLbvh> lbvh;
   std::optional<gpubuild::GpuPloc> ploc;
-  if (builder == "ploc-gpu")
-    ploc.emplace();
+  if (builder == "ploc-gpu" || builder == "plocpp-gpu")
+    ploc.emplace(std::nullopt, builder == "plocpp-gpu" ? gpubuild::PlocPasses::Fused : gpubuild::PlocPasses::Split);
   else
     lbvh.emplace();
   gpubuild::GpuPhaseTimes times;
@@ -179,6 +195,7 @@ GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input,
   Bvh last;
   for (size_t k = 0; k < builds; ++k) {
     last = build();
+    timing.fusedFallbacks += times.fusedFallbacks;
     totals.push_back(times.totalMs());
     phases.resize(times.phases.size());
     for (size_t p = 0; p < times.phases.size(); ++p) phases[p].push_back(times.phases[p].second);

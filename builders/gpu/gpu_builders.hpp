@@ -20,7 +20,7 @@
 
 namespace bvhlab {
 
-// Adds lbvh-gpu and ploc-gpu to builders(), timeGpuBuild as the runs' GPU build timer
+// Adds lbvh-gpu, ploc-gpu and plocpp-gpu to builders(), timeGpuBuild as the runs' GPU build timer
 // (render/gpu_build_timing.hpp) and makeResidentClipBuilder as the clips' GPU rebuild
 // (render/gpu_clip_build.hpp), once; later calls do nothing.
 void registerGpuBuilders();
@@ -29,6 +29,8 @@ void registerGpuBuilders();
 Bvh buildLbvhGpu(const BuildInput& input, const BuildOptions& options);
 // The registry's entry for ploc-gpu: gpubuild::GpuPloc likewise.
 Bvh buildPlocGpu(const BuildInput& input, const BuildOptions& options);
+// The registry's entry for plocpp-gpu: gpubuild::GpuPloc with PlocPasses::Fused likewise.
+Bvh buildPlocppGpu(const BuildInput& input, const BuildOptions& options);
 
 // GpuBuildTiming: render/gpu_build_timing.hpp (runs record it through the timer registerGpuBuilders sets).
 // With `packLayout` (v1 or bvh2-cb: gpubuild::gpuPackable) and the `soup` the input was made from, every

@@ -34,8 +34,8 @@ class ResidentClipBuilder final : public GpuClipBuilder {
     const BuildInput input{boxes, centroids, soup.v0, soup.v1, soup.v2};
     validateBuildInput(input, options_);
     if (!lbvh_ && !ploc_) {  // the programs, compiled in the context of the first build
-      if (builder_ == "ploc-gpu")
-        ploc_.emplace();
+      if (builder_ == "ploc-gpu" || builder_ == "plocpp-gpu")
+        ploc_.emplace(std::nullopt, builder_ == "plocpp-gpu" ? gpubuild::PlocPasses::Fused : gpubuild::PlocPasses::Split);
       else
         lbvh_.emplace();
     }
@@ -96,7 +96,8 @@ class ResidentClipBuilder final : public GpuClipBuilder {
 
 std::unique_ptr<GpuClipBuilder> makeResidentClipBuilder(const std::string& builder, const BuildOptions& options,
                                                         const std::string& layout) {
-  if ((builder != "lbvh-gpu" && builder != "ploc-gpu") || !gpubuild::gpuPackable(layout)) return nullptr;
+  if ((builder != "lbvh-gpu" && builder != "ploc-gpu" && builder != "plocpp-gpu") || !gpubuild::gpuPackable(layout))
+    return nullptr;
   return std::make_unique<ResidentClipBuilder>(builder, options, layout);
 }
 

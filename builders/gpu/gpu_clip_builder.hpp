@@ -11,7 +11,7 @@
 
 namespace bvhlab {
 
-// lbvh-gpu or ploc-gpu into `layout` (v1 or bvh2-cb); nullptr for another builder or layout. Needs no
+// lbvh-gpu, ploc-gpu or plocpp-gpu into `layout` (v1 or bvh2-cb); nullptr for another builder or layout. Needs no
 // GL context: the first build() compiles the programs in the context current then (every build must
 // run in that one), and builds once untimed before the timed build: the driver compiles the programs
 // at their first dispatch, which no later frame pays.

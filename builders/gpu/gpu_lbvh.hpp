@@ -28,6 +28,9 @@ struct GpuPhaseTimes {
   // ploc-gpu: the clustering passes that merged, the passes issued (a batch's passes past the last one
   // dispatch nothing) and the CPU's reads of the pass state. 0 for lbvh-gpu, which reads nothing back.
   uint32_t passes = 0, passesIssued = 0, readbacks = 0;
+  // plocpp-gpu: fused passes run again with the split kernels because a workgroup's look-back gave up
+  // waiting (gpubuild_ploc_fused.glsl; llvmpipe bounds every loop); 0 for the others.
+  uint32_t fusedFallbacks = 0;
   // Wall-clock (steady_clock) from the build's first buffer allocation to its last timed pass finished
   // (glFinish): what the build holds up a frame on one timeline, allocations, submissions and ploc-gpu's
   // readbacks included; the download after it is not. 0 where nothing ran on the GPU.

@@ -21,11 +21,18 @@ namespace {
 constexpr uint32_t kClusterBytes = 28;  // a cluster as the shaders store it: box (6 floats), node
 
 // gpubuild_ploc_next.glsl's PassState as it lies in the buffer (std430: uvec3 then uints, no padding).
+// ticket and done are gpubuild_ploc_fused.glsl's counters (workgroups started, finished), 0 between passes.
 struct PassState {
   uint32_t groups = 0, one_y = 1, one_z = 1;  // the indirect dispatch of nn, count and merge
   uint32_t clusters = 0, passes = 0, stuck = 0;
+  uint32_t ticket = 0, done = 0;
 };
-static_assert(sizeof(PassState) == 24);
+static_assert(sizeof(PassState) == 32);
+
+// gpubuild_ploc_fused.glsl's bit in PassState::stuck when a look-back gave up waiting.
+constexpr uint32_t kLookBackGaveUp = 2;
+// gpubuild_ploc_fused.glsl's look-back status words keep a count in their low 29 bits.
+constexpr uint64_t kFusedMaxPrimitives = uint64_t(1) << 29;
 
 // The passes that take `clusters` down to one when each keeps kKeptPerPass of its clusters (the
 // measured rate, gpu_ploc.cpp's pass loop): ceil(ln(clusters) / -ln(kKeptPerPass)), at least 1.
@@ -37,8 +44,9 @@ uint32_t passesToOne(uint32_t clusters) {
 
 }  // namespace
 
-GpuPloc::GpuPloc(std::optional<GpuLimits> limits)
+GpuPloc::GpuPloc(std::optional<GpuLimits> limits, PlocPasses passes)
     : limits_(limits ? *limits : queryGpuLimits()),
+      passes_(passes),
       bounds_("gpubuild_bounds.glsl"),
       grid_("gpubuild_grid.glsl"),
       morton_("gpubuild_morton.glsl"),
@@ -50,25 +58,30 @@ GpuPloc::GpuPloc(std::optional<GpuLimits> limits)
       scanPass_("gpubuild_scan.glsl", "#define COUNT_FROM_PASS_STATE 1\n"),
       merge_("gpubuild_ploc_merge.glsl"),
       next_("gpubuild_ploc_next.glsl"),
-      collapse_("gpubuild_collapse.glsl") {}
+      collapse_("gpubuild_collapse.glsl") {
+  if (passes_ == PlocPasses::Fused) fused_.emplace("gpubuild_ploc_fused.glsl");
+}
 
 void GpuPloc::checkLimits(size_t n, bool pack) const {
   std::vector<std::pair<const char*, uint64_t>> buffers = sharedBuildBuffers(n, pack);
   buffers.push_back({"clusters", uint64_t(n) * kClusterBytes});
-  checkBuildLimits("ploc-gpu", n, limits_, buffers);
+  checkBuildLimits(name(), n, limits_, buffers);
+  if (passes_ == PlocPasses::Fused && n >= kFusedMaxPrimitives)
+    throw InputError(std::string(name()) + ": " + std::to_string(n) + " primitives; its pass counts clusters in 29 bits (" +
+                     std::to_string(kFusedMaxPrimitives) + " primitives at most)");
 }
 
 Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times,
                    const GpuPackRequest* pack) const {
   const uint32_t radius = options.plocRadius;
   if (radius < 1 || radius > kMaxPlocRadius)
-    throw std::invalid_argument("ploc-gpu: plocRadius " + std::to_string(radius) + " is outside 1.." +
+    throw std::invalid_argument(std::string(name()) + ": plocRadius " + std::to_string(radius) + " is outside 1.." +
                                 std::to_string(kMaxPlocRadius));
   if (options.mortonSizeBits != 0)
-    throw std::invalid_argument("ploc-gpu: --morton-size-bits " + std::to_string(options.mortonSizeBits) +
+    throw std::invalid_argument(std::string(name()) + ": --morton-size-bits " + std::to_string(options.mortonSizeBits) +
                                 " is not supported on the GPU (only 0: plain position codes)");
   if (options.plocTopDown != 0)
-    throw std::invalid_argument("ploc-gpu: --ploc-top-down " + std::to_string(options.plocTopDown) +
+    throw std::invalid_argument(std::string(name()) + ": --ploc-top-down " + std::to_string(options.plocTopDown) +
                                 " is not supported on the GPU (only 0: clustering up to the root)");
   const size_t count = input.boxes.size();
   checkLimits(count, pack != nullptr);
@@ -86,7 +99,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   const uint32_t inner = n - 1, nodes = 2 * n - 1, blocks = groupsFor(n);
 
   enum { kBoxes, kCentroids, kBoundKeys, kGrid, kKeys, kScratch, kCounts, kNodeBoxes, kChildren, kParents, kInfo,
-         kCosts, kCollapseCounters, kClustersA, kClustersB, kNearest, kSums, kState };
+         kCosts, kCollapseCounters, kClustersA, kClustersB, kNearest, kSums, kState, kStatus };
   BuildBuffers<20, 8> b;
   const auto wallStart = std::chrono::steady_clock::now();
   const bool soupBoxes = pack && pack->boxesFromSoup;  // the boxes pass fills them (phase `boxes`)
@@ -110,12 +123,17 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   glClearNamedBufferData(b.ids[kCollapseCounters], GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
   b.ids[kClustersA] = makeStorageBuffer(uint64_t(n) * kClusterBytes);
   b.ids[kClustersB] = makeStorageBuffer(uint64_t(n) * kClusterBytes);
-  b.ids[kNearest] = makeStorageBuffer(uint64_t(n) * 4);
+  b.ids[kNearest] = makeStorageBuffer(uint64_t(n) * 4);  // the runs' slots, then each pass's neighbours
+  const bool fused = passes_ == PlocPasses::Fused;
+  if (fused) {  // the look-back's status words: kept and merged per workgroup, 0 = not yet written
+    b.ids[kStatus] = makeStorageBuffer(uint64_t(2 * blocks) * 4);
+    glClearNamedBufferData(b.ids[kStatus], GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  }
   b.ids[kSums] = makeStorageBuffer(uint64_t(2 * blocks) * 4);
   const PassState initial;
   b.ids[kState] = makeStorageBuffer(sizeof initial, &initial);
   uint32_t issued = 0, readbacks = 0;
-  checkGl("ploc-gpu: uploading the input");
+  checkGl((std::string(name()) + ": uploading the input").c_str());
 
   auto bind = [&](std::initializer_list<int> which) {
     GLuint slot = 0;
@@ -128,13 +146,13 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   // morton
   bind({kCentroids, kBoundKeys});
   bounds_.set("u_count", n);
-  bounds_.dispatch(groupsFor(n), "ploc-gpu morton: centroid bounds (gpubuild_bounds.glsl)");
+  bounds_.dispatch(groupsFor(n), pass("morton: centroid bounds (gpubuild_bounds.glsl)").c_str());
   bind({kBoundKeys, kGrid});
   grid_.set("u_cube", int32_t(options.mortonGrid == MortonGrid::Cube));
-  grid_.dispatch(1, "ploc-gpu morton: grid (gpubuild_grid.glsl)");
+  grid_.dispatch(1, pass("morton: grid (gpubuild_grid.glsl)").c_str());
   bind({kCentroids, kGrid, kKeys});
   morton_.set("u_count", n);
-  morton_.dispatch(groupsFor(n), "ploc-gpu morton: codes (gpubuild_morton.glsl)");
+  morton_.dispatch(groupsFor(n), pass("morton: codes (gpubuild_morton.glsl)").c_str());
   stamps.mark("morton");
   // sort
   sort_.sort(b.ids[kKeys], b.ids[kScratch], b.ids[kCounts], n);
@@ -142,13 +160,13 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   // clusters: leaves, runs counted, scanned, one tree per run
   bind({kKeys, kBoxes, kNodeBoxes, kSums});
   runs_.set("u_count", n);
-  runs_.dispatch(blocks, "ploc-gpu clusters: leaves and runs of equal codes (gpubuild_ploc_runs.glsl)");
+  runs_.dispatch(blocks, pass("clusters: leaves and runs of equal codes (gpubuild_ploc_runs.glsl)").c_str());
   bind({kSums});
   scan_.set("u_count", 2 * blocks);
-  scan_.dispatch(1, "ploc-gpu clusters: scan (gpubuild_scan.glsl)");
+  scan_.dispatch(1, pass("clusters: scan (gpubuild_scan.glsl)").c_str());
   bind({kKeys, kNodeBoxes, kChildren, kParents, kNearest, kSums, kClustersA});
   clusters_.set("u_count", n);
-  clusters_.dispatch(blocks, "ploc-gpu clusters: a tree per run of equal codes (gpubuild_ploc_clusters.glsl)");
+  clusters_.dispatch(blocks, pass("clusters: a tree per run of equal codes (gpubuild_ploc_clusters.glsl)").c_str());
   stamps.mark("clusters");
 
   // Clustering passes until one cluster is left (each merges at least one pair: builders/ploc.cpp),
@@ -161,37 +179,72 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, b.ids[kState]);
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, b.ids[kState]);
   next_.set("u_first", blocks);
-  next_.dispatch(1, "ploc-gpu clusters: the first pass state (gpubuild_ploc_next.glsl)");
+  next_.dispatch(1, pass("clusters: the first pass state (gpubuild_ploc_next.glsl)").c_str());
   next_.set("u_first", 0u);
   nn_.set("u_radius", radius);
+  if (fused_) {
+    fused_->set("u_radius", radius);
+    fused_->set("u_giveUpPass", giveUpPass_);
+  }
   PassState state;
   state.clusters = n;  // at most; the runs of equal codes make fewer
   int from = kClustersA, to = kClustersB;
+  // One clustering pass of the split kernels from `from` into `to`.
+  auto splitPass = [&](int from, int to) {
+    bind({from, kNearest});
+    nn_.dispatchIndirect(0, pass("nn: nearest neighbours (gpubuild_ploc_nn.glsl)").c_str());
+    stamps.mark("nn");
+    bind({kNearest, kSums});
+    count_.dispatchIndirect(0, pass("merge: counts (gpubuild_ploc_count.glsl)").c_str());
+    bind({kSums});
+    scanPass_.dispatch(1, pass("merge: scan (gpubuild_scan.glsl)").c_str());
+    bind({from, kNearest, kSums, to, kNodeBoxes, kChildren, kParents});
+    merge_.dispatchIndirect(0, pass("merge: merge and compact (gpubuild_ploc_merge.glsl)").c_str());
+    bind({kSums});
+    next_.dispatch(1, pass("merge: the next pass state (gpubuild_ploc_next.glsl)").c_str());
+    stamps.mark("merge");
+  };
+  auto readState = [&] {
+    glGetNamedBufferSubData(b.ids[kState], 0, sizeof state, &state);
+    checkGl((std::string(name()) + ": reading the pass state back").c_str());
+    stamps.mark("readback");
+    ++readbacks;
+  };
+  uint32_t fallbacks = 0;
   while (state.clusters > 1) {
     const uint32_t batch = passesToOne(state.clusters);
-    for (uint32_t pass = 0; pass < batch; ++pass) {
-      bind({from, kNearest});
-      nn_.dispatchIndirect(0, "ploc-gpu nn: nearest neighbours (gpubuild_ploc_nn.glsl)");
-      stamps.mark("nn");
-      bind({kNearest, kSums});
-      count_.dispatchIndirect(0, "ploc-gpu merge: counts (gpubuild_ploc_count.glsl)");
-      bind({kSums});
-      scanPass_.dispatch(1, "ploc-gpu merge: scan (gpubuild_scan.glsl)");
-      bind({from, kNearest, kSums, to, kNodeBoxes, kChildren, kParents});
-      merge_.dispatchIndirect(0, "ploc-gpu merge: merge and compact (gpubuild_ploc_merge.glsl)");
-      bind({kSums});
-      next_.dispatch(1, "ploc-gpu merge: the next pass state (gpubuild_ploc_next.glsl)");
-      stamps.mark("merge");
+    for (uint32_t k = 0; k < batch; ++k) {
+      if (fused) {
+        bind({from, to, kNodeBoxes, kChildren, kParents, kStatus});
+        fused_->dispatchIndirect(0, pass("passes: one fused clustering pass (gpubuild_ploc_fused.glsl)").c_str());
+        stamps.mark("passes");
+      } else {
+        splitPass(from, to);
+      }
       std::swap(from, to);
     }
     // A batch past the last pass still swaps: the last pass's output is not needed, only its nodes.
-    glGetNamedBufferSubData(b.ids[kState], 0, sizeof state, &state);
-    checkGl("ploc-gpu: reading the pass state back");
-    stamps.mark("readback");
+    readState();
     issued += batch;
-    ++readbacks;
+    if (state.stuck & kLookBackGaveUp) {
+      // A fused pass whose look-back gave up wrote no cluster it could not place and left the state as
+      // it was; the passes after it dispatched nothing. It runs again with the split kernels, from its
+      // input: clusters A after an even number of passes, B after an odd one.
+      ++fallbacks;
+      from = state.passes % 2 == 0 ? kClustersA : kClustersB;
+      to = from == kClustersA ? kClustersB : kClustersA;
+      state.stuck = 0;
+      state.groups = groupsFor(state.clusters);
+      state.ticket = state.done = 0;
+      glNamedBufferSubData(b.ids[kState], 0, sizeof state, &state);
+      glClearNamedBufferData(b.ids[kStatus], GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+      splitPass(from, to);
+      std::swap(from, to);
+      ++issued;
+      readState();
+    }
     if (state.stuck)
-      throw std::runtime_error("ploc-gpu merge: pass " + std::to_string(state.passes + 1) + " over " +
+      throw std::runtime_error(pass("merge: pass ") + std::to_string(state.passes + 1) + " over " +
                                std::to_string(state.clusters) + " clusters merged none");
   }
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
@@ -203,10 +256,10 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   collapse_.set("u_maxLeaf", options.maxLeafSize);
   collapse_.set("u_ct", options.cost.traversalCost);
   collapse_.set("u_ci", options.cost.intersectionCost);
-  collapse_.dispatch(groupsFor(n), "ploc-gpu collapse: SAH leaf collapse (gpubuild_collapse.glsl)");
+  collapse_.dispatch(groupsFor(n), pass("collapse: SAH leaf collapse (gpubuild_collapse.glsl)").c_str());
   stamps.mark("collapse");
   if (packJob) packJob->run({b.ids[kChildren], b.ids[kParents], b.ids[kNodeBoxes], b.ids[kInfo], b.ids[kKeys]}, stamps);
-  checkGl("ploc-gpu: timer queries");
+  checkGl((std::string(name()) + ": timer queries").c_str());
   glFinish();
   const double wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wallStart).count();
   if (times) {
@@ -215,6 +268,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
     times->passes = state.passes;
     times->passesIssued = issued;
     times->readbacks = readbacks;
+    times->fusedFallbacks = fallbacks;
   }
   if (packJob) packJob->download();
 
@@ -225,7 +279,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   const std::vector<uint32_t> children = download<uint32_t>(b.ids[kChildren], 2 * size_t(inner));
   const std::vector<Aabb> boxes = download<Aabb>(b.ids[kNodeBoxes], nodes);
   const std::vector<uint32_t> info = download<uint32_t>(b.ids[kInfo], 2 * size_t(nodes));  // count, inner
-  checkGl("ploc-gpu: download");
+  checkGl((std::string(name()) + ": download").c_str());
   Bvh bvh;
   bvh.nodes.resize(1 + 2 * size_t(info[1]));
   bvh.primIndices.resize(n);

@@ -14,8 +14,13 @@
 // from n - 2 as they are made, the root at 0), merges within a pass in order. The download (untimed)
 // reads the tree back and emits the collapsed tree as builders/collapse.hpp emits it: the same Bvh,
 // node for node, as `ploc` at the same radius (so the same tree_hash).
+//
+// plocpp-gpu (PlocPasses::Fused): the same build with each clustering pass one dispatch instead of five
+// (gpubuild_ploc_fused.glsl: PLOC++'s fused pass, compaction by a single-pass scan with decoupled
+// look-back); its phase `passes` replaces `nn` and `merge`. The same tree, node for node.
 #pragma once
 #include <optional>
+#include <string>
 
 #include "builders/bvh.hpp"
 #include "builders/gpu/gpu_compute.hpp"
@@ -25,10 +30,15 @@
 
 namespace bvhlab::gpubuild {
 
+// How a clustering pass is dispatched: nn, count, scan, merge and next (ploc-gpu), or one fused
+// kernel (plocpp-gpu).
+enum class PlocPasses { Split, Fused };
+
 class GpuPloc {
  public:
   // Compiles the passes in the current context; `limits` replaces the implementation's (tests).
-  explicit GpuPloc(std::optional<GpuLimits> limits = std::nullopt);
+  explicit GpuPloc(std::optional<GpuLimits> limits = std::nullopt, PlocPasses passes = PlocPasses::Split);
+  const char* name() const { return passes_ == PlocPasses::Fused ? "plocpp-gpu" : "ploc-gpu"; }
 
   // Throws InputError naming GL_MAX_SHADER_STORAGE_BLOCK_SIZE or GL_MAX_COMPUTE_WORK_GROUP_COUNT when
   // the input needs more than the limits allow (before any GL work), std::invalid_argument for a
@@ -39,12 +49,21 @@ class GpuPloc {
   Bvh build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times = nullptr,
             const GpuPackRequest* pack = nullptr) const;
 
+  // Tests only (plocpp-gpu): in every later build, the fused pass that starts after `passes` passes has
+  // a workgroup give up its look-back at once, so that pass runs again with the split kernels (the tree
+  // is the same). ~0u (the default): never.
+  void giveUpInPass(uint32_t passes) { giveUpPass_ = passes; }
+
   // The check build() makes first.
   void checkLimits(size_t primitives, bool pack = false) const;
 
  private:
+  std::string pass(const char* what) const { return std::string(name()) + " " + what; }  // a pass's label
   GpuLimits limits_;
+  PlocPasses passes_;
   ComputeProgram bounds_, grid_, morton_, runs_, clusters_, nn_, count_, scan_, scanPass_, merge_, next_, collapse_;
+  std::optional<ComputeProgram> fused_;
+  uint32_t giveUpPass_ = ~0u;
   GpuRadixSort sort_;
   GpuPacker packer_;
 };

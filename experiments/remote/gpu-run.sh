@@ -3,7 +3,7 @@
 # (the report scene rendered shaded and as a node-visit heatmap, with GL_RENDERER in the JSON), (2)
 # layouts-paper-gpu.toml (every layout with every kernel, the scenes past the L2 cache), (3)
 # builders-gpu.toml, (4) layouts-gpu.toml with 8 s of rounds per group, (5) kernels-gpu.toml, (6) the
-# report scene's 1080p frames over the 9 builders with and without shared programs (docs/gpu.md, "Frame
+# report scene's 1080p frames over the builders with and without shared programs (docs/gpu.md, "Frame
 # groups"). After (1), (1b) times the GPU builders (`build --json`, GL-timed over repeated builds) on
 # scaling_1M and scaling_10M beside the CPU builders of this host. Each step has a time cap (0 skips it); a
 # sweep stopped by its cap keeps its finished runs (resume with the same command). Results go to OUTDIR
@@ -61,7 +61,7 @@ gpu_builders_step() {
   local end=$(( $(date +%s) + gpubuild_s )) mesh builder k left
   : > "$out/gpu-builders.jsonl"
   for mesh in ${GPUBUILD_MESHES:-datasets/scenes/bench/scaling_1M.toml datasets/scenes/bench/scaling_10M.toml}; do
-    for builder in lbvh-gpu ploc-gpu lbvh ploc sah-binned embree-low; do
+    for builder in lbvh-gpu ploc-gpu plocpp-gpu lbvh ploc sah-binned embree-low; do
       for k in 1 2 3; do
         case $builder in *-gpu) [ "$k" -gt 1 ] && continue ;; esac
         left=$(( end - $(date +%s) ))
@@ -110,6 +110,6 @@ tar -C /tmp/gpu-run -czf "$out/sharing-gpu.tgz" --exclude=images sharing
 # the CPU builders of this host (docs/animation.md); on a GPU they rebuild the exploding mesh too
 # (dynamic.toml leaves it out: on llvmpipe a ploc-gpu build takes ~0.8 s).
 sed 's|"\.\./\.\./datasets/|"'"$PWD"'/datasets/|' experiments/configs/dynamic.toml > /tmp/gpu-run/dynamic-gpu.toml
-printf '[[sweep]]\nname = "gpu-rebuild-explode"\nscenes = { file = "%s/datasets/scenes/bench/anim-explode.toml", name = "explode", clip_step = 1, clip_frames = 30 }\nbuilders = ["lbvh-gpu", "ploc-gpu"]\nupdates = ["rebuild"]\n' "$PWD" >> /tmp/gpu-run/dynamic-gpu.toml
+printf '[[sweep]]\nname = "gpu-rebuild-explode"\nscenes = { file = "%s/datasets/scenes/bench/anim-explode.toml", name = "explode", clip_step = 1, clip_frames = 30 }\nbuilders = ["lbvh-gpu", "ploc-gpu", "plocpp-gpu"]\nupdates = ["rebuild"]\n' "$PWD" >> /tmp/gpu-run/dynamic-gpu.toml
 sweep dynamic-gpu /tmp/gpu-run/dynamic-gpu.toml "$dynamic_s"
 step "done"; ls -la "$out"
