@@ -404,9 +404,13 @@ def cpu_dynamic():
               "and pays in rays); for the mixed strategies with their 95% intervals, paired over frames as the "
               "clip totals are (findings.json `clip_mixed`, `vs_rebuild.update` and `.ray_cost`). Frames are traced "
               "every `step` frames of the scene's clip, from frame 0."]
+    on_gpu = sorted({r.get("builder") for r in rows if r.get("update_on") == "gpu"})
+    gpu_note = (f" Rows of {', '.join(f'`{b}`' for b in on_gpu)} updated on the GPU (`update_on` gpu): their update is "
+                "the build and pack by compute passes and their upload the frame's triangles alone; on llvmpipe "
+                "those passes run on the CPU." if on_gpu else "")
     lines += ["", "Each row is one clip traced frame by frame (docs/animation.md): the traced frames' update, upload "
               "(pack + GL re-upload) and trace medians summed; the interval is the bootstrap over each frame's "
-              "samples. The clips of a scene ran in lockstep in one process (frame f of every strategy, in a shuffled "
+              "samples." + gpu_note + " The clips of a scene ran in lockstep in one process (frame f of every strategy, in a shuffled "
               f"order, before frame f + 1 of any). {r0.get('workload')} rays "
               f"({', '.join(f'{sc} {n}' for sc, n in rays.items())} a frame), {r0.get('kernel')} kernel, leaf size {r0.get('leaf_size')}; "
               "ray cost = node visits + triangle tests per ray, from the kernel's counters. Per-frame values: "
