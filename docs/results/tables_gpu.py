@@ -1,6 +1,9 @@
 """The tables of the committed GPU run (docs/results/gpu-h200), for docs/results/generate.py."""
 
-from tables_io import num, pick, read_csv, read_json, source, commands, provenance, table, sig, f3, with_ci
+import os
+
+from tables_io import (num, pick, read_csv, read_json, read_json_lines, rel, source, commands, provenance, table,
+                       sig, f3, with_ci)
 
 # ---- the GPU run (docs/results/gpu-h200) ---------------------------------------------------------
 
@@ -155,3 +158,53 @@ def gpu_layouts():
     lines += ["", "Each cell: the layout's median time with its default kernel x v1's (node visits per ray x v1's "
                   "in brackets); v1's row gives its median and visits. sah-binned, leaf 4. " + NO_PAIRED]
     return lines + provenance([(path, rows)], src, commands(GPU, src))
+
+
+# ---- GPU builds beside the CPU builders (experiments/remote/gpu-run.sh, step 1b) ---------------------
+
+def gpu_build_time(dirname):
+    """The GPU builders' GL-timed builds beside the CPU builders' wall-clock builds on the same host, from
+    DIR/gpu-builders.jsonl (one `bvhlab build --json` object a line). Register it in generate.TABLES with
+    the result directory of a committed GPU run."""
+    path, builds = read_json_lines(dirname, "gpu-builders.jsonl")
+    src = source(dirname)
+    groups = {}
+    for n, b in enumerate(builds, 1):
+        mesh = os.path.splitext(os.path.basename(str(b.get("mesh", "?"))))[0]
+        groups.setdefault((mesh, b.get("builder", "?")), []).append((n, b))
+    cells = {}
+    for (mesh, builder), bs in groups.items():
+        where = f"{rel(path)}: object {bs[0][0]}"
+        sah = num(bs[0][1], "sah_cost", where)
+        g = bs[0][1].get("gpu_build_ms")
+        if isinstance(g, dict):  # GL-timed: the median and interval over the object's builds
+            ms, lo, hi = num(g, "median", where), g.get("low"), g.get("high")
+            time = with_ci(ms, lo, hi) if lo is not None and hi is not None else f"{sig(ms)} (no interval)"
+            how = f"GPU, {int(num(g, 'builds', where))} GL-timed builds"
+        else:  # a CPU builder: one wall-clock build per line
+            times = sorted(num(b, "build_ms", f"{rel(path)}: object {k}") for k, b in bs)
+            ms = times[len(times) // 2]
+            time = f"{sig(ms)} [{sig(times[0])}, {sig(times[-1])}]"
+            how = f"CPU, median [min, max] of {len(times)} builds"
+        cells[(mesh, builder)] = (ms, sah, time, how, g is not None and isinstance(g, dict))
+    out = []
+    for (mesh, builder), (ms, sah, time, how, gpu) in sorted(cells.items(), key=lambda kv: (kv[0][0], not kv[1][4], kv[1][0])):
+        ref = cells.get((mesh, "sah-binned"))
+        vs_sah = f"{sah / ref[1]:.3f}" if ref else "–"
+        speedup = "–"
+        if gpu:
+            # The fastest CPU build of this mesh whose SAH is the same or better (a relative 1e-9 covers the
+            # rounding of equal trees' costs summed in another order).
+            cpu = [c[0] for (m, _), c in cells.items() if m == mesh and not c[4] and c[1] <= sah * (1 + 1e-9)]
+            speedup = f"{sig(min(cpu) / ms)}x" if cpu else "no CPU builder as good"
+        out.append([mesh, f"`{builder}`", how, time, f"{sah:.2f}", vs_sah, speedup])
+    header = ["mesh", "builder", "timed as", "build ms", "SAH cost", "SAH / sah-binned's",
+              "fastest CPU build of the same or better SAH / this build"]
+    lines = table(header, out)
+    lines += ["", "GPU builders: the median of `build --json --gpu-builds` GL-timed builds after an untimed warm-up, "
+                  "with its 95% order-statistic interval; the times cover the passes from the uploaded boxes to the "
+                  "packed streams (`gpu_phases_ms`), not the upload or the download. CPU builders: `build --json`'s "
+                  "wall-clock `build_ms` of one build on every host core, repeated."]
+    renderers = sorted({b.get("gpu_renderer") for b in builds if b.get("gpu_renderer")})
+    rows = [{"git_commit": src.get("git_commit", ""), "gl_renderer": r} for r in renderers]
+    return lines + provenance([(path, rows)], src, commands(dirname, src))

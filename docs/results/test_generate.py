@@ -8,6 +8,7 @@ from findings.json follow from the per-round times is checked by `bvhlab finding
 
 import contextlib
 import io
+import json
 import os
 import shutil
 import sys
@@ -17,6 +18,7 @@ import unittest
 sys.dont_write_bytecode = True
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import generate  # noqa: E402
+import tables_gpu  # noqa: E402
 import tables_io  # noqa: E402
 
 
@@ -83,6 +85,52 @@ class CopiedDocs(unittest.TestCase):
         status, err = run("--check", "--root", self.root)
         self.assertEqual(status, 2)
         self.assertIn("docs/extra.md:1: table 'gpu-render' has no", err)
+
+
+class GpuBuildTime(unittest.TestCase):
+    """tables_gpu.gpu_build_time over a made-up step-1b file (no GPU run of the GPU builders is committed)."""
+
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix="gpu_build_time_")
+        with open(os.path.join(self.dir, "source.json"), "w") as f:
+            json.dump({"commands": {"gpu-builders.jsonl": "bash experiments/remote/gpu-run.sh installed OUT"},
+                       "git_commit": "0123456789abcdef", "machine": "test host"}, f)
+
+    def tearDown(self):
+        shutil.rmtree(self.dir)
+
+    def write(self, builds):
+        with open(os.path.join(self.dir, "gpu-builders.jsonl"), "w") as f:
+            for b in builds:
+                f.write(json.dumps(b) + "\n")
+
+    def rows(self):
+        lines = tables_gpu.gpu_build_time(self.dir)
+        return {tuple(c.strip() for c in line.strip("|").split("|"))[1]: [c.strip() for c in line.strip("|").split("|")]
+                for line in lines if line.startswith("| ") and "`" in line}
+
+    def test_speedups_are_over_the_fastest_cpu_build_of_the_same_or_better_sah(self):
+        gpu = lambda name, ms, sah: {"mesh": "m/scaling_1M.toml", "builder": name, "sah_cost": sah, "build_ms": 900.0,
+                                     "gpu_build_ms": {"median": ms, "low": ms * 0.9, "high": ms * 1.1, "builds": 11},
+                                     "gpu_renderer": "NVIDIA H100"}
+        cpu = lambda name, ms, sah: {"mesh": "m/scaling_1M.toml", "builder": name, "sah_cost": sah, "build_ms": ms}
+        self.write([gpu("lbvh-gpu", 2.0, 60.0), gpu("ploc-gpu", 5.0, 50.0), gpu("odd-gpu", 1.0, 10.0),
+                    cpu("lbvh", 30.0, 60.0), cpu("lbvh", 50.0, 60.0), cpu("lbvh", 40.0, 60.0),
+                    cpu("ploc", 100.0, 50.0), cpu("sah-binned", 80.0, 45.0)])
+        rows = self.rows()
+        self.assertEqual(rows["`lbvh-gpu`"][6], "20.0x")   # lbvh's median 40 ms (sah-binned's 80 is better, slower)
+        self.assertEqual(rows["`ploc-gpu`"][6], "16.0x")   # min(ploc 100, sah-binned 80) / 5
+        self.assertEqual(rows["`odd-gpu`"][6], "no CPU builder as good")
+        self.assertEqual(rows["`lbvh`"][3], "40.0 [30.0, 50.0]")
+        self.assertEqual(rows["`ploc-gpu`"][5], f"{50 / 45:.3f}")
+        self.assertEqual(rows["`lbvh`"][6], "–")
+
+    def test_a_missing_key_names_the_file_and_object(self):
+        self.write([{"mesh": "a.off", "builder": "lbvh", "build_ms": 3.0}])
+        with self.assertRaises(tables_io.DataError) as e:
+            tables_gpu.gpu_build_time(self.dir)
+        self.assertIn("gpu-builders.jsonl: object 1", str(e.exception))
+        self.assertIn("sah_cost", str(e.exception))
 
 
 if __name__ == "__main__":
