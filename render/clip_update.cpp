@@ -142,15 +142,20 @@ BuildStats twoLevelStats(const TwoLevelUpdater& tree, const std::string& builder
 
 double packClipFrame(PreparedScene& frame, const Bvh& tree, const LayoutInfo& packer, const std::string& triangleFormat,
                      const std::string& builder) {
-  frame.bvh = tree;
   const auto start = std::chrono::steady_clock::now();
-  frame.packed = packer.pack(frame.bvh, frame.soup);
-  packTriangles(frame.packed, frame.soup, triangleFormat);
+  PackedBvh packed = packer.pack(tree, frame.soup);
+  packTriangles(packed, frame.soup, triangleFormat);
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  setClipFrameTree(frame, tree, std::move(packed), builder);
+  return ms;
+}
+
+void setClipFrameTree(PreparedScene& frame, const Bvh& tree, PackedBvh packed, const std::string& builder) {
+  frame.bvh = tree;
+  frame.packed = std::move(packed);
   frame.stats = computeStats(frame.bvh, frame.cost);
   frame.stats.builder = builder;
   frame.stats.bytes = frame.packed.bytes();
-  return ms;
 }
 
 void putClipTimes(nlohmann::json& j, const std::string& key, const std::vector<double>& ms) {

@@ -115,6 +115,10 @@ BuildStats twoLevelStats(const TwoLevelUpdater& tree, const std::string& builder
 double packClipFrame(PreparedScene& frame, const Bvh& tree, const LayoutInfo& packer, const std::string& triangleFormat,
                      const std::string& builder);
 
+// The same for a tree packed already (on the GPU: ClipGpuRebuild's frame, whose streams the caller also
+// sets in frame.gpuStreams): frame.bvh, frame.packed and frame.stats.
+void setClipFrameTree(PreparedScene& frame, const Bvh& tree, PackedBvh packed, const std::string& builder);
+
 // A part's samples as the JSON keys KEY, KEY_ci_low, KEY_ci_high (null below 6 samples) and KEY_all.
 void putClipTimes(nlohmann::json& j, const std::string& key, const std::vector<double>& ms);
 // A two-level frame's own keys of `trace --json` and `render --json`: blas_updated, blas_update_ms,

@@ -103,6 +103,24 @@ unsigned uploadBvhStream(const std::vector<glm::uvec4>& texels, Storage storage,
   return tex;
 }
 
+unsigned viewBvhStream(unsigned buffer, size_t texels, Storage storage, const char* name) {
+  if (storage == Storage::Tex2D)
+    throw std::invalid_argument(std::string(name) + " stream: streams on the GPU are bound with --storage tbo or "
+                                                    "ssbo; tex2d would copy them into a texture");
+  if (storage == Storage::Ssbo) return 0;
+  GLint maxTexels = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &maxTexels);
+  const GLsizeiptr count = GLsizeiptr(std::max<size_t>(1, texels));
+  if (count > maxTexels)
+    throw std::runtime_error(std::string(name) + " stream has " + std::to_string(count) +
+                             " texels, above GL_MAX_TEXTURE_BUFFER_SIZE = " + std::to_string(maxTexels));
+  GLuint tex = 0;
+  glCreateTextures(GL_TEXTURE_BUFFER, 1, &tex);
+  glTextureBufferRange(tex, GL_RGBA32UI, buffer, 0, count * GLsizeiptr(sizeof(glm::uvec4)));
+  checkGl(name);
+  return tex;
+}
+
 void bindBvhStorageBuffers(const unsigned buffers[4]) {
   for (GLuint k = 0; k < 4; ++k) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kFirstStreamBinding + k, buffers[k]);
 }
@@ -129,7 +147,8 @@ GpuRenderer::~GpuRenderer() {
   glDeleteFramebuffers(1, &fbo_);
   GLuint textures[] = {colorTex_, statsTex_, boxTestsTex_, primaryIdTex_, streams_[0], streams_[1], streams_[2], streams_[3], texArray_, worldTex_};
   glDeleteTextures(GLsizei(std::size(textures)), textures);
-  glDeleteBuffers(4, streamBuffers_);
+  glDeleteBuffers(borrowed_ ? 0 : 3, streamBuffers_);  // borrowed: PreparedScene::gpuStreams' owner deletes them
+  glDeleteBuffers(1, &streamBuffers_[3]);
   glDeleteBuffers(1, &ubo_);
 }
 
@@ -178,10 +197,18 @@ void GpuRenderer::upload() {
                              std::to_string(block.size()) + " > " + std::to_string(maxBlock) + " bytes)");
 
   const PackedBvh& p = scene_.packed;
-  streams_[0] = uploadBvhStream(p.nodes, options_.storage, "node", &streamBuffers_[0]);
-  streams_[1] = uploadBvhStream(p.triangles, options_.storage, "triangle", &streamBuffers_[1]);
-  streams_[2] = uploadBvhStream(p.attributes, options_.storage, "attribute", &streamBuffers_[2]);
+  const std::vector<glm::uvec4>* sized[3] = {&p.nodes, &p.triangles, &p.attributes};
+  const char* names[3] = {"node", "triangle", "attribute"};
+  borrowed_ = scene_.gpuStreams[0] != 0;
+  for (int k = 0; k < 3; ++k)
+    if (borrowed_) {  // built and packed on the GPU: bound as they lie
+      streamBuffers_[k] = scene_.gpuStreams[k];
+      streams_[k] = viewBvhStream(streamBuffers_[k], sized[k]->size(), options_.storage, names[k]);
+    } else {
+      streams_[k] = uploadBvhStream(*sized[k], options_.storage, names[k], &streamBuffers_[k]);
+    }
   streams_[3] = uploadBvhStream(p.vertices, options_.storage, "vertex", &streamBuffers_[3]);  // indexed only
+  if (borrowed_) glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
 
   // Material textures (a 1x1x1 dummy keeps the uber shader's sampler complete) and the world map.
   // With ray cones (texture_lod.glsl) both carry the host's mip chains (shaders/texture_mips.hpp, the

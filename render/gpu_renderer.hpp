@@ -31,6 +31,12 @@ unsigned compileComputeProgram(const AssembledShader& shader);
 // layout's STORAGE kinds; 0 for ssbo, which reads the buffer itself); for tbo and ssbo, *buffer gets
 // the buffer. An empty stream uploads one zero texel. Throws std::runtime_error naming the stream when it exceeds the kind's limit.
 unsigned uploadBvhStream(const std::vector<glm::uvec4>& texels, Storage storage, const char* name, unsigned* buffer);
+// A packed-BVH stream already on the GPU (a storage buffer of uvec4 texels holding at least `texels`,
+// render/gpu_clip_build.hpp) made readable in the storage kind without a copy: a texture buffer over its
+// first `texels` texels for tbo, 0 for ssbo (the buffer is bound itself). The buffer stays the caller's.
+// Throws std::invalid_argument for tex2d (it would copy) and std::runtime_error naming the stream past
+// GL_MAX_TEXTURE_BUFFER_SIZE.
+unsigned viewBvhStream(unsigned buffer, size_t texels, Storage storage, const char* name);
 // Storage::Ssbo: the node, triangle, attribute and vertex streams' buffers bound as shader storage
 // buffers kFirstStreamBinding.. (traversal/storage_ssbo.glsl's bindings).
 constexpr unsigned kFirstStreamBinding = 4;
@@ -80,6 +86,7 @@ class GpuRenderer {
   unsigned program_ = 0, vao_ = 0, fbo_ = 0, colorTex_ = 0, statsTex_ = 0, boxTestsTex_ = 0, ubo_ = 0;
   unsigned primaryIdTex_ = 0;  // R32UI, with ShaderOptions::primaryIdOut
   unsigned streams_[4] = {0, 0, 0, 0}, streamBuffers_[4] = {0, 0, 0, 0};  // node, triangle, attribute, vertex
+  bool borrowed_ = false;  // streamBuffers_[0..2] are PreparedScene::gpuStreams (not deleted here)
   unsigned texArray_ = 0, worldTex_ = 0;
 };
 

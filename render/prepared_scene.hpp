@@ -2,6 +2,7 @@
 // into the chosen texture layout (layout/layouts.hpp), and its objects/materials/textures packed for
 // the tracer.
 #pragma once
+#include <array>
 #include <memory>
 #include <string>
 
@@ -20,6 +21,11 @@ struct PreparedScene {
   PackedBvh packed;
   BuildStats stats;  // empty (primitives == 0) when the scene has no triangles
   CostModel cost;    // the model the tree was built (and its SAH computed) with
+  // The streams already on the GPU, where the tree was built and packed there (render/gpu_clip_build.hpp):
+  // node, triangle and attribute storage buffers holding `packed`'s streams, which a GpuRenderer binds
+  // instead of uploading `packed`'s (whose copies then serve for sizes, statistics and checks). Owned
+  // elsewhere and alive while a renderer uses them; 0: none.
+  std::array<unsigned, 3> gpuStreams{};
 
   // Clock-free identity and quality of the tree, computed on first use (EPO costs a pass over the
   // tree; `render` without --json never needs it). Both are 0 / "" without triangles.

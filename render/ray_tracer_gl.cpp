@@ -96,23 +96,16 @@ void GlRayTracer::setTree(const PackedBvh& packed) {
 
 void GlRayTracer::setTreeBuffers(const PackedBvh& shape, const unsigned buffers[3]) {
   checkSameProgram(shape, "setTreeBuffers");
-  if (options_.storage == Storage::Tex2D)
+  if (options_.storage == Storage::Tex2D)  // before anything is released (viewBvhStream would refuse it too)
     throw std::invalid_argument("GlRayTracer::setTreeBuffers: --storage tex2d would copy the streams into textures; "
                                 "streams on the GPU are bound with --storage tbo or ssbo");
   releaseStreams();
   borrowed_ = true;
   const std::vector<glm::uvec4>* sized[3] = {&shape.nodes, &shape.triangles, &shape.attributes};
+  const char* names[3] = {"node", "triangle", "attribute"};
   for (int k = 0; k < 3; ++k) {
     streamBuffers_[k] = buffers[k];
-    if (options_.storage != Storage::Tbo) continue;
-    GLint maxTexels = 0;
-    glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &maxTexels);
-    const GLsizeiptr texels = GLsizeiptr(std::max<size_t>(1, sized[k]->size()));
-    if (texels > maxTexels)
-      throw std::runtime_error("GlRayTracer::setTreeBuffers: a stream of " + std::to_string(texels) +
-                               " texels is above GL_MAX_TEXTURE_BUFFER_SIZE = " + std::to_string(maxTexels));
-    glCreateTextures(GL_TEXTURE_BUFFER, 1, &streams_[k]);
-    glTextureBufferRange(streams_[k], GL_RGBA32UI, buffers[k], 0, texels * GLsizeiptr(sizeof(glm::uvec4)));
+    streams_[k] = viewBvhStream(buffers[k], sized[k]->size(), options_.storage, names[k]);
   }
   streams_[3] = uploadBvhStream(shape.vertices, options_.storage, "vertex", &streamBuffers_[3]);  // indexed only
   glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);

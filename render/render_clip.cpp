@@ -41,19 +41,22 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
   const ClipPlan plan = planClip(cmd, setup.scene);
   const LayoutInfo& packer = findLayout(setup.shader.layout);
   const std::string triangleFormat = findTriangleFormat(setup.shader.triangles).name;
+  // Made before the strategy, so that a GPU rebuild's buffers go before the context does.
+  std::unique_ptr<GlContext> ctx = createContext(setup.backend);
   // The strategy: a flat tree's copies, or a two-level tree's drawn by the kernel's two-level walk.
   std::unique_ptr<ClipUpdater> updater;
   std::unique_ptr<ClipTwoLevel> twoLevel;
+  std::unique_ptr<ClipGpuRebuild> gpuRebuild;  // rebuild with a GPU builder: built, packed and drawn on the GPU
   if (parseUpdateSpec(cmd.update).name == "two-level") {
     twoLevel = std::make_unique<ClipTwoLevel>(cmd, setup.build, packer.name, setup.shader.kernel, triangleFormat);
     setup.shader.twoLevel = true;
+  } else if ((gpuRebuild = ClipGpuRebuild::make(cmd, setup.build, packer.name, triangleFormat, setup.shader.storage))) {
   } else {
     updater = std::make_unique<ClipUpdater>(cmd, setup.build);
   }
   const CostModel cost = setup.build.cost;
   Scene scene = std::move(setup.scene);
 
-  std::unique_ptr<GlContext> ctx = createContext(setup.backend);
   const std::string renderer = ctx->renderer();
   auto programs = std::make_unique<ProgramCache>();
   int stack = 0;
@@ -74,7 +77,16 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
     nlohmann::json parts;  // a two-level frame's own keys
     bool rebuilt = false, agree = true;
     double packMs = 0.0;
-    if (!twoLevel) {
+    ClipGpuRebuild::Step gpuStep;
+    if (gpuRebuild) {  // the renderer binds the streams the passes left on the GPU; upload_ms is the triangles'
+      gpuStep = gpuRebuild->update(frame->soup);
+      sm.update = gpuStep.ms;
+      rebuilt = true;
+      agree = gpuStep.agree;
+      const GpuClipFrame& built = gpuRebuild->frame();
+      setClipFrameTree(*frame, built.tree, built.packed, cmd.builder);
+      for (int k = 0; k < 3; ++k) frame->gpuStreams[size_t(k)] = built.streams[k];
+    } else if (!twoLevel) {
       const ClipUpdater::Step step = updater->update(frame->soup);
       sm.update = step.ms;
       rebuilt = step.rebuilt;
@@ -96,7 +108,13 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
     const auto start = Clock::now();
     GpuJob job(cmd, setup, frame, programs.get(), stack);
     glFinish();
-    sm.upload.push_back(packMs + msSince(start));
+    // The renderer's upload (scene, textures; the tree's streams unless they are on the GPU), plus the pack
+    // on the CPU or, on the GPU path, each build's upload of the triangles.
+    const double rendererMs = msSince(start);
+    if (gpuRebuild)
+      for (double ms : gpuStep.uploadMs) sm.upload.push_back(ms + rendererMs);
+    else
+      sm.upload.push_back(packMs + rendererMs);
     const bool compiled = programs->size() > cached;
 
     FrameTimes times;
@@ -122,6 +140,12 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
     putClipTimes(j, "upload_ms", sm.upload);
     j["pack_ms"] = packMs;
     putClipTimes(j, "ms", sm.trace);
+    if (gpuRebuild) {
+      putClipTimes(j, "gpu_update_ms", gpuStep.gpuMs);
+      nlohmann::json phases = nlohmann::json::object();
+      for (const auto& [phase, ms] : gpuStep.phases) phases[phase] = ms;
+      j["gpu_update_phases_ms"] = phases;
+    }
     for (const char* k : {"sah_cost", "epo", "ray_cost", "node_visits_per_ray", "triangle_tests_per_ray", "tree_hash",
                           "nodes", "mesh_rays"})
       if (r.contains(k)) j[k] = r[k];
@@ -156,6 +180,7 @@ nlohmann::json renderClip(const RenderCommand& cmd, uint64_t& overflows) {
     if (last.contains(k)) j[k] = last[k];
   j["update"] = cmd.update;
   j["two_level"] = twoLevel != nullptr;
+  j["update_on"] = gpuRebuild ? "gpu" : "cpu";  // as trace --update (render/trace_clip.hpp)
   j["update_repeats"] = cmd.updateRepeats;
   j["warmup"] = cmd.warmup;
   j["timed_frames"] = cmd.frames;

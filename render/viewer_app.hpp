@@ -26,6 +26,7 @@
 #include "builders/update.hpp"
 #include "layout/two_level_update.hpp"
 #include "render/fly_camera.hpp"
+#include "render/gpu_clip_build.hpp"
 #include "render/gpu_renderer.hpp"
 #include "render/program_cache.hpp"
 #include "render/smaa.hpp"
@@ -171,6 +172,9 @@ class Viewer {
   std::string update_;  // the strategy's spec ("" for a static scene)
   std::unique_ptr<UpdateStrategy> strategy_;
   std::unique_ptr<TwoLevelUpdater> twoLevel_;  // instead of strategy_ while update_ is two-level[:...]
+  // Instead of strategy_ while update_ is `rebuild` with a GPU builder whose layout the GPU packs: each
+  // frame built and packed on the GPU and drawn from the streams left there (render/gpu_clip_build.hpp).
+  std::unique_ptr<GpuClipBuilder> gpuClip_;
   std::unique_ptr<ProgramCache> programs_;  // clip playback only
   Scene clipScene_;                         // the scene at clipFrame_
   int clipFrames_ = 1, clipFrame_ = 0, clipStack_ = 0;
@@ -179,6 +183,8 @@ class Viewer {
   bool clipJump_ = false;        // a script jumped to a clip frame: draw it before advancing
   bool uploadPending_ = false;   // this frame's renderer creation is the clip frame's upload
   bool clipFrameRendered_ = false;
+  // packMs_: the part of a clip frame's upload before its renderer is made: the pack on the CPU, or with
+  // gpuClip_ the triangles' upload to the GPU.
   double packMs_ = 0.0, lastUpdateMs_ = 0.0, lastUploadMs_ = 0.0;
   bool lastRebuilt_ = false;
   std::deque<double> recentUpdateMs_, recentUploadMs_;

@@ -90,6 +90,12 @@ void Viewer::updateClipFrame() {
   if (!twoLevel && (!strategy_ || needStrategy_ || needRebuild_)) strategy_ = makeUpdateStrategy(update_, uo);
   if (twoLevel && (!twoLevel_ || needStrategy_ || needRebuild_)) twoLevel_ = std::make_unique<TwoLevelUpdater>(spec, uo, layout_);
   if (!twoLevel) twoLevel_.reset();
+  // A GPU rebuild keeps no state between frames: it is made again only for another builder or leaf size.
+  const std::string& format = findTriangleFormat(triangles_).name;
+  if (spec.name != "rebuild")
+    gpuClip_.reset();
+  else if (!gpuClip_ || needRebuild_)
+    gpuClip_ = makeGpuClipBuilder(builder_, uo.build, layout_, format);
   needStrategy_ = needRebuild_ = false;
 
   setFrame(clipScene_, clipFrame_);
@@ -99,7 +105,6 @@ void Viewer::updateClipFrame() {
   frame->data = buildSceneData(frame->scene);
   frame->soup = gatherTriangles(frame->scene);
   const LayoutInfo& packer = findLayout(layout_);
-  const std::string& format = findTriangleFormat(triangles_).name;
   lastUpdateMs_ = packMs_ = 0.0;
   lastRebuilt_ = false;
   if (frame->soup.size() > 0 && twoLevel) {
@@ -110,6 +115,16 @@ void Viewer::updateClipFrame() {
     packMs_ = step.packMs;
     frame->packed = twoLevel_->packed().streams;
     frame->stats = twoLevelStats(*twoLevel_, builder_);
+  } else if (frame->soup.size() > 0 && gpuClip_) {
+    statsGpu_.reset();  // the renderers bind the last frame's streams, which this build replaces
+    gpu_.reset();
+    const GpuClipFrame built = gpuClip_->build(frame->soup);
+    lastRebuilt_ = true;
+    lastUpdateMs_ = built.buildMs;
+    packMs_ = built.uploadMs;
+    setClipFrameTree(*frame, built.tree, built.packed, builder_);
+    frame->gpuStreams = {built.streams[0], built.streams[1], built.streams[2]};
+    frame->stats.buildMs = lastUpdateMs_;
   } else if (frame->soup.size() > 0) {
     const FrameTriangles tris{frame->soup.v0, frame->soup.v1, frame->soup.v2};
     const auto start = Clock::now();
@@ -141,6 +156,7 @@ void Viewer::updateClipFrame() {
                       {"update", update_},
                       {"builder", builder_},
                       {"rebuilt", lastRebuilt_},
+                      {"update_on", gpuClip_ ? "gpu" : "cpu"},
                       {"update_ms", lastUpdateMs_},
                       {"pack_ms", packMs_},
                       {"sah_cost", prepared_->stats.sahCost},

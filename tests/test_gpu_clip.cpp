@@ -10,22 +10,27 @@
 #include <string>
 #include <vector>
 
+#include <glad/gl.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "builders/builder.hpp"
 #include "builders/gpu/gpu_builders.hpp"
 #include "builders/gpu/gpu_build_steps.hpp"
+#include "builders/gpu/gpu_compute.hpp"
 #include "builders/gpu/gpu_clip_builder.hpp"
 #include "builders/gpu/gpu_lbvh.hpp"
 #include "builders/gpu/gpu_pack.hpp"
 #include "builders/gpu/gpu_ploc.hpp"
 #include "cli_run.hpp"
+#include "render_fixture.hpp"
+#include "datasets/image_io.hpp"
 #include "datasets/scene.hpp"
 #include "layout/layout.hpp"
 #include "layout/layout_bvh2cb.hpp"
 #include "layout/tree_hash.hpp"
 #include "render/gl_context.hpp"
+#include "render/gpu_renderer.hpp"
 #include "render/ray_tracer_gl.hpp"
 #include "traversal_test_util.hpp"
 
@@ -188,6 +193,21 @@ TEST_F(GpuClip, ATracerBoundToTheStreamsOnTheGpuTracesTheCpuPack) {
             hits += hitsBound[i].hit;
           }
           EXPECT_GT(hits, rays.size() / 10) << "too few hits to compare trees by";
+          // The bound tracer reads the GPU's buffers themselves: their triangles zeroed there (every one a
+          // point at the origin), it finds none, while the tracer with its own upload still does.
+          const glm::uvec4 zero(0u);
+          glClearNamedBufferData(f.streams[1], GL_RGBA32UI, GL_RGBA_INTEGER, GL_UNSIGNED_INT, &zero);
+          glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+          std::vector<BatchHit> afterBound, afterUploaded;
+          bound.traceCounted(&afterBound);
+          uploaded.traceCounted(&afterUploaded);
+          size_t boundHits = 0, uploadedHits = 0;
+          for (size_t i = 0; i < rays.size(); ++i) {
+            boundHits += afterBound[i].hit;
+            uploadedHits += afterUploaded[i].hit;
+          }
+          EXPECT_EQ(boundHits, 0u);
+          EXPECT_EQ(uploadedHits, hits);
         }
       }
 }
@@ -215,6 +235,47 @@ TEST_F(GpuClip, RefusalsAndErrors) {
   tex2d.kernel = "";
   GlRayTracer tracer(f.packed, tex2d);
   EXPECT_THROW(tracer.setTreeBuffers(f.packed, f.streams), std::invalid_argument);
+}
+
+// A renderer given streams on the GPU (PreparedScene::gpuStreams) draws from those buffers themselves:
+// the image of a renderer that uploads its own copy, and, once their triangles are zeroed on the GPU, no
+// mesh (while the copy's renderer still draws it). tex2d storage is refused (it would copy).
+TEST_F(GpuClip, ARendererDrawsFromTheStreamsOnTheGpuThemselves) {
+  std::unique_ptr<PreparedScene> p = test::prepareToml(
+      "[camera]\neye = [0, 2.5, 4]\ntarget = [0, 0, 0]\n[[object]]\nkind = \"mesh\"\ngenerate = \"terrain\"\n"
+      "triangles = 1500\nfit = 2\n");
+  const FrameOptions frame = test::smallFrame(p->scene, 32, 24);
+  const PackedBvh& packed = p->packed;
+  for (const Storage storage : {Storage::Tbo, Storage::Ssbo}) {
+    SCOPED_TRACE(storage == Storage::Tbo ? "tbo" : "ssbo");
+    ShaderOptions options = test::tracerOptions(*p);
+    options.storage = storage;
+    p->gpuStreams = {};
+    GpuRenderer own(*p, options, frame);
+    own.drawFrame();
+    const std::vector<uint8_t> expected = own.readColor();
+    gpubuild::GpuStreamBuffers buffers{gpubuild::makeStorageBuffer(packed.nodes.size() * 16, packed.nodes.data()),
+                                       gpubuild::makeStorageBuffer(packed.triangles.size() * 16, packed.triangles.data()),
+                                       gpubuild::makeStorageBuffer(packed.attributes.size() * 16, packed.attributes.data())};
+    p->gpuStreams = {buffers.node, buffers.triangle, buffers.attribute};
+    {
+      GpuRenderer bound(*p, options, frame);
+      bound.drawFrame();
+      EXPECT_EQ(bound.readColor(), expected);
+      const glm::uvec4 zero(0u);
+      glClearNamedBufferData(buffers.triangle, GL_RGBA32UI, GL_RGBA_INTEGER, GL_UNSIGNED_INT, &zero);
+      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+      bound.drawFrame();
+      EXPECT_NE(bound.readColor(), expected) << "the renderer drew from a copy of its own";
+      own.drawFrame();
+      EXPECT_EQ(own.readColor(), expected);
+    }
+    ShaderOptions tex2d = options;
+    tex2d.storage = Storage::Tex2D;
+    EXPECT_THROW(GpuRenderer(*p, tex2d, frame), std::invalid_argument);
+    p->gpuStreams = {};
+    gpubuild::deleteStreams(buffers);
+  }
 }
 
 json traceJson(const std::string& args) {
@@ -265,6 +326,42 @@ TEST(GpuClipCli, TraceUpdateRebuildWithAGpuBuilderBuildsOnTheGpuAndGivesTheCpuBu
   const json tex2d = traceJson(common + " --builder lbvh-gpu --storage tex2d");
   EXPECT_EQ(tex2d["update_on"], "cpu");
   EXPECT_EQ(tex2d["hit_mismatches"], 0);
+}
+
+// `render --update rebuild` with a GPU builder: the renderer binds the streams the GPU made (`update_on`
+// gpu), and draws the CPU builder's trees: the same per-frame tree_hash and ray cost, the same image.
+TEST(GpuClipCli, RenderUpdateRebuildDrawsFromTheStreamsOnTheGpu) {
+  const std::string scene = clitest::writeTemp("gpu_clip/explode.toml",
+                                               "[clip]\nframes = 3\nfps = 10\n[camera]\neye = [0, 2.5, 4]\n"
+                                               "target = [0, 0, 0]\n[render]\nwidth = 32\nheight = 24\n"
+                                               "[[object]]\nkind = \"mesh\"\ngenerate = \"terrain\"\n"
+                                               "triangles = 1500\nfit = 2\n[object.deform]\nkind = \"explode\"\n"
+                                               "speed = 2\njitter = 0.5\n")
+                                  .string();
+  json out[2];
+  std::string images[2];
+  for (int k = 0; k < 2; ++k) {
+    const std::string builder = k == 0 ? "lbvh-gpu" : "lbvh";
+    images[k] = (clitest::testDir() / ("render_" + builder + ".png")).string();
+    const clitest::Result r = clitest::run("render " + scene + " --update rebuild --builder " + builder +
+                                           " --frames 1 --warmup 0 --update-repeats 2 --json -o " + images[k]);
+    ASSERT_EQ(r.code, 0) << r.err;
+    out[k] = json::parse(r.out);
+  }
+  EXPECT_EQ(out[0]["update_on"], "gpu");
+  EXPECT_EQ(out[1]["update_on"], "cpu");
+  ASSERT_EQ(out[0]["frames"].size(), 3u);
+  for (size_t f = 0; f < 3; ++f) {
+    const json &g = out[0]["frames"][f], &c = out[1]["frames"][f];
+    SCOPED_TRACE(f);
+    EXPECT_EQ(g["tree_hash"], c["tree_hash"]);
+    EXPECT_EQ(g["ray_cost"], c["ray_cost"]);
+    EXPECT_EQ(g["pack_ms"], 0.0);
+    EXPECT_EQ(g["upload_ms_all"].size(), 2u);  // one per build: each uploads the frame's triangles
+    EXPECT_TRUE(g["gpu_update_phases_ms"].contains("pack"));
+  }
+  EXPECT_NE(out[0]["frames"][0]["tree_hash"], out[0]["frames"][2]["tree_hash"]) << "the clip does not move";
+  EXPECT_EQ(loadImageRgba8(images[0]).rgba, loadImageRgba8(images[1]).rgba) << "the last frames drawn differ";
 }
 
 }  // namespace

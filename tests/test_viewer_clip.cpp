@@ -11,6 +11,7 @@
 #include "builders/update.hpp"
 #include "cli_run.hpp"
 #include "datasets/animation.hpp"
+#include "datasets/image_io.hpp"
 #include "datasets/scene_io.hpp"
 #include "layout/layout.hpp"
 #include "viewer_test_util.hpp"
@@ -153,6 +154,36 @@ TEST(ViewClip, PlaysAClipThroughATwoLevelTree) {
     EXPECT_GT(clip[i]["sah_cost"].get<double>(), 0.0);
     EXPECT_GT(clip[i]["nodes"].get<int>(), 1);
   }
+}
+
+// A GPU builder rebuilding every frame: built and packed on the GPU and drawn from the streams left
+// there (`update_on` gpu); the same trees (SAH, exactly) and the same last image as the CPU lbvh's.
+TEST(ViewClip, AGpuBuilderRebuildsOnTheGpuAndDrawsWhatTheCpuBuilderDraws) {
+  REQUIRE_VIEWER(prefix);
+  const std::string scene = explodingScene();
+  const std::string script = writeTemp("gpu_clip.txt", "3 key SPACE\n").string();
+  json out[2];
+  std::string shots[2];
+  for (int k = 0; k < 2; ++k) {
+    const std::string builder = k == 0 ? "lbvh-gpu" : "lbvh";
+    shots[k] = clitest::testDir().string() + "/view_" + builder + ".png";
+    const clitest::Result r = view(*prefix, scene + " --builder " + builder + " --script " + script +
+                                                " --frames 4 --json --screenshot " + shots[k]);
+    ASSERT_EQ(r.code, 0) << r.err;
+    out[k] = json::parse(r.out);
+  }
+  const json &gpu = out[0]["clip"], &cpu = out[1]["clip"];
+  ASSERT_EQ(gpu.size(), 3u) << gpu.dump();
+  ASSERT_EQ(cpu.size(), 3u) << cpu.dump();
+  for (size_t i = 0; i < gpu.size(); ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ(gpu[i]["update_on"], "gpu");
+    EXPECT_EQ(cpu[i]["update_on"], "cpu");
+    EXPECT_TRUE(gpu[i]["rebuilt"].get<bool>());
+    EXPECT_EQ(gpu[i]["sah_cost"], cpu[i]["sah_cost"]);
+    EXPECT_EQ(gpu[i]["nodes"], cpu[i]["nodes"]);
+  }
+  EXPECT_EQ(loadImageRgba8(shots[0]).rgba, loadImageRgba8(shots[1]).rgba) << "the frames drawn differ";
 }
 
 TEST(ViewClip, AJumpStartsTheStrategyAgainAtThatFrame) {
