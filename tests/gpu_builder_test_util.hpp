@@ -2,11 +2,13 @@
 #pragma once
 #include <algorithm>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "builder_test_util.hpp"
+#include "builders/builder.hpp"
 #include "builders/bvh.hpp"
 #include "builders/test_inputs.hpp"
 #include "datasets/scene.hpp"
@@ -53,6 +55,23 @@ inline PrimitiveSet fromMesh(const Mesh& mesh) {
   PrimitiveSet set;
   for (const glm::uvec3& t : mesh.triangles) set.addTriangle(mesh.positions[t.x], mesh.positions[t.y], mesh.positions[t.z]);
   return set;
+}
+
+inline BuildOptions withRadius(uint32_t radius) {
+  BuildOptions o;
+  o.plocRadius = radius;
+  return o;
+}
+
+// ploc and a GPU build of its tree (ploc-gpu, plocpp-gpu) through the registry, validation included:
+// the same tree, node for node, and a valid one.
+inline void expectSameAsPloc(const std::string& builder, const BuildInput& input, const BuildOptions& options = {}) {
+  const Bvh cpu = buildBvh("ploc", input, options);
+  const Bvh gpu = buildBvh(builder, input, options);
+  expectValidTree(gpu, input, options.maxLeafSize);
+  EXPECT_EQ(gpu.nodes.size(), cpu.nodes.size());
+  EXPECT_TRUE(identical(gpu, cpu)) << builder << "'s tree differs from ploc's";
+  EXPECT_EQ(sahCost(gpu, options.cost), sahCost(cpu, options.cost));
 }
 
 }  // namespace bvhlab::testing

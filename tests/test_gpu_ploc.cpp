@@ -49,20 +49,9 @@ class GpuPloc : public ::testing::Test {
 };
 std::unique_ptr<GlContext> GpuPloc::context_;
 
-BuildOptions withRadius(uint32_t radius) {
-  BuildOptions o;
-  o.plocRadius = radius;
-  return o;
-}
-
-// ploc and ploc-gpu through the registry (validation included): the same tree, and a valid one.
+using testing::withRadius;
 void expectSameAsPloc(const BuildInput& input, const BuildOptions& options = {}) {
-  const Bvh cpu = buildBvh("ploc", input, options);
-  const Bvh gpu = buildBvh("ploc-gpu", input, options);
-  testing::expectValidTree(gpu, input, options.maxLeafSize);
-  EXPECT_EQ(gpu.nodes.size(), cpu.nodes.size());
-  EXPECT_TRUE(testing::identical(gpu, cpu)) << "ploc-gpu's tree differs from ploc's";
-  EXPECT_EQ(sahCost(gpu, options.cost), sahCost(cpu, options.cost));
+  testing::expectSameAsPloc("ploc-gpu", input, options);
 }
 
 // The scanned meshes at radii 1, 4 and 16; on the bunny the packed tree_hash too (as `build --json`

@@ -46,18 +46,9 @@ class GpuPlocpp : public ::testing::Test {
 };
 std::unique_ptr<GlContext> GpuPlocpp::context_;
 
-BuildOptions withRadius(uint32_t radius) {
-  BuildOptions o;
-  o.plocRadius = radius;
-  return o;
-}
-
-// ploc and plocpp-gpu through the registry (validation included): the same tree, and a valid one.
+using testing::withRadius;
 void expectSameAsPloc(const BuildInput& input, const BuildOptions& options = {}) {
-  const Bvh cpu = buildBvh("ploc", input, options);
-  const Bvh gpu = buildBvh("plocpp-gpu", input, options);
-  testing::expectValidTree(gpu, input, options.maxLeafSize);
-  EXPECT_TRUE(testing::identical(gpu, cpu)) << "plocpp-gpu's tree differs from ploc's";
+  testing::expectSameAsPloc("plocpp-gpu", input, options);
 }
 
 TEST_F(GpuPlocpp, TheBunnyGivesPlocsTree) {

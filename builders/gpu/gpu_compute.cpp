@@ -8,11 +8,21 @@
 
 namespace bvhlab::gpubuild {
 
-ComputeProgram::ComputeProgram(const std::string& module, const std::string& defines) : module_(module) {
+ComputeProgram::ComputeProgram(const std::string& module, const std::string& defines,
+                               const std::vector<std::string>& prelude)
+    : module_(module) {
   const auto& sources = glslSources();
-  const auto found = sources.find(module);
-  if (found == sources.end()) throw std::runtime_error("GPU builder: no embedded GLSL module " + module);
-  const std::string source = "#version 450\n" + defines + found->second;
+  auto moduleText = [&](const std::string& name) -> const std::string& {
+    const auto found = sources.find(name);
+    if (found == sources.end()) throw std::runtime_error("GPU builder: no embedded GLSL module " + name);
+    return found->second;
+  };
+  std::string source = "#version 450\n" + defines;
+  for (size_t k = 0; k < prelude.size(); ++k) {
+    source += "#line 1 " + std::to_string(k + 1) + "\n" + moduleText(prelude[k]);
+    module_ += (k == 0 ? " (source strings 1.. in messages: " : ", ") + prelude[k] + (k + 1 == prelude.size() ? ")" : "");
+  }
+  source += "#line 1 0\n" + moduleText(module);
   GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
   const char* text = source.c_str();
   glShaderSource(shader, 1, &text, nullptr);
@@ -23,7 +33,7 @@ ComputeProgram::ComputeProgram(const std::string& module, const std::string& def
   if (!ok) {
     glGetShaderInfoLog(shader, sizeof log, nullptr, log);
     glDeleteShader(shader);
-    throw std::runtime_error("GPU builder: " + module + " does not compile: " + log);
+    throw std::runtime_error("GPU builder: " + module_ + " does not compile: " + log);
   }
   program_ = glCreateProgram();
   glAttachShader(program_, shader);
@@ -33,7 +43,7 @@ ComputeProgram::ComputeProgram(const std::string& module, const std::string& def
   if (!ok) {
     glGetProgramInfoLog(program_, sizeof log, nullptr, log);
     glDeleteProgram(program_);
-    throw std::runtime_error("GPU builder: " + module + " does not link: " + log);
+    throw std::runtime_error("GPU builder: " + module_ + " does not link: " + log);
   }
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <glad/gl.h>
 
@@ -13,7 +14,10 @@ namespace bvhlab::gpubuild {
 // link.
 class ComputeProgram {
  public:
-  explicit ComputeProgram(const std::string& module, const std::string& defines = "");
+  // `prelude`: modules compiled ahead of `module` (functions and types it shares with other passes).
+  // Each is GLSL source string 1, 2, ... in a driver's messages (`#line 1 k`), `module` string 0.
+  explicit ComputeProgram(const std::string& module, const std::string& defines = "",
+                          const std::vector<std::string>& prelude = {});
   ~ComputeProgram();
   ComputeProgram(const ComputeProgram&) = delete;
   ComputeProgram& operator=(const ComputeProgram&) = delete;

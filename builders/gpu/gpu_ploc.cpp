@@ -52,14 +52,14 @@ GpuPloc::GpuPloc(std::optional<GpuLimits> limits, PlocPasses passes)
       morton_("gpubuild_morton.glsl"),
       runs_("gpubuild_ploc_runs.glsl"),
       clusters_("gpubuild_ploc_clusters.glsl"),
-      nn_("gpubuild_ploc_nn.glsl"),
+      nn_("gpubuild_ploc_nn.glsl", "", {"gpubuild_ploc_pairs.glsl"}),
       count_("gpubuild_ploc_count.glsl"),
       scan_("gpubuild_scan.glsl"),
       scanPass_("gpubuild_scan.glsl", "#define COUNT_FROM_PASS_STATE 1\n"),
-      merge_("gpubuild_ploc_merge.glsl"),
+      merge_("gpubuild_ploc_merge.glsl", "", {"gpubuild_ploc_pairs.glsl"}),
       next_("gpubuild_ploc_next.glsl"),
       collapse_("gpubuild_collapse.glsl") {
-  if (passes_ == PlocPasses::Fused) fused_.emplace("gpubuild_ploc_fused.glsl");
+  if (passes_ == PlocPasses::Fused) fused_.emplace("gpubuild_ploc_fused.glsl", "", std::vector<std::string>{"gpubuild_ploc_pairs.glsl"});
 }
 
 void GpuPloc::checkLimits(size_t n, bool pack) const {

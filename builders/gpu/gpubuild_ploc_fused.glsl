@@ -2,7 +2,8 @@
 // "PLOC++: Parallel Locally-Ordered Clustering for Bounding Volume Hierarchy Construction Revisited",
 // HPG 2022): nearest neighbours, the mutual-pair test, merging and compaction in one kernel, the
 // compaction's global offsets by a single-pass scan with decoupled look-back (Merrill & Garland, 2016).
-// The same choices and numbering as gpubuild_ploc_nn/count/merge/next.glsl, so the same tree.
+// The same choices and numbering as gpubuild_ploc_nn/count/merge/next.glsl (the keys and merges of
+// gpubuild_ploc_pairs.glsl, compiled ahead of this module as for them), so the same tree.
 //
 // A workgroup owns 256 positions of the current order. The mutual test of a position x needs the
 // nearest neighbour of x's neighbour y, which lies within +-r of x, so the workgroup finds the nearest
@@ -18,7 +19,6 @@
 // parity and reads as not ready. The last workgroup to finish (an atomic counter) writes the next
 // pass's state as gpubuild_ploc_next.glsl does and resets both counters.
 layout(local_size_x = 256) in;
-struct Cluster { float box[6]; uint node; };
 layout(std430, binding = 0) readonly buffer Clusters { Cluster clusters[]; };
 layout(std430, binding = 1) writeonly buffer Next { Cluster next[]; };
 layout(std430, binding = 2) writeonly buffer NodeBoxes { float nodeBoxes[]; };
@@ -42,18 +42,6 @@ shared vec3 s_lo[256u + 4u * kTiledRadius], s_hi[256u + 4u * kTiledRadius];
 shared uint s_nn[256u + 2u * kMaxRadius];
 shared uvec2 s_scan[256];  // kept, merged
 shared uint s_block, s_clusters, s_parity, s_keptBefore, s_mergedBefore, s_ok;
-
-// (area bits, tie key) as gpubuild_ploc_nn.glsl computes it: compared as a 64-bit number.
-uvec2 candidateKey(uint x, uint j, vec3 xlo, vec3 xhi, vec3 jlo, vec3 jhi) {
-  precise float ex = max(xhi.x, jhi.x) - min(xlo.x, jlo.x);
-  precise float ey = max(xhi.y, jhi.y) - min(xlo.y, jlo.y);
-  precise float ez = max(xhi.z, jhi.z) - min(xlo.z, jlo.z);
-  precise float area = (ex * ey + ey * ez) + ez * ex;
-  uint d = x > j ? x - j : j - x, lower = min(x, j);
-  return uvec2(area == 0.0 ? 0u : floatBitsToUint(area), 4u * d + 2u * (lower & 1u) + (j > x ? 1u : 0u));
-}
-
-bool less(uvec2 a, uvec2 b) { return a.x < b.x || (a.x == b.x && a.y < b.y); }
 
 vec3 lowOf(uint i) { return vec3(clusters[i].box[0], clusters[i].box[1], clusters[i].box[2]); }
 vec3 highOf(uint i) { return vec3(clusters[i].box[3], clusters[i].box[4], clusters[i].box[5]); }
@@ -171,14 +159,7 @@ void main() {
     } else {
       // The pass's merges take the inner nodes m - 2, m - 3, ... in order (gpubuild_ploc_merge.glsl).
       uint node = m - 2u - (s_mergedBefore + before.y);
-      Cluster c;
-      for (uint a = 0u; a < 3u; ++a) {
-        float p = clusters[x].box[a], q = clusters[y].box[a];
-        c.box[a] = q < p ? q : p;
-        p = clusters[x].box[3u + a], q = clusters[y].box[3u + a];
-        c.box[3u + a] = p < q ? q : p;
-      }
-      c.node = node;
+      Cluster c = mergedCluster(clusters[x], clusters[y], node);
       next[at] = c;
       for (uint a = 0u; a < 6u; ++a) nodeBoxes[6u * node + a] = c.box[a];
       uint l = clusters[x].node, rr = clusters[y].node;

@@ -1,11 +1,10 @@
 // ploc-gpu, a clustering pass, step 3: the next order of clusters, compacted. A cluster whose
 // nearest neighbour is not mutual is copied; a mutual pair becomes one inner node at the lower
-// position (left child the lower one, the box their union as Aabb::grow makes it). Positions and
+// position (left child the lower one, the box their union: gpubuild_ploc_pairs.glsl). Positions and
 // node numbers come from the scanned counts of step 2 plus a scan within the workgroup: the pass's
 // merges take the inner nodes m - 2, m - 3, .. in order, m = passClusters (the CPU's numbering; one
 // cluster is made from m by m - 1 merges, so node 0, the root, comes last).
 layout(local_size_x = 256) in;
-struct Cluster { float box[6]; uint node; };
 layout(std430, binding = 0) readonly buffer Clusters { Cluster clusters[]; };
 layout(std430, binding = 1) readonly buffer Nearest { uint nearest[]; };
 layout(std430, binding = 2) readonly buffer Sums { uint sums[]; };  // scanned: kept, then merged
@@ -47,14 +46,7 @@ void main() {
   }
   // sums[blocks] is the total kept: the merges' scan continues from it.
   uint node = passClusters - 2u - (sums[blocks + block] - sums[blocks] + before.y);
-  Cluster c;
-  for (uint a = 0u; a < 3u; ++a) {
-    float p = clusters[x].box[a], q = clusters[y].box[a];
-    c.box[a] = q < p ? q : p;
-    p = clusters[x].box[3u + a], q = clusters[y].box[3u + a];
-    c.box[3u + a] = p < q ? q : p;
-  }
-  c.node = node;
+  Cluster c = mergedCluster(clusters[x], clusters[y], node);
   next[at] = c;
   for (uint a = 0u; a < 6u; ++a) nodeBoxes[6u * node + a] = c.box[a];
   uint l = clusters[x].node, r = clusters[y].node;
