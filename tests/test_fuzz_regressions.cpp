@@ -126,6 +126,20 @@ TEST(FuzzRegressionsExr, TilesLargerThanTheImageAreRefusedNamingBothSizes) {
   }
 }
 
+// OpenEXR's C++ reader allocates an attribute at its declared size: 1.9 GB for this 368-byte file before
+// it failed. The headers are walked first, and the attribute is refused by name.
+TEST(FuzzRegressionsExr, AnAttributeLargerThanTheFileIsRefusedNamingIt) {
+  const fs::path file = kRegressions / "exr/string-attribute-declaring-1.8gb-in-a-368-byte-file.exr";
+  ASSERT_EQ(fs::file_size(file), 368u);
+  try {
+    loadImage(file);
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("OpenEXR header: attribute 'capDate' (string) declares"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(FuzzRegressionsLayout, FoldersNameKnownParsers) {
   const auto& names = fuzz::parserNames();
   for (const auto& e : fs::directory_iterator(kRegressions)) {
