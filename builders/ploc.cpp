@@ -15,9 +15,9 @@
 //     leaves of one cluster, the same thread count. PLOC for the bottom of the tree, binned SAH for
 //     its top, where PLOC loses most of its SAH (docs/builders.md, "The knobs").
 //  3. The single-primitive-leaf tree is collapsed by SAH (builders/collapse.hpp, shared with lbvh).
-// Ties in the merged area are broken by a key of the pair alone (distance in the order, then the
-// lower position's parity, then the lower position), so the smallest pair in the window is always
-// mutual (at least one merge per pass) and equal boxes pair up (2k, 2k+1) instead of chaining.
+// Ties in the merged area are broken by a key of the pair alone (builders/ploc_keys.hpp), so the
+// smallest pair in the window is always mutual (at least one merge per pass) and equal boxes pair up
+// (2k, 2k+1) instead of chaining.
 // Threads: the passes work in fixed chunks of the order (never derived from the thread count) and
 // every cluster's neighbour is a function of the clusters alone, so the tree is the same for any
 // thread count. Quality, leaf 4, Ct = Ci = 1: 1.09x sah-binned's SAH on the bunny, elephant and
@@ -55,6 +55,7 @@
 #include "builders/build_util.hpp"
 #include "builders/builder.hpp"
 #include "builders/collapse.hpp"
+#include "builders/ploc_keys.hpp"
 
 namespace bvhlab {
 
@@ -119,22 +120,7 @@ struct Clusters {
   }
 };
 
-// Orders the candidates of cluster x that tie on merged area by a key of the pair {x, j} alone
-// (distance, parity of the lower position, the lower position), so both ends of a pair rank it alike.
-// Below 2^32 for any radius below 2^29 (kMaxPlocRadius is far below).
-uint32_t tieKey(uint32_t x, uint32_t j) {
-  const uint32_t d = x > j ? x - j : j - x, lower = std::min(x, j);
-  return 4 * d + 2 * (lower & 1) + (j > x ? 1 : 0);
-}
-
-// Candidate j of cluster x with merged area `area`, as one number: areas are >= 0 (and not NaN), so
-// their bit patterns order as they do; the nearest neighbour is the candidate with the smallest key.
-// "+ 0.0f" turns -0 into +0 (and changes nothing else): a coordinate of -0 next to one of +0 can
-// make an extent, and so an area, -0 or +0 depending on the operand order of min/max, and -0's bit
-// pattern would rank it above every positive area.
-uint64_t candidateKey(float area, uint32_t x, uint32_t j) {
-  return uint64_t(std::bit_cast<uint32_t>(area + 0.0f)) << 32 | tieKey(x, j);
-}
+using detail::ploc::candidateKey;  // builders/ploc_keys.hpp
 
 // A node of the full tree and its collapse entry, in one 64-byte cache line: the emission walks the
 // tree depth-first, far from the order the nodes were made in, and reads both (one miss, not two).

@@ -22,6 +22,7 @@ Bvh buildSahSweepBvh(const BuildInput&, const BuildOptions&);
 Bvh buildSbvh(const BuildInput&, const BuildOptions&);
 Bvh buildLbvh(const BuildInput&, const BuildOptions&);
 Bvh buildPloc(const BuildInput&, const BuildOptions&);
+Bvh buildHploc(const BuildInput&, const BuildOptions&);
 Bvh buildEmbreeBvh(const BuildInput&, const BuildOptions&);
 Bvh buildEmbreeLowBvh(const BuildInput&, const BuildOptions&);
 
@@ -41,6 +42,9 @@ std::vector<BuilderInfo>& table() {
       {"ploc", "PLOC: bottom-up clustering in Morton order, neighbours within +-plocRadius, SAH-collapsed leaves; "
                "plocTopDown F: the last n/F clusters split top-down by binned SAH",
        buildPloc, false, false, /*usesPlocRadius=*/true, kMaxLeafSize, /*usesMortonSizeBits=*/true},
+      {"hploc", "H-PLOC: ploc's clustering inside the subtrees of the LBVH radix tree, bottom-up, a subtree above "
+                "16 primitives cut to 16 clusters (neighbours within +-plocRadius); hploc-gpu's tree, built on one thread",
+       buildHploc, false, false, /*usesPlocRadius=*/true, kMaxLeafSize, /*usesMortonSizeBits=*/true},
       // Embree's builder caps leaves at RTC_BUILD_MAX_PRIMITIVES_PER_LEAF (builders/embree.cpp).
       {"embree", "Embree 3 rtcBuildBVH, quality MEDIUM (the reference)", buildEmbreeBvh, false, false, false,
        kEmbreeMaxLeafSize},
@@ -152,13 +156,16 @@ OptionReview reviewBuildOptions(const std::string& builder, const BuildOptions& 
   if (options.sbvhReferenceBudget != defaults.sbvhReferenceBudget && !info.usesSbvhAlpha)  // usesSbvhAlpha: makes spatial splits
     review.warnings.push_back(info.name + " ignores --sbvh-budget (only sbvh makes spatial splits)");
   if (options.plocRadius != defaults.plocRadius && !info.usesPlocRadius)
-    review.warnings.push_back(info.name + " ignores --ploc-radius (only ploc clusters)");
+    review.warnings.push_back(info.name +
+                              " ignores --ploc-radius (only the PLOC builders cluster: ploc, hploc and their GPU versions)");
   if (options.plocTopDown != defaults.plocTopDown && !info.usesPlocRadius)
-    review.warnings.push_back(info.name + " ignores --ploc-top-down (only ploc clusters)");
+    review.warnings.push_back(info.name + " ignores --ploc-top-down (only ploc splits its top down)");
   if (options.mortonSizeBits != defaults.mortonSizeBits && !info.usesMortonSizeBits)
-    review.warnings.push_back(info.name + " ignores --morton-size-bits (only ploc and lbvh build Morton codes)");
+    review.warnings.push_back(info.name + " ignores --morton-size-bits (only lbvh, ploc, hploc and their GPU versions build "
+                                          "Morton codes)");
   if (options.mortonGrid != defaults.mortonGrid && !info.usesMortonSizeBits)
-    review.warnings.push_back(info.name + " ignores --morton-grid (only ploc and lbvh build Morton codes)");
+    review.warnings.push_back(info.name + " ignores --morton-grid (only lbvh, ploc, hploc and their GPU versions build "
+                                          "Morton codes)");
   return review;
 }
 

@@ -150,7 +150,7 @@ TEST_F(GpuClip, TheSignedZeroCaseCanFail) {
 TEST_F(GpuClip, ATracerBoundToTheStreamsOnTheGpuTracesTheCpuPack) {
   using namespace traversaltest;
   const Mesh base = sphereMesh(12, 24, 1.0f);
-  for (const char* builder : {"lbvh-gpu", "ploc-gpu"})
+  for (const char* builder : {"lbvh-gpu", "ploc-gpu", "hploc-gpu"})
     for (const char* layout : {"v1", kLayoutBvh2cb})
       for (const Storage storage : {Storage::Tbo, Storage::Ssbo}) {
         SCOPED_TRACE(std::string(builder) + ", " + layout + (storage == Storage::Tbo ? ", tbo" : ", ssbo"));
@@ -166,7 +166,8 @@ TEST_F(GpuClip, ATracerBoundToTheStreamsOnTheGpuTracesTheCpuPack) {
           const GpuClipFrame f = resident->build(soup);
           const std::vector<Aabb> boxes = triangleBoxes(soup);
           const std::vector<glm::vec3> centroids = triangleCentroids(soup);
-          const Bvh cpu = buildBvh(std::string(builder) == "ploc-gpu" ? "ploc" : "lbvh",
+          const std::string name = builder;
+          const Bvh cpu = buildBvh(name.substr(0, name.size() - 4),  // the CPU builder of the same tree
                                    BuildInput{boxes, centroids, soup.v0, soup.v1, soup.v2}, BuildOptions{});
           const PackedBvh cpuPacked = cpuPack(cpu, soup, layout);
           ASSERT_EQ(packedTreeHash(f.packed), packedTreeHash(cpuPacked)) << "frame " << frame;

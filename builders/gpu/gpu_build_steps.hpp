@@ -1,6 +1,6 @@
-// What the GPU builders' passes share (builders/gpu/gpu_lbvh.cpp, gpu_ploc.cpp): the workgroup size of
-// the per-primitive passes, the refusal of sizes past the GL limits, the buffers of one build, the
-// per-phase GL timestamps and the untimed download.
+// What the GPU builders' passes share (builders/gpu/gpu_lbvh.cpp, gpu_ploc.cpp, gpu_hploc.cpp): the
+// workgroup size of the per-primitive passes, the refusal of sizes past the GL limits, the buffers of
+// one build, the per-phase GL timestamps and the untimed download.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -15,6 +15,7 @@
 #include "builders/gpu/gpu_lbvh.hpp"  // GpuPhaseTimes
 #include "builders/gpu/gpu_pack.hpp"
 #include "builders/gpu/gpu_radix_sort.hpp"
+#include "builders/bvh.hpp"
 #include "datasets/scene.hpp"         // InputError
 #include "render/gl_context.hpp"      // isSoftwareRenderer
 
@@ -120,5 +121,12 @@ class PhaseStamps {
   std::vector<GLuint> ids_;
   std::vector<std::string> phases_;
 };
+
+// The download (untimed) of a tree whose subtrees need not be ranges of the sorted order (ploc-gpu,
+// hploc-gpu) and the depth-first emission of builders/collapse.hpp's emitCollapsed: an emitted inner
+// node's children take the slots base, base + 1, then the left child's descendants, then the right's;
+// a leaf's primitives are its subtree's full-tree leaves, left first. The buffers are GpuTreeBuffers'
+// (root at node 0); a GL error names `builder`.
+Bvh downloadClusteredTree(const std::string& builder, const GpuTreeBuffers& tree, uint32_t n);
 
 }  // namespace bvhlab::gpubuild

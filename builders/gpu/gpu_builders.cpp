@@ -14,6 +14,7 @@
 
 #include "builders/builder.hpp"
 #include "builders/gpu/gpu_clip_builder.hpp"
+#include "builders/gpu/gpu_hploc.hpp"
 #include "builders/gpu/gpu_lbvh.hpp"
 #include "builders/gpu/gpu_pack.hpp"
 #include "builders/gpu/gpu_ploc.hpp"
@@ -91,6 +92,40 @@ Bvh buildPlocppGpu(const BuildInput& input, const BuildOptions& options) {
   return gpubuild::GpuPloc(std::nullopt, gpubuild::PlocPasses::Fused).build(input, options);
 }
 
+Bvh buildHplocGpu(const BuildInput& input, const BuildOptions& options) {
+  BuildContext context;
+  return gpubuild::GpuHploc().build(input, options);
+}
+
+namespace gpubuild {
+
+namespace {
+template <class Builder>
+class GpuBuilderOf : public AnyGpuBuilder {
+ public:
+  template <class... Args>
+  explicit GpuBuilderOf(Args&&... args) : builder_(std::forward<Args>(args)...) {}
+  Bvh build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times,
+            const GpuPackRequest* pack) const override {
+    return builder_.build(input, options, times, pack);
+  }
+  void checkLimits(size_t primitives, bool pack) const override { builder_.checkLimits(primitives, pack); }
+
+ private:
+  Builder builder_;
+};
+}  // namespace
+
+std::unique_ptr<AnyGpuBuilder> makeGpuBuilder(const std::string& builder) {
+  if (builder == "lbvh-gpu") return std::make_unique<GpuBuilderOf<GpuLbvh>>();
+  if (builder == "ploc-gpu") return std::make_unique<GpuBuilderOf<GpuPloc>>(std::nullopt, PlocPasses::Split);
+  if (builder == "plocpp-gpu") return std::make_unique<GpuBuilderOf<GpuPloc>>(std::nullopt, PlocPasses::Fused);
+  if (builder == "hploc-gpu") return std::make_unique<GpuBuilderOf<GpuHploc>>();
+  throw std::invalid_argument(builder + " does not build on the GPU");
+}
+
+}  // namespace gpubuild
+
 void registerGpuBuilders() {
   static const bool once = [] {
     BuilderInfo info{"lbvh-gpu",
@@ -126,6 +161,17 @@ void registerGpuBuilders() {
                        /*usesMortonSizeBits=*/true};
     plocpp.gpu = true;
     registerBuilder(std::move(plocpp));
+    BuilderInfo hploc{"hploc-gpu",
+                      "hploc's tree built in GLSL compute shaders: the radix tree climbed bottom-up and its subtrees "
+                      "clustered by ploc's passes within workgroups of 32, in one dispatch; SAH collapse",
+                      buildHplocGpu,
+                      false,
+                      false,
+                      /*usesPlocRadius=*/true,
+                      kMaxLeafSize,
+                      /*usesMortonSizeBits=*/true};
+    hploc.gpu = true;
+    registerBuilder(std::move(hploc));
     setGpuBuildTimer([](const std::string& builder, const BuildInput& input, const BuildOptions& options, size_t builds,
                         const std::string& layout, const std::string& triangleFormat, const TriangleSoup& soup) {
       const bool pack = gpubuild::gpuPackable(layout) && triangleFormat == "raw";
@@ -169,12 +215,7 @@ GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input,
   BuildContext context;
   GpuBuildTiming timing;
   timing.renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  std::optional<gpubuild::GpuLbvh> lbvh;
-  std::optional<gpubuild::GpuPloc> ploc;
-  if (builder == "ploc-gpu" || builder == "plocpp-gpu")
-    ploc.emplace(std::nullopt, builder == "plocpp-gpu" ? gpubuild::PlocPasses::Fused : gpubuild::PlocPasses::Split);
-  else
-    lbvh.emplace();
+  const std::unique_ptr<gpubuild::AnyGpuBuilder> gpuBuilder = gpubuild::makeGpuBuilder(builder);
   gpubuild::GpuPhaseTimes times;
   PackedBvh packed;
   // The soup's texels uploaded once for all the builds (untimed in each, as a renderer keeps them).
@@ -186,9 +227,7 @@ GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input,
     soupBuffer.id = gpubuild::uploadSoupTexels(*soup);
   const gpubuild::GpuPackRequest request{packLayout, soup, &packed, soupBuffer.id};
   const gpubuild::GpuPackRequest* pack = packLayout.empty() ? nullptr : &request;
-  auto build = [&] {
-    return ploc ? ploc->build(input, options, &times, pack) : lbvh->build(input, options, &times, pack);
-  };
+  auto build = [&] { return gpuBuilder->build(input, options, &times, pack); };
   build();  // warm-up: the driver compiles at the first dispatch
   std::vector<double> totals;
   std::vector<std::vector<double>> phases;

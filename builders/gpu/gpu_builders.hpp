@@ -9,6 +9,7 @@
 // context it did not make it restores the program and shader storage bindings it changed.
 #pragma once
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -20,7 +21,7 @@
 
 namespace bvhlab {
 
-// Adds lbvh-gpu, ploc-gpu and plocpp-gpu to builders(), timeGpuBuild as the runs' GPU build timer
+// Adds lbvh-gpu, ploc-gpu, plocpp-gpu and hploc-gpu to builders(), timeGpuBuild as the runs' GPU build timer
 // (render/gpu_build_timing.hpp) and makeResidentClipBuilder as the clips' GPU rebuild
 // (render/gpu_clip_build.hpp), once; later calls do nothing.
 void registerGpuBuilders();
@@ -31,6 +32,25 @@ Bvh buildLbvhGpu(const BuildInput& input, const BuildOptions& options);
 Bvh buildPlocGpu(const BuildInput& input, const BuildOptions& options);
 // The registry's entry for plocpp-gpu: gpubuild::GpuPloc with PlocPasses::Fused likewise.
 Bvh buildPlocppGpu(const BuildInput& input, const BuildOptions& options);
+
+// The registry's entry for hploc-gpu: gpubuild::GpuHploc likewise.
+Bvh buildHplocGpu(const BuildInput& input, const BuildOptions& options);
+
+namespace gpubuild {
+struct GpuPhaseTimes;
+struct GpuPackRequest;
+// A GPU builder's object (GpuLbvh, GpuPloc, GpuHploc), its programs compiled in the current context,
+// behind one interface: what timeGpuBuild and the clips' GPU rebuild hold.
+class AnyGpuBuilder {
+ public:
+  virtual ~AnyGpuBuilder() = default;
+  virtual Bvh build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times,
+                    const GpuPackRequest* pack) const = 0;
+  virtual void checkLimits(size_t primitives, bool pack) const = 0;
+};
+// Throws std::invalid_argument when `builder` is not one of the GPU builders.
+std::unique_ptr<AnyGpuBuilder> makeGpuBuilder(const std::string& builder);
+}  // namespace gpubuild
 
 // GpuBuildTiming: render/gpu_build_timing.hpp (runs record it through the timer registerGpuBuilders sets).
 // With `packLayout` (v1 or bvh2-cb: gpubuild::gpuPackable) and the `soup` the input was made from, every

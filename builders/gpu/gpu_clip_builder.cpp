@@ -1,14 +1,15 @@
 // GPU clip builders (builders/gpu/gpu_clip_builder.hpp).
 #include "builders/gpu/gpu_clip_builder.hpp"
 
+#include <algorithm>
 #include <chrono>
-#include <optional>
+#include <memory>
 #include <vector>
 
 #include "builders/builder.hpp"
-#include "builders/gpu/gpu_lbvh.hpp"
+#include "builders/gpu/gpu_builders.hpp"  // makeGpuBuilder
+#include "builders/gpu/gpu_lbvh.hpp"      // GpuPhaseTimes
 #include "builders/gpu/gpu_pack.hpp"
-#include "builders/gpu/gpu_ploc.hpp"
 #include "builders/refit.hpp"  // checkFiniteVertices
 #include "render/gl_context.hpp"
 
@@ -33,16 +34,8 @@ class ResidentClipBuilder final : public GpuClipBuilder {
     const std::vector<glm::vec3> centroids = triangleCentroids(soup);
     const BuildInput input{boxes, centroids, soup.v0, soup.v1, soup.v2};
     validateBuildInput(input, options_);
-    if (!lbvh_ && !ploc_) {  // the programs, compiled in the context of the first build
-      if (builder_ == "ploc-gpu" || builder_ == "plocpp-gpu")
-        ploc_.emplace(std::nullopt, builder_ == "plocpp-gpu" ? gpubuild::PlocPasses::Fused : gpubuild::PlocPasses::Split);
-      else
-        lbvh_.emplace();
-    }
-    if (ploc_)
-      ploc_->checkLimits(soup.size(), true);
-    else
-      lbvh_->checkLimits(soup.size(), true);
+    if (!gpuBuilder_) gpuBuilder_ = gpubuild::makeGpuBuilder(builder_);  // compiled in the first build's context
+    gpuBuilder_->checkLimits(soup.size(), true);
     // The texels are laid out on the CPU untimed (a renderer's animation would write them on the GPU);
     // their upload is timed.
     const std::vector<glm::uvec4> texels = gpubuild::soupTexels(soup);
@@ -63,9 +56,7 @@ class ResidentClipBuilder final : public GpuClipBuilder {
 
     const gpubuild::GpuPackRequest request{layout_, &soup, &frame.packed, soup_, /*boxesFromSoup=*/true, &streams_};
     gpubuild::GpuPhaseTimes times;
-    auto run = [&] {
-      return ploc_ ? ploc_->build(input, options_, &times, &request) : lbvh_->build(input, options_, &times, &request);
-    };
+    auto run = [&] { return gpuBuilder_->build(input, options_, &times, &request); };
     if (!warmed_) {  // the driver compiles at the first dispatch: untimed, as timeGpuBuild's warm-up
       run();
       warmed_ = true;
@@ -84,8 +75,7 @@ class ResidentClipBuilder final : public GpuClipBuilder {
   std::string builder_;
   BuildOptions options_;
   std::string layout_;
-  std::optional<gpubuild::GpuLbvh> lbvh_;
-  std::optional<gpubuild::GpuPloc> ploc_;
+  std::unique_ptr<gpubuild::AnyGpuBuilder> gpuBuilder_;
   GLuint soup_ = 0;
   GLsizeiptr soupBytes_ = 0;
   gpubuild::GpuStreamBuffers streams_;
@@ -96,7 +86,9 @@ class ResidentClipBuilder final : public GpuClipBuilder {
 
 std::unique_ptr<GpuClipBuilder> makeResidentClipBuilder(const std::string& builder, const BuildOptions& options,
                                                         const std::string& layout) {
-  if ((builder != "lbvh-gpu" && builder != "ploc-gpu" && builder != "plocpp-gpu") || !gpubuild::gpuPackable(layout))
+  const std::vector<BuilderInfo>& all = builders();
+  const bool gpu = std::any_of(all.begin(), all.end(), [&](const BuilderInfo& b) { return b.gpu && b.name == builder; });
+  if (!gpu || !gpubuild::gpuPackable(layout))
     return nullptr;
   return std::make_unique<ResidentClipBuilder>(builder, options, layout);
 }

@@ -1,7 +1,7 @@
 // The GPU builders as an animated clip's per-frame rebuild kept on the GPU (render/gpu_clip_build.hpp):
-// lbvh-gpu or ploc-gpu compiled once, a soup buffer kept for the clip, every frame's boxes computed
-// from it on the GPU (phase `boxes`), the tree built and packed into v1 or bvh2-cb streams that stay
-// on the GPU for the tracer.
+// a GPU builder (lbvh-gpu, ploc-gpu, plocpp-gpu, hploc-gpu) compiled once, a soup buffer kept for the
+// clip, every frame's boxes computed from it on the GPU (phase `boxes`), the tree built and packed into
+// v1 or bvh2-cb streams that stay on the GPU for the tracer.
 #pragma once
 #include <memory>
 #include <string>
@@ -11,8 +11,8 @@
 
 namespace bvhlab {
 
-// lbvh-gpu, ploc-gpu or plocpp-gpu into `layout` (v1 or bvh2-cb); nullptr for another builder or layout. Needs no
-// GL context: the first build() compiles the programs in the context current then (every build must
+// A GPU builder into `layout` (v1 or bvh2-cb); nullptr for another builder or layout. Needs no GL
+// context: the first build() compiles the programs in the context current then (every build must
 // run in that one), and builds once untimed before the timed build: the driver compiles the programs
 // at their first dispatch, which no later frame pays.
 std::unique_ptr<GpuClipBuilder> makeResidentClipBuilder(const std::string& builder, const BuildOptions& options,

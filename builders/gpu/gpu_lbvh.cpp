@@ -24,9 +24,6 @@ double GpuPhaseTimes::totalMs() const {
 
 GpuLbvh::GpuLbvh(std::optional<GpuLimits> limits)
     : limits_(limits ? *limits : queryGpuLimits()),
-      bounds_("gpubuild_bounds.glsl"),
-      grid_("gpubuild_grid.glsl"),
-      morton_("gpubuild_morton.glsl"),
       labels_("gpubuild_labels.glsl"),
       hierarchy_("gpubuild_hierarchy.glsl"),
       fit_("gpubuild_fit.glsl"),
@@ -93,16 +90,7 @@ Bvh GpuLbvh::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   if (pack) packJob.emplace(packer_, *pack, n);
   PhaseStamps stamps;
   if (soupBoxes) packJob->soupBoxes(b.ids[kBoxes], b.ids[kCentroids], stamps);
-  // morton
-  bind({kCentroids, kBoundKeys});
-  bounds_.set("u_count", n);
-  bounds_.dispatch(groupsFor(n), "lbvh-gpu morton: centroid bounds (gpubuild_bounds.glsl)");
-  bind({kBoundKeys, kGrid});
-  grid_.set("u_cube", int32_t(options.mortonGrid == MortonGrid::Cube));
-  grid_.dispatch(1, "lbvh-gpu morton: grid (gpubuild_grid.glsl)");
-  bind({kCentroids, kGrid, kKeys});
-  morton_.set("u_count", n);
-  morton_.dispatch(groupsFor(n), "lbvh-gpu morton: codes (gpubuild_morton.glsl)");
+  morton_.run("lbvh-gpu", n, options.mortonGrid, b.ids[kCentroids], b.ids[kBoundKeys], b.ids[kGrid], b.ids[kKeys]);
   stamps.mark("morton");
   // sort
   sort_.sort(b.ids[kKeys], b.ids[kScratch], b.ids[kCounts], n);

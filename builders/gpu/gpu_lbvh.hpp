@@ -16,6 +16,7 @@
 
 #include "builders/bvh.hpp"
 #include "builders/gpu/gpu_compute.hpp"
+#include "builders/gpu/gpu_morton.hpp"
 #include "builders/gpu/gpu_pack.hpp"
 #include "builders/gpu/gpu_radix_sort.hpp"
 
@@ -56,7 +57,8 @@ class GpuLbvh {
 
  private:
   GpuLimits limits_;
-  ComputeProgram bounds_, grid_, morton_, labels_, hierarchy_, fit_, collapse_;
+  MortonPasses morton_;
+  ComputeProgram labels_, hierarchy_, fit_, collapse_;
   GpuRadixSort sort_;
   GpuPacker packer_;
 };

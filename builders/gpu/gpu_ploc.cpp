@@ -47,9 +47,6 @@ uint32_t passesToOne(uint32_t clusters) {
 GpuPloc::GpuPloc(std::optional<GpuLimits> limits, PlocPasses passes)
     : limits_(limits ? *limits : queryGpuLimits()),
       passes_(passes),
-      bounds_("gpubuild_bounds.glsl"),
-      grid_("gpubuild_grid.glsl"),
-      morton_("gpubuild_morton.glsl"),
       runs_("gpubuild_ploc_runs.glsl"),
       clusters_("gpubuild_ploc_clusters.glsl"),
       nn_("gpubuild_ploc_nn.glsl", "", {"gpubuild_ploc_pairs.glsl"}),
@@ -143,16 +140,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   if (pack) packJob.emplace(packer_, *pack, n);
   PhaseStamps stamps;
   if (soupBoxes) packJob->soupBoxes(b.ids[kBoxes], b.ids[kCentroids], stamps);
-  // morton
-  bind({kCentroids, kBoundKeys});
-  bounds_.set("u_count", n);
-  bounds_.dispatch(groupsFor(n), pass("morton: centroid bounds (gpubuild_bounds.glsl)").c_str());
-  bind({kBoundKeys, kGrid});
-  grid_.set("u_cube", int32_t(options.mortonGrid == MortonGrid::Cube));
-  grid_.dispatch(1, pass("morton: grid (gpubuild_grid.glsl)").c_str());
-  bind({kCentroids, kGrid, kKeys});
-  morton_.set("u_count", n);
-  morton_.dispatch(groupsFor(n), pass("morton: codes (gpubuild_morton.glsl)").c_str());
+  morton_.run(name(), n, options.mortonGrid, b.ids[kCentroids], b.ids[kBoundKeys], b.ids[kGrid], b.ids[kKeys]);
   stamps.mark("morton");
   // sort
   sort_.sort(b.ids[kKeys], b.ids[kScratch], b.ids[kCounts], n);
@@ -272,51 +260,8 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   }
   if (packJob) packJob->download();
 
-  // Download (untimed) and the depth-first emission of builders/collapse.hpp's emitCollapsed: an
-  // emitted inner node's children take the slots base, base + 1, then the left child's descendants,
-  // then the right's; a leaf's primitives are its subtree's full-tree leaves, left first.
-  const std::vector<GpuKey> keys = download<GpuKey>(b.ids[kKeys], n);
-  const std::vector<uint32_t> children = download<uint32_t>(b.ids[kChildren], 2 * size_t(inner));
-  const std::vector<Aabb> boxes = download<Aabb>(b.ids[kNodeBoxes], nodes);
-  const std::vector<uint32_t> info = download<uint32_t>(b.ids[kInfo], 2 * size_t(nodes));  // count, inner
-  checkGl((std::string(name()) + ": download").c_str());
-  Bvh bvh;
-  bvh.nodes.resize(1 + 2 * size_t(info[1]));
-  bvh.primIndices.resize(n);
-  struct Item {
-    uint32_t node, slot, base, prim;
-  };
-  std::vector<Item> stack{{0, 0, 1, 0}};
-  std::vector<uint32_t> below;
-  while (!stack.empty()) {
-    const Item it = stack.back();
-    stack.pop_back();
-    BvhNode& out = bvh.nodes[it.slot];
-    out.bounds = boxes[it.node];
-    if (info[2 * it.node + 1] == 0) {  // one leaf (a full-tree leaf, or a collapsed subtree)
-      out.first = it.prim;
-      out.count = info[2 * it.node];
-      uint32_t prim = it.prim;
-      below.assign(1, it.node);
-      while (!below.empty()) {
-        const uint32_t node = below.back();
-        below.pop_back();
-        if (node >= inner) {
-          bvh.primIndices[prim++] = keys[node - inner].id;
-        } else {
-          below.push_back(children[2 * node + 1]);
-          below.push_back(children[2 * node]);
-        }
-      }
-      continue;
-    }
-    const uint32_t l = children[2 * it.node], r = children[2 * it.node + 1];
-    out.left = it.base;
-    out.right = it.base + 1;
-    stack.push_back({r, it.base + 1, it.base + 2 + 2 * info[2 * l + 1], it.prim + info[2 * l]});
-    stack.push_back({l, it.base, it.base + 2, it.prim});
-  }
-  return bvh;
+  return downloadClusteredTree(name(), {b.ids[kChildren], b.ids[kParents], b.ids[kNodeBoxes], b.ids[kInfo], b.ids[kKeys]},
+                               n);
 }
 
 }  // namespace bvhlab::gpubuild

@@ -23,6 +23,7 @@
 #include <string>
 
 #include "builders/bvh.hpp"
+#include "builders/gpu/gpu_morton.hpp"
 #include "builders/gpu/gpu_compute.hpp"
 #include "builders/gpu/gpu_pack.hpp"
 #include "builders/gpu/gpu_lbvh.hpp"  // GpuPhaseTimes
@@ -61,7 +62,8 @@ class GpuPloc {
   std::string pass(const char* what) const { return std::string(name()) + " " + what; }  // a pass's label
   GpuLimits limits_;
   PlocPasses passes_;
-  ComputeProgram bounds_, grid_, morton_, runs_, clusters_, nn_, count_, scan_, scanPass_, merge_, next_, collapse_;
+  MortonPasses morton_;
+  ComputeProgram runs_, clusters_, nn_, count_, scan_, scanPass_, merge_, next_, collapse_;
   std::optional<ComputeProgram> fused_;
   uint32_t giveUpPass_ = ~0u;
   GpuRadixSort sort_;
