@@ -220,7 +220,7 @@ TEST(ShippedConfigs, AreValidAgainstTheRegistriesAndTheirDataIsThere) {
       {"flythrough.toml", 15}, {"large.toml", 2}, {"bench.toml", 400},
       {"morton-grid.toml", 20}, {"ploc-top-down.toml", 12}, {"storage.toml", 15},
       {"sbvh-knobs.toml", 15},  // 3 scenes x (sah-binned + 4 sbvh settings)
-      {"builders-gpu.toml", 96},   // 3 scenes x 2 workloads x 12 builders + 2 rendered scenes x 12
+      {"builders-gpu.toml", 104},  // 3 scenes x 2 workloads x 13 builders + 2 rendered scenes x 13
       {"kernels-gpu.toml", 21}};   // 3 scenes x 2 workloads x 3 kernels + the report scene x 3
   // layouts.toml sweeps `layouts = "all"`: (3 scenes x 2 workloads + the report scene + the bunny's diffuse
   // rays with indexed triangles) per registered layout.

@@ -12,8 +12,8 @@
 // The other subtrees are the climbing invocation's alone: a run of one Morton code becomes the radix
 // tree's node over its two children (one cluster each), a small subtree's list the left child's
 // followed by the right's.
-// Inner nodes are numbered downwards from n - 2 by an atomic counter; the root's last merge is the
-// build's last, so the root is node 0.
+// Inner nodes are numbered downwards from n - 2 by an atomic counter (a pass's merges take one block of
+// numbers); the root's last merge is the build's last, so the root is node 0.
 layout(local_size_x = 32) in;
 struct Key { uint hi, lo, id; };
 layout(std430, binding = 0) readonly buffer Keys { Key keys[]; };
@@ -40,7 +40,8 @@ shared uvec3 s_range[2][kGroup];
 shared vec3 s_lo[kGroup], s_hi[kGroup];  // the list's clusters: box
 shared uint s_node[kGroup];              // and node
 shared uint s_nearest[kGroup];
-shared uint s_kept[kGroup];
+shared uint s_kept[kGroup];  // per position: 1 = kept, 2 = merges with its neighbour (kept too)
+shared uint s_made;          // the inner nodes made before this pass's merges
 
 // The keys at i, i + 1 differ in a lower bit than those at j, j + 1: (code, position), code first.
 bool deltaLess(uint i, uint j) {
@@ -155,28 +156,35 @@ void main() {
           s_nearest[lane] = found;
         }
         barrier();
-        bool kept = false;
-        Cluster mine;
+        // The pass's merges take one block of node numbers (one atomic per pass, not per merge), in
+        // the order of their positions.
+        bool kept = false, merging = false;
+        Cluster mine, other;
         if (lane < m) {
           uint y = s_nearest[lane];
           bool mutual = s_nearest[y] == lane;
           kept = !mutual || lane < y;
+          merging = mutual && lane < y;  // merged here: left child the lower position
           mine = sharedCluster(lane);
-          if (mutual && lane < y) {  // merged here: left child the lower position
-            uint node = n - 2u - atomicAdd(made, 1u);
-            Cluster other = sharedCluster(y);
-            makeInner(node, mine, other);
-            mine = mergedCluster(mine, other, node);
-          }
+          if (merging) other = sharedCluster(y);
         }
-        s_kept[lane] = kept ? 1u : 0u;
+        s_kept[lane] = (kept ? 1u : 0u) | (merging ? 2u : 0u);
         barrier();
-        uint at = 0u, total = 0u;
+        uint at = 0u, total = 0u, rank = 0u, merges = 0u;
         for (uint j = 0u; j < kGroup; ++j) {
-          at += j < lane ? s_kept[j] : 0u;
-          total += s_kept[j];
+          uint flags = s_kept[j];
+          at += j < lane ? flags & 1u : 0u;
+          total += flags & 1u;
+          rank += j < lane ? flags >> 1u : 0u;
+          merges += flags >> 1u;
         }
-        barrier();  // every invocation has read its neighbours' clusters and the kept flags
+        if (merging && rank == 0u) s_made = atomicAdd(made, merges);
+        barrier();  // every invocation has read its clusters and the flags; the block of numbers is known
+        if (merging) {
+          uint node = n - 2u - (s_made + rank);
+          makeInner(node, mine, other);
+          mine = mergedCluster(mine, other, node);
+        }
         if (kept) {
           s_lo[at] = vec3(mine.box[0], mine.box[1], mine.box[2]);
           s_hi[at] = vec3(mine.box[3], mine.box[4], mine.box[5]);

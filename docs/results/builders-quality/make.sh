@@ -8,7 +8,7 @@ B=${BVHLAB:-./build/bvhlab}   # the binary (BVHLAB=... to use another build)
 out=docs/results/builders-quality/build.jsonl
 : > "$out"
 for mesh in datasets/cache/meshes/bunny00.off datasets/scenes/bench/ship.toml datasets/scenes/bench/interior.toml; do
-  for b in sah-binned median sah-sweep sbvh lbvh ploc embree embree-low; do
+  for b in sah-binned median sah-sweep sbvh lbvh ploc hploc embree embree-low; do
     "$B" build --mesh "$mesh" --builder "$b" --json | python3 -c \
       'import json,sys; d=json.load(sys.stdin); d["input"]=sys.argv[1]; print(json.dumps(d, sort_keys=True))' "$mesh" >> "$out"
   done
