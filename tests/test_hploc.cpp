@@ -36,8 +36,8 @@ using testing::withRadius;
 // The definition, plainly: sorted keys (code, position); a range [l, r] splits after the position s
 // whose pair (s, s + 1) differs in the highest bit, (code XOR, position XOR) compared code first;
 // children first, left first; a range of one Morton code is one node over its children; another
-// range's list is the left child's then the right's, clustered by ploc's passes (written out here
-// without the shared key code) down to kKeep clusters above kKeep primitives and to one at the root.
+// range's list is the left child's then the right's, clustered by ploc's passes (referencePlocPass,
+// without the builders' key code) down to kKeep clusters above kKeep primitives and to one at the root.
 Bvh referenceHploc(const PrimitiveSet& set, const BuildOptions& options) {
   const BuildInput input = set.input();
   const uint32_t n = uint32_t(set.boxes.size());
@@ -70,32 +70,7 @@ Bvh referenceHploc(const PrimitiveSet& set, const BuildOptions& options) {
     const bool root = l == 0 && r == n - 1;
     if (r - l + 1 <= kKeep && !root) return list;
     EXPECT_LE(list.size(), kGroup);
-    while (list.size() > (root ? 1u : kKeep)) {
-      const uint32_t m = uint32_t(list.size());
-      std::vector<uint32_t> nn(m);
-      for (uint32_t x = 0; x < m; ++x) {
-        uint64_t best = ~uint64_t(0);
-        for (uint32_t j = x > options.plocRadius ? x - options.plocRadius : 0; j <= std::min(m - 1, x + options.plocRadius);
-             ++j) {
-          if (j == x) continue;
-          Aabb merged = full[list[x]].bounds;
-          merged.grow(full[list[j]].bounds);
-          const glm::vec3 e = merged.extent();
-          const float area = (e.x * e.y + e.y * e.z) + e.z * e.x + 0.0f;  // -0 counts as +0
-          const uint32_t d = x > j ? x - j : j - x, lower = std::min(x, j);
-          const uint64_t key = uint64_t(std::bit_cast<uint32_t>(area)) << 32 | (4 * d + 2 * (lower & 1) + (j > x));
-          if (key < best) best = key, nn[x] = j;
-        }
-      }
-      std::vector<uint32_t> kept;
-      for (uint32_t x = 0; x < m; ++x) {
-        if (nn[nn[x]] != x)
-          kept.push_back(list[x]);
-        else if (x < nn[x])
-          kept.push_back(merge(list[x], list[nn[x]]));
-      }
-      list = kept;
-    }
+    while (list.size() > (root ? 1u : kKeep)) testing::referencePlocPass(full, list, options.plocRadius, merge);
     return list;
   };
   if (n > 1) listOf(0, n - 1);

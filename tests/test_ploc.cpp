@@ -173,31 +173,7 @@ Bvh referencePloc(const PrimitiveSet& set, uint32_t radius, uint32_t leafSize, u
     }
     clusters.push_back(run[0]);
   }
-  while (clusters.size() > 1) {
-    const uint32_t m = uint32_t(clusters.size());
-    std::vector<uint32_t> nn(m);
-    for (uint32_t x = 0; x < m; ++x) {
-      uint64_t best = ~uint64_t(0);
-      for (uint32_t j = x > radius ? x - radius : 0; j <= std::min(m - 1, x + radius); ++j) {
-        if (j == x) continue;
-        Aabb merged = full[clusters[x]].bounds;
-        merged.grow(full[clusters[j]].bounds);
-        const glm::vec3 e = merged.extent();
-        const float area = (e.x * e.y + e.y * e.z) + e.z * e.x + 0.0f;  // -0 counts as +0
-        const uint32_t d = x > j ? x - j : j - x, lower = std::min(x, j);
-        const uint64_t key = uint64_t(std::bit_cast<uint32_t>(area)) << 32 | (4 * d + 2 * (lower & 1) + (j > x));
-        if (key < best) best = key, nn[x] = j;
-      }
-    }
-    std::vector<uint32_t> kept;
-    for (uint32_t x = 0; x < m; ++x) {
-      if (nn[nn[x]] != x)
-        kept.push_back(clusters[x]);
-      else if (x < nn[x])
-        kept.push_back(merge(clusters[x], clusters[nn[x]]));
-    }
-    clusters = kept;
-  }
+  while (clusters.size() > 1) testing::referencePlocPass(full, clusters, radius, merge);
   BuildOptions options;
   options.maxLeafSize = leafSize;
   return detail::collapseLeavesBySah(full, options);

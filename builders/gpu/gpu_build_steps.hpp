@@ -129,4 +129,34 @@ class PhaseStamps {
 // (root at node 0); a GL error names `builder`.
 Bvh downloadClusteredTree(const std::string& builder, const GpuTreeBuffers& tree, uint32_t n);
 
+// The buffers every GPU build makes, at the front of its BuildBuffers in this order (a builder's own
+// enum continues from kSharedBuffers): the primitives' boxes and centroids, the centroid bounds' keys,
+// the grid, the sort's keys, scratch and digit counts, and the tree (node boxes, children, parents),
+// with the collapse's info, costs and counters.
+enum SharedBuffer : int { kBoxes, kCentroids, kBoundKeys, kGrid, kKeys, kScratch, kCounts, kNodeBoxes, kChildren,
+                          kParents, kInfo, kCosts, kCollapseCounters, kSharedBuffers };
+// Makes them in ids[0 .. kSharedBuffers) for n >= 2 primitives: the boxes and centroids uploaded (left
+// unset with `soupBoxes`: the pack's boxes pass fills them), the bounds' starting keys, the root's
+// parent (node 0) ~0u, the collapse counters 0.
+void makeSharedBuffers(GLuint* ids, const BuildInput& input, bool soupBoxes);
+
+// The shared buffers as the pack and the download read them.
+inline GpuTreeBuffers treeBuffers(const GLuint* ids) {
+  return {ids[kChildren], ids[kParents], ids[kNodeBoxes], ids[kInfo], ids[kKeys]};
+}
+
+// The phase `collapse`: builders/collapse.hpp's SAH leaf collapse bottom-up (gpubuild_collapse.glsl)
+// over the shared buffers, the pass labelled with `builder`.
+void runCollapse(const ComputeProgram& collapse, const GLuint* ids, uint32_t n, const BuildOptions& options,
+                 const std::string& builder);
+
+// The tree of one primitive, one leaf, as every builder makes it (packed on the CPU with `pack`): a GPU
+// builder runs nothing on the GPU for it.
+Bvh onePrimitiveTree(const BuildInput& input, const GpuPackRequest* pack);
+
+// Refuses (std::invalid_argument naming the option) what no GPU builder implements: Morton size bits,
+// and for the clustering builders (`radius`: ploc-gpu, plocpp-gpu, hploc-gpu) a radius outside
+// 1..kMaxPlocRadius and --ploc-top-down.
+void checkGpuOptions(const std::string& builder, const BuildOptions& options, bool radius);
+
 }  // namespace bvhlab::gpubuild

@@ -38,55 +38,21 @@ void GpuHploc::checkLimits(size_t n, bool pack) const {
 
 Bvh GpuHploc::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times,
                     const GpuPackRequest* pack) const {
-  const uint32_t radius = options.plocRadius;
-  if (radius < 1 || radius > kMaxPlocRadius)
-    throw std::invalid_argument(std::string(kName) + ": plocRadius " + std::to_string(radius) + " is outside 1.." +
-                                std::to_string(kMaxPlocRadius));
-  if (options.mortonSizeBits != 0)
-    throw std::invalid_argument(std::string(kName) + ": --morton-size-bits " + std::to_string(options.mortonSizeBits) +
-                                " is not supported on the GPU (only 0: plain position codes)");
-  if (options.plocTopDown != 0)
-    throw std::invalid_argument(std::string(kName) + ": --ploc-top-down " + std::to_string(options.plocTopDown) +
-                                " is not supported (only 0: clustering up to the root)");
+  checkGpuOptions(kName, options, /*radius=*/true);
   const size_t count = input.boxes.size();
   checkLimits(count, pack != nullptr);
   if (times) *times = GpuPhaseTimes{};
   const uint32_t n = uint32_t(count);
-  if (n == 1) {  // hploc's tree of one primitive: one leaf; nothing to sort or cluster
-    Bvh bvh;
-    bvh.nodes.resize(1);
-    bvh.nodes[0].bounds = input.boxes[0];
-    bvh.nodes[0].count = 1;
-    bvh.primIndices = {0};
-    if (pack) packOnTheCpu(bvh, *pack);
-    return bvh;
-  }
-  const uint32_t inner = n - 1, nodes = 2 * n - 1;
+  if (n == 1) return onePrimitiveTree(input, pack);  // hploc's tree: one leaf; nothing to sort or cluster
 
-  enum { kBoxes, kCentroids, kBoundKeys, kGrid, kKeys, kScratch, kCounts, kNodeBoxes, kChildren, kParents, kInfo,
-         kCosts, kCollapseCounters, kLists, kWaiting };
-  BuildBuffers<15, 7> b;
+  enum { kLists = kSharedBuffers, kWaiting, kBuffers };
+  BuildBuffers<kBuffers, 7> b;
   const auto wallStart = std::chrono::steady_clock::now();
   const bool soupBoxes = pack && pack->boxesFromSoup;  // the boxes pass fills them (phase `boxes`)
-  b.ids[kBoxes] = makeStorageBuffer(uint64_t(n) * 24, soupBoxes ? nullptr : input.boxes.data());
-  b.ids[kCentroids] = makeStorageBuffer(uint64_t(n) * 12, soupBoxes ? nullptr : input.centroids.data());
-  const uint32_t initialKeys[6] = {~0u, ~0u, ~0u, 0u, 0u, 0u};  // min keys from the top, max from the bottom
-  b.ids[kBoundKeys] = makeStorageBuffer(sizeof initialKeys, initialKeys);
-  b.ids[kGrid] = makeStorageBuffer(6 * 4);
-  b.ids[kKeys] = makeStorageBuffer(uint64_t(n) * 12);
-  b.ids[kScratch] = makeStorageBuffer(uint64_t(n) * 12);
-  b.ids[kCounts] = makeStorageBuffer(GpuRadixSort::countBytes(n));
-  b.ids[kNodeBoxes] = makeStorageBuffer(uint64_t(nodes) * 24);
-  b.ids[kChildren] = makeStorageBuffer(uint64_t(inner) * 8);
-  b.ids[kParents] = makeStorageBuffer(uint64_t(nodes) * 4);
-  const uint32_t none = ~0u, zero = 0;
-  glNamedBufferSubData(b.ids[kParents], 0, 4, &none);  // the root's (node 0); the merges write the others
-  b.ids[kInfo] = makeStorageBuffer(uint64_t(nodes) * 8);
-  b.ids[kCosts] = makeStorageBuffer(uint64_t(nodes) * 8);
-  b.ids[kCollapseCounters] = makeStorageBuffer(uint64_t(inner) * 4);
-  glClearNamedBufferData(b.ids[kCollapseCounters], GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  makeSharedBuffers(b.ids.data(), input, soupBoxes);
   b.ids[kLists] = makeStorageBuffer(uint64_t(n) * 8);
   b.ids[kWaiting] = makeStorageBuffer(uint64_t(n) * 4);  // the made-node counter, then n - 1 boundaries
+  const uint32_t none = ~0u, zero = 0;
   glClearNamedBufferData(b.ids[kWaiting], GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &none);
   glNamedBufferSubData(b.ids[kWaiting], 0, 4, &zero);
   checkGl("hploc-gpu: uploading the input");
@@ -105,17 +71,12 @@ Bvh GpuHploc::build(const BuildInput& input, const BuildOptions& options, GpuPha
   stamps.mark("sort");
   bind({kKeys, kBoxes, kNodeBoxes, kChildren, kParents, kLists, kWaiting});
   hierarchy_.set("u_count", n);
-  hierarchy_.set("u_radius", radius);
+  hierarchy_.set("u_radius", options.plocRadius);
   hierarchy_.dispatch(hplocGroupsFor(n), "hploc-gpu hierarchy: climb and cluster (gpubuild_hploc.glsl)");
   stamps.mark("hierarchy");
-  bind({kChildren, kParents, kNodeBoxes, kInfo, kCosts, kCollapseCounters});
-  collapse_.set("u_count", n);
-  collapse_.set("u_maxLeaf", options.maxLeafSize);
-  collapse_.set("u_ct", options.cost.traversalCost);
-  collapse_.set("u_ci", options.cost.intersectionCost);
-  collapse_.dispatch(groupsFor(n), "hploc-gpu collapse: SAH leaf collapse (gpubuild_collapse.glsl)");
+  runCollapse(collapse_, b.ids.data(), n, options, kName);
   stamps.mark("collapse");
-  const GpuTreeBuffers tree{b.ids[kChildren], b.ids[kParents], b.ids[kNodeBoxes], b.ids[kInfo], b.ids[kKeys]};
+  const GpuTreeBuffers tree = treeBuffers(b.ids.data());
   if (packJob) packJob->run(tree, stamps);
   checkGl("hploc-gpu: timer queries");
   glFinish();
@@ -127,9 +88,9 @@ Bvh GpuHploc::build(const BuildInput& input, const BuildOptions& options, GpuPha
   if (packJob) packJob->download();
   uint32_t made = 0;
   glGetNamedBufferSubData(b.ids[kWaiting], 0, 4, &made);
-  if (made != inner)
+  if (made != n - 1)
     throw std::runtime_error("hploc-gpu hierarchy: " + std::to_string(made) + " inner nodes made of " +
-                             std::to_string(inner));
+                             std::to_string(n - 1));
   return downloadClusteredTree(kName, tree, n);
 }
 

@@ -70,54 +70,21 @@ void GpuPloc::checkLimits(size_t n, bool pack) const {
 
 Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times,
                    const GpuPackRequest* pack) const {
+  checkGpuOptions(name(), options, /*radius=*/true);
   const uint32_t radius = options.plocRadius;
-  if (radius < 1 || radius > kMaxPlocRadius)
-    throw std::invalid_argument(std::string(name()) + ": plocRadius " + std::to_string(radius) + " is outside 1.." +
-                                std::to_string(kMaxPlocRadius));
-  if (options.mortonSizeBits != 0)
-    throw std::invalid_argument(std::string(name()) + ": --morton-size-bits " + std::to_string(options.mortonSizeBits) +
-                                " is not supported on the GPU (only 0: plain position codes)");
-  if (options.plocTopDown != 0)
-    throw std::invalid_argument(std::string(name()) + ": --ploc-top-down " + std::to_string(options.plocTopDown) +
-                                " is not supported on the GPU (only 0: clustering up to the root)");
   const size_t count = input.boxes.size();
   checkLimits(count, pack != nullptr);
   if (times) *times = GpuPhaseTimes{};
   const uint32_t n = uint32_t(count);
-  if (n == 1) {  // ploc's tree of one primitive: one leaf; nothing to sort or cluster
-    Bvh bvh;
-    bvh.nodes.resize(1);
-    bvh.nodes[0].bounds = input.boxes[0];
-    bvh.nodes[0].count = 1;
-    bvh.primIndices = {0};
-    if (pack) packOnTheCpu(bvh, *pack);
-    return bvh;
-  }
-  const uint32_t inner = n - 1, nodes = 2 * n - 1, blocks = groupsFor(n);
+  if (n == 1) return onePrimitiveTree(input, pack);  // ploc's tree: one leaf; nothing to sort or cluster
+  const uint32_t blocks = groupsFor(n);
 
-  enum { kBoxes, kCentroids, kBoundKeys, kGrid, kKeys, kScratch, kCounts, kNodeBoxes, kChildren, kParents, kInfo,
-         kCosts, kCollapseCounters, kClustersA, kClustersB, kNearest, kSums, kState, kStatus };
-  BuildBuffers<20, 8> b;
+  enum { kClustersA = kSharedBuffers, kClustersB, kNearest, kSums, kState, kStatus, kBuffers };
+  BuildBuffers<kBuffers, 8> b;
   const auto wallStart = std::chrono::steady_clock::now();
   const bool soupBoxes = pack && pack->boxesFromSoup;  // the boxes pass fills them (phase `boxes`)
-  b.ids[kBoxes] = makeStorageBuffer(uint64_t(n) * 24, soupBoxes ? nullptr : input.boxes.data());
-  b.ids[kCentroids] = makeStorageBuffer(uint64_t(n) * 12, soupBoxes ? nullptr : input.centroids.data());
-  const uint32_t initialKeys[6] = {~0u, ~0u, ~0u, 0u, 0u, 0u};  // min keys from the top, max from the bottom
-  b.ids[kBoundKeys] = makeStorageBuffer(sizeof initialKeys, initialKeys);
-  b.ids[kGrid] = makeStorageBuffer(6 * 4);
-  b.ids[kKeys] = makeStorageBuffer(uint64_t(n) * 12);
-  b.ids[kScratch] = makeStorageBuffer(uint64_t(n) * 12);
-  b.ids[kCounts] = makeStorageBuffer(GpuRadixSort::countBytes(n));
-  b.ids[kNodeBoxes] = makeStorageBuffer(uint64_t(nodes) * 24);
-  b.ids[kChildren] = makeStorageBuffer(uint64_t(inner) * 8);
-  b.ids[kParents] = makeStorageBuffer(uint64_t(nodes) * 4);
-  const uint32_t noParent = ~0u;
-  glNamedBufferSubData(b.ids[kParents], 0, 4, &noParent);  // the root's (node 0); the passes write the others
-  b.ids[kInfo] = makeStorageBuffer(uint64_t(nodes) * 8);
-  b.ids[kCosts] = makeStorageBuffer(uint64_t(nodes) * 8);
-  b.ids[kCollapseCounters] = makeStorageBuffer(uint64_t(inner) * 4);
+  makeSharedBuffers(b.ids.data(), input, soupBoxes);
   const uint32_t zero = 0;
-  glClearNamedBufferData(b.ids[kCollapseCounters], GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
   b.ids[kClustersA] = makeStorageBuffer(uint64_t(n) * kClusterBytes);
   b.ids[kClustersB] = makeStorageBuffer(uint64_t(n) * kClusterBytes);
   b.ids[kNearest] = makeStorageBuffer(uint64_t(n) * 4);  // the runs' slots, then each pass's neighbours
@@ -238,15 +205,9 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, 0);
 
-  // collapse
-  bind({kChildren, kParents, kNodeBoxes, kInfo, kCosts, kCollapseCounters});
-  collapse_.set("u_count", n);
-  collapse_.set("u_maxLeaf", options.maxLeafSize);
-  collapse_.set("u_ct", options.cost.traversalCost);
-  collapse_.set("u_ci", options.cost.intersectionCost);
-  collapse_.dispatch(groupsFor(n), pass("collapse: SAH leaf collapse (gpubuild_collapse.glsl)").c_str());
+  runCollapse(collapse_, b.ids.data(), n, options, name());
   stamps.mark("collapse");
-  if (packJob) packJob->run({b.ids[kChildren], b.ids[kParents], b.ids[kNodeBoxes], b.ids[kInfo], b.ids[kKeys]}, stamps);
+  if (packJob) packJob->run(treeBuffers(b.ids.data()), stamps);
   checkGl((std::string(name()) + ": timer queries").c_str());
   glFinish();
   const double wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wallStart).count();
@@ -260,8 +221,7 @@ Bvh GpuPloc::build(const BuildInput& input, const BuildOptions& options, GpuPhas
   }
   if (packJob) packJob->download();
 
-  return downloadClusteredTree(name(), {b.ids[kChildren], b.ids[kParents], b.ids[kNodeBoxes], b.ids[kInfo], b.ids[kKeys]},
-                               n);
+  return downloadClusteredTree(name(), treeBuffers(b.ids.data()), n);
 }
 
 }  // namespace bvhlab::gpubuild
