@@ -1,12 +1,26 @@
 // The GL glue of the GPU builders (builders/gpu/gpu_compute.hpp).
 #include "builders/gpu/gpu_compute.hpp"
 
+#include <mutex>
 #include <stdexcept>
 
 #include "render/gl_context.hpp"
 #include "shaders/assemble.hpp"
 
 namespace bvhlab::gpubuild {
+
+namespace {
+std::mutex sourcesMutex;
+std::map<std::string, std::string>& sourcesMade() {
+  static std::map<std::string, std::string> made;
+  return made;
+}
+}  // namespace
+
+std::map<std::string, std::string> computeSourcesMade() {
+  std::lock_guard<std::mutex> lock(sourcesMutex);
+  return sourcesMade();
+}
 
 ComputeProgram::ComputeProgram(const std::string& module, const std::string& defines,
                                const std::vector<std::string>& prelude)
@@ -23,6 +37,10 @@ ComputeProgram::ComputeProgram(const std::string& module, const std::string& def
     module_ += (k == 0 ? " (source strings 1.. in messages: " : ", ") + prelude[k] + (k + 1 == prelude.size() ? ")" : "");
   }
   source += "#line 1 0\n" + moduleText(module);
+  {
+    std::lock_guard<std::mutex> lock(sourcesMutex);
+    sourcesMade()[module_ + (defines.empty() ? "" : " with " + defines)] = source;
+  }
   GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
   const char* text = source.c_str();
   glShaderSource(shader, 1, &text, nullptr);

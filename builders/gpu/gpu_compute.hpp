@@ -2,6 +2,7 @@
 // its dispatch with an error that names the pass, and the implementation limits a build must fit in.
 #pragma once
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,11 @@ class ComputeProgram {
   GLuint program_ = 0;
   std::string module_;
 };
+
+// Every source text a ComputeProgram was made from in this process, by its label (the module, its
+// defines and preludes), as the driver received it: for offline checks (tests/test_gpu_glslang.cpp runs
+// glslang, the reference GLSL front end, over them).
+std::map<std::string, std::string> computeSourcesMade();
 
 // What the GL implementation allows (queried in the current context), or smaller values a test sets.
 struct GpuLimits {
