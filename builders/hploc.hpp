@@ -25,7 +25,7 @@
 //    tree gives 12.
 // What one node's list becomes depends only on its children's lists, so the tree does not depend on
 // the order in which subtrees finish: the GPU's order (the second thread to reach a node goes on)
-// and the CPU's (one thread, in order) give the same tree.
+// and the CPU's (jobs of leaves on any number of threads) give the same tree.
 #pragma once
 #include <cstdint>
 

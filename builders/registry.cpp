@@ -43,7 +43,7 @@ std::vector<BuilderInfo>& table() {
                "plocTopDown F: the last n/F clusters split top-down by binned SAH",
        buildPloc, false, false, /*usesPlocRadius=*/true, kMaxLeafSize, /*usesMortonSizeBits=*/true},
       {"hploc", "H-PLOC: ploc's clustering inside the subtrees of the LBVH radix tree, bottom-up, a subtree above "
-                "16 primitives cut to 16 clusters (neighbours within +-plocRadius); hploc-gpu's tree, built on one thread",
+                "16 primitives cut to 16 clusters (neighbours within +-plocRadius); hploc-gpu's tree, built on the CPU",
        buildHploc, false, false, /*usesPlocRadius=*/true, kMaxLeafSize, /*usesMortonSizeBits=*/true},
       // Embree's builder caps leaves at RTC_BUILD_MAX_PRIMITIVES_PER_LEAF (builders/embree.cpp).
       {"embree", "Embree 3 rtcBuildBVH, quality MEDIUM (the reference)", buildEmbreeBvh, false, false, false,
