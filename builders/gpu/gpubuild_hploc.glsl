@@ -7,8 +7,10 @@
 // kKeep primitives, or the root): the two children's cluster lists loaded one cluster per
 // invocation, ploc's passes (gpubuild_ploc_pairs.glsl, compiled ahead of this module) until kKeep
 // clusters are left (the root: one), the list written back at the subtree's first position. Every
-// decision the workgroup takes together (who clusters, how many clusters are left) is read from
-// shared memory by every invocation, so barrier() stays in uniform control flow.
+// decision the workgroup takes together (who clusters, which clusters are kept and where they go) is
+// a bit mask in shared memory (atomicOr, then bitCount: the paper's ballots) that every invocation
+// reads, so barrier() stays in uniform control flow. (Loops over 32 shared flags instead made the
+// dispatch about twice as long on llvmpipe: bunny, 2 cores, radius 1 and 16, interleaved builds.)
 // The other subtrees are the climbing invocation's alone: a run of one Morton code becomes the radix
 // tree's node over its two children (one cluster each), a small subtree's list the left child's
 // followed by the right's.
@@ -32,15 +34,18 @@ uniform uint u_radius;
 
 const uint kGroup = 32u, kKeep = 16u, kNone = 0xffffffffu;
 
-// Per invocation, in two copies used by turns (an iteration writes one while the last one's may
-// still be read): 1 = clusters its subtree now, 2 = still climbing; the subtree (first position,
-// split, last position).
-shared uint s_flags[2][kGroup];
-shared uvec3 s_range[2][kGroup];
+// In three copies used by turns (iteration t writes copy t % 3 before its barrier and reads it after;
+// invocation 0 clears copy (t + 2) % 3, last read before that barrier and next written after the
+// following one): the invocations that cluster their subtree now and those still climbing, one bit
+// each (atomicOr), and per invocation its subtree (first position, split, last position).
+shared uint s_clusterBits[3], s_climbingBits[3];
+shared uvec3 s_range[3][kGroup];
 shared vec3 s_lo[kGroup], s_hi[kGroup];  // the list's clusters: box
 shared uint s_node[kGroup];              // and node
 shared uint s_nearest[kGroup];
-shared uint s_kept[kGroup];  // per position: 1 = kept, 2 = merges with its neighbour (kept too)
+// The positions kept and those that merge with their neighbour (kept too), one bit each (atomicOr);
+// written between a pass's first and second barrier, read before its third, cleared after it.
+shared uint s_keptBits, s_mergeBits;
 shared uint s_made;          // the inner nodes made before this pass's merges
 
 // The keys at i, i + 1 differ in a lower bit than those at j, j + 1: (code, position), code first.
@@ -89,7 +94,13 @@ void main() {
     lists[k] = leaf;
     lists[n + k] = 1u;
   }
-  for (uint turn = 0u;; turn ^= 1u) {
+  if (lane == 0u) {
+    s_clusterBits[0] = s_clusterBits[1] = 0u;
+    s_climbingBits[0] = s_climbingBits[1] = 0u;
+    s_keptBits = s_mergeBits = 0u;
+  }
+  barrier();
+  for (uint turn = 0u;; turn = turn == 2u ? 0u : turn + 1u) {
     // One level up: the parent over boundary `split`.
     bool clusterNow = false;
     if (climbing) {
@@ -117,14 +128,16 @@ void main() {
         }
       }
     }
-    s_flags[turn][lane] = (clusterNow ? 1u : 0u) | (climbing ? 2u : 0u);
+    if (clusterNow) atomicOr(s_clusterBits[turn], 1u << lane);
+    if (climbing) atomicOr(s_climbingBits[turn], 1u << lane);
     s_range[turn][lane] = uvec3(l, split, r);
     barrier();
-    uint mask = 0u;
-    bool any = false;
-    for (uint j = 0u; j < kGroup; ++j) {
-      mask |= (s_flags[turn][j] & 1u) << j;
-      any = any || (s_flags[turn][j] & 2u) != 0u;
+    uint mask = s_clusterBits[turn];
+    bool any = s_climbingBits[turn] != 0u;
+    if (lane == 0u) {
+      uint next2 = turn == 0u ? 2u : turn - 1u;  // (turn + 2) % 3
+      s_clusterBits[next2] = 0u;
+      s_climbingBits[next2] = 0u;
     }
     if (!any) break;
     while (mask != 0u) {
@@ -168,18 +181,15 @@ void main() {
           mine = sharedCluster(lane);
           if (merging) other = sharedCluster(y);
         }
-        s_kept[lane] = (kept ? 1u : 0u) | (merging ? 2u : 0u);
+        if (kept) atomicOr(s_keptBits, 1u << lane);
+        if (merging) atomicOr(s_mergeBits, 1u << lane);
         barrier();
-        uint at = 0u, total = 0u, rank = 0u, merges = 0u;
-        for (uint j = 0u; j < kGroup; ++j) {
-          uint flags = s_kept[j];
-          at += j < lane ? flags & 1u : 0u;
-          total += flags & 1u;
-          rank += j < lane ? flags >> 1u : 0u;
-          merges += flags >> 1u;
-        }
+        uint keptBits = s_keptBits, mergeBits = s_mergeBits, below = (1u << lane) - 1u;
+        uint at = uint(bitCount(keptBits & below)), total = uint(bitCount(keptBits));
+        uint rank = uint(bitCount(mergeBits & below)), merges = uint(bitCount(mergeBits));
         if (merging && rank == 0u) s_made = atomicAdd(made, merges);
-        barrier();  // every invocation has read its clusters and the flags; the block of numbers is known
+        barrier();  // every invocation has read its clusters and the bits; the block of numbers is known
+        if (lane == 0u) s_keptBits = s_mergeBits = 0u;
         if (merging) {
           uint node = n - 2u - (s_made + rank);
           makeInner(node, mine, other);
