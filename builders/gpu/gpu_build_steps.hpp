@@ -25,6 +25,17 @@ constexpr uint32_t kGroup = 256;  // local_size_x of every per-primitive, per-no
 
 inline uint32_t groupsFor(uint64_t items) { return uint32_t((items + kGroup - 1) / kGroup); }
 
+// Refuses a dispatch of one invocation per primitive in workgroups of `group` that needs more
+// workgroups than `limits` allow: an InputError naming the builder and GL_MAX_COMPUTE_WORK_GROUP_COUNT.
+inline void checkWorkGroups(const char* builder, size_t n, const GpuLimits& limits, uint32_t group) {
+  const uint64_t groups = (uint64_t(n) + group - 1) / group;
+  if (groups > limits.maxWorkGroupsX)
+    throw InputError(std::string(builder) + ": " + std::to_string(n) + " primitives need " + std::to_string(groups) +
+                     " workgroups of " + std::to_string(group) +
+                     " in one dispatch; GL_MAX_COMPUTE_WORK_GROUP_COUNT (x) is " + std::to_string(limits.maxWorkGroupsX) +
+                     " here");
+}
+
 // Refuses, before any work, a build of n primitives whose storage buffers (what each holds, its bytes)
 // or one-dispatch workgroup count exceed `limits`: an InputError naming the builder and the limit.
 inline void checkBuildLimits(const char* builder, size_t n, const GpuLimits& limits,
@@ -35,11 +46,7 @@ inline void checkBuildLimits(const char* builder, size_t n, const GpuLimits& lim
                        std::to_string(bytes) + "-byte shader storage buffer (" + what +
                        "); GL_MAX_SHADER_STORAGE_BLOCK_SIZE is " + std::to_string(limits.maxStorageBlockBytes) +
                        " bytes here");
-  if (groupsFor(n) > limits.maxWorkGroupsX || uint64_t(n) > uint64_t(limits.maxWorkGroupsX) * kGroup)
-    throw InputError(std::string(builder) + ": " + std::to_string(n) + " primitives need " +
-                     std::to_string(groupsFor(n)) + " workgroups of " + std::to_string(kGroup) +
-                     " in one dispatch; GL_MAX_COMPUTE_WORK_GROUP_COUNT (x) is " +
-                     std::to_string(limits.maxWorkGroupsX) + " here");
+  checkWorkGroups(builder, n, limits, kGroup);
 }
 
 // The storage buffers both GPU builders bind for n primitives (what each holds, its bytes), plus the GPU

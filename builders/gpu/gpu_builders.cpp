@@ -79,22 +79,22 @@ class BuildContext {
 
 Bvh buildLbvhGpu(const BuildInput& input, const BuildOptions& options) {
   BuildContext context;
-  return gpubuild::GpuLbvh().build(input, options);
+  return gpubuild::makeGpuBuilder("lbvh-gpu")->build(input, options, nullptr, nullptr);
 }
 
 Bvh buildPlocGpu(const BuildInput& input, const BuildOptions& options) {
   BuildContext context;
-  return gpubuild::GpuPloc().build(input, options);
+  return gpubuild::makeGpuBuilder("ploc-gpu")->build(input, options, nullptr, nullptr);
 }
 
 Bvh buildPlocppGpu(const BuildInput& input, const BuildOptions& options) {
   BuildContext context;
-  return gpubuild::GpuPloc(std::nullopt, gpubuild::PlocPasses::Fused).build(input, options);
+  return gpubuild::makeGpuBuilder("plocpp-gpu")->build(input, options, nullptr, nullptr);
 }
 
 Bvh buildHplocGpu(const BuildInput& input, const BuildOptions& options) {
   BuildContext context;
-  return gpubuild::GpuHploc().build(input, options);
+  return gpubuild::makeGpuBuilder("hploc-gpu")->build(input, options, nullptr, nullptr);
 }
 
 namespace gpubuild {

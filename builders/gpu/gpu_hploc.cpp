@@ -29,11 +29,7 @@ void GpuHploc::checkLimits(size_t n, bool pack) const {
   buffers.push_back({"cluster lists", uint64_t(n) * 8});
   buffers.push_back({"waiting ends", uint64_t(n) * 4});
   checkBuildLimits(kName, n, limits_, buffers);
-  if (uint64_t(hplocGroupsFor(n)) > limits_.maxWorkGroupsX)
-    throw InputError(std::string(kName) + ": " + std::to_string(n) + " primitives need " +
-                     std::to_string(hplocGroupsFor(n)) + " workgroups of " + std::to_string(kHplocGroup) +
-                     " in one dispatch; GL_MAX_COMPUTE_WORK_GROUP_COUNT (x) is " +
-                     std::to_string(limits_.maxWorkGroupsX) + " here");
+  checkWorkGroups(kName, n, limits_, kHplocGroup);  // the hierarchy's workgroups of 32
 }
 
 Bvh GpuHploc::build(const BuildInput& input, const BuildOptions& options, GpuPhaseTimes* times,
