@@ -147,7 +147,7 @@ TEST_F(GpuHploc, AGlErrorNamesTheStep) {
   EXPECT_TRUE(testing::identical(hploc.build(set.input(), {}), buildBvh("hploc", set.input(), {})));
 }
 
-// Timed per phase, one dispatch for the whole hierarchy; packed on the GPU into v1 and bvh2-cb, where
+// Timed per phase, one dispatch for the whole hierarchy; packed on the GPU into v1, bvh2-cb and cwbvh, where
 // timeGpuBuild compares every texel with the CPU's pack of the same tree (and throws at the first
 // difference).
 TEST_F(GpuHploc, RegisteredTimedPerPhaseAndPackedAsTheCpuPacks) {
@@ -166,11 +166,11 @@ TEST_F(GpuHploc, RegisteredTimedPerPhaseAndPackedAsTheCpuPacks) {
   for (const auto& [phase, ms] : t.phaseMedianMs) names.push_back(phase);
   EXPECT_EQ(names, (std::vector<std::string>{"morton", "sort", "hierarchy", "collapse"}));
   EXPECT_EQ(t.readbacks, 0u);
-  for (const char* layout : {"v1", "bvh2-cb"}) {
+  for (const char* layout : {"v1", "bvh2-cb", "cwbvh"}) {
     SCOPED_TRACE(layout);
     const GpuBuildTiming packed = timeGpuBuild("hploc-gpu", input, withRadius(4), 1, layout, &soup);
     EXPECT_EQ(packed.packLayout, layout);
-    EXPECT_EQ(packed.phaseMedianMs.back().first, "pack");
+    EXPECT_EQ(packed.phaseMedianMs.back().first, std::string(layout) == "cwbvh" ? "wide_nodes" : "pack");
   }
 }
 

@@ -1,5 +1,6 @@
-// The GPU pack (builders/gpu/gpu_pack.hpp) on llvmpipe: lbvh-gpu's and ploc-gpu's trees packed on the
-// GPU into v1 and bvh2-cb give the streams the CPU packs from the downloaded tree, texel for texel, on
+// The GPU pack (builders/gpu/gpu_pack.hpp, gpu_pack_wide.hpp) on llvmpipe: lbvh-gpu's and ploc-gpu's
+// trees packed on the GPU into v1, bvh2-cb and cwbvh give the streams the CPU packs from the downloaded
+// tree, texel for texel, on
 // the bunny, synthetic meshes, a deep tree and a root that is one leaf, at several leaf sizes; one
 // primitive packed on the CPU; other layouts, mismatched soups and sizes past the GL limits refused;
 // the `pack` phase timed; `build --json` saying which layout it packed.
@@ -19,11 +20,13 @@
 #include "builders/gpu/gpu_builders.hpp"
 #include "builders/gpu/gpu_lbvh.hpp"
 #include "builders/gpu/gpu_pack.hpp"
+#include "builders/gpu/gpu_pack_wide.hpp"
 #include "builders/gpu/gpu_ploc.hpp"
 #include "datasets/scene.hpp"
 #include "datasets/scene_io.hpp"
 #include "layout/layout.hpp"
 #include "layout/layout_bvh2cb.hpp"
+#include "layout/layout_cwbvh.hpp"
 #include "render/gl_context.hpp"
 #include "require.hpp"
 #include "traversal_test_util.hpp"
@@ -68,8 +71,10 @@ std::unique_ptr<gpubuild::GpuLbvh> GpuPack::lbvh_;
 std::unique_ptr<gpubuild::GpuPloc> GpuPack::ploc_;
 
 PackedBvh cpuPack(const Bvh& bvh, const TriangleSoup& soup, const std::string& layout) {
-  return layout == "v1" ? packBvh(bvh, soup) : packBvh2cb(bvh, soup);
+  return layout == "v1" ? packBvh(bvh, soup) : layout == kLayoutBvh2cb ? packBvh2cb(bvh, soup) : packCwbvh(bvh, soup);
 }
+
+constexpr const char* kPackedLayouts[] = {"v1", kLayoutBvh2cb, kLayoutCwbvh};
 
 void expectSameStreams(const PackedBvh& gpu, const PackedBvh& cpu) {
   EXPECT_EQ(gpu.layout, cpu.layout);
@@ -86,7 +91,7 @@ void expectSameStreams(const PackedBvh& gpu, const PackedBvh& cpu) {
 // Every builder x layout x leaf size on `soup`: the GPU's streams are the CPU's pack of the tree.
 void expectCpuStreams(const TriangleSoup& soup, const std::string& what) {
   for (const char* builder : {"lbvh-gpu", "ploc-gpu"})
-    for (const char* layout : {"v1", kLayoutBvh2cb})
+    for (const char* layout : kPackedLayouts)
       for (uint32_t leaf : {1u, 4u, 8u}) {
         SCOPED_TRACE(what + ", " + builder + ", " + layout + ", leaf size " + std::to_string(leaf));
         BuildOptions options;
@@ -122,6 +127,9 @@ Mesh mortonChain() {
 TEST_F(GpuPack, SyntheticMeshesGiveTheCpuStreams) {
   using namespace traversaltest;
   expectCpuStreams(soupOf({sphereMesh(12, 24, 1.0f), randomSoupMesh(700, 4)}), "sphere and random soup");
+  // Equal triangles on a grid: equal areas make equal costs, where the wide collapse's and the slot
+  // assignment's tie-breaks decide.
+  expectCpuStreams(soupOf({gridMesh(24)}), "a grid");
   const TriangleSoup deep = soupOf({mortonChain()});
   expectCpuStreams(deep, "a chain of Morton bits");
   PackedBvh gpu;
@@ -129,6 +137,8 @@ TEST_F(GpuPack, SyntheticMeshesGiveTheCpuStreams) {
   leaf1.maxLeafSize = 1;
   build("lbvh-gpu", deep, "v1", leaf1, &gpu);
   EXPECT_GT(gpu.depth, 32u) << "the deep input is not deep: fewer jumping rounds than meant";
+  build("lbvh-gpu", deep, kLayoutCwbvh, leaf1, &gpu);
+  EXPECT_GE(gpu.depth, 10u) << "the deep input's wide tree is not deep: few level dispatches did any work";
 }
 
 TEST_F(GpuPack, TheBunnyGivesTheCpuStreams) {
@@ -138,20 +148,21 @@ TEST_F(GpuPack, TheBunnyGivesTheCpuStreams) {
 }
 
 // Three copies of one triangle: the collapse makes the root one leaf (3 A <= A + 2 A + A). v1 holds
-// one node; bvh2-cb one record with the leaf in A and an empty slot over the same box in B.
+// one node; bvh2-cb one record with the leaf in A and an empty slot over the same box in B; cwbvh one
+// node with the leaf in one slot.
 TEST_F(GpuPack, ARootThatIsOneLeaf) {
   Mesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   m.triangles = {{0, 1, 2}, {0, 1, 2}, {0, 1, 2}};
   const TriangleSoup soup = traversaltest::soupOf({m});
   for (const char* builder : {"lbvh-gpu", "ploc-gpu"})
-    for (const char* layout : {"v1", kLayoutBvh2cb}) {
+    for (const char* layout : kPackedLayouts) {
       SCOPED_TRACE(std::string(builder) + ", " + layout);
       PackedBvh gpu;
       const Bvh bvh = build(builder, soup, layout, BuildOptions{}, &gpu);
       ASSERT_EQ(bvh.nodes.size(), 1u) << "the root was not collapsed: this case tests nothing";
       expectSameStreams(gpu, cpuPack(bvh, soup, layout));
-      EXPECT_EQ(gpu.nodes.size(), std::string(layout) == "v1" ? 2u : 4u);
+      EXPECT_EQ(gpu.nodes.size(), std::string(layout) == "v1" ? 2u : std::string(layout) == kLayoutCwbvh ? 5u : 4u);
     }
 }
 
@@ -160,7 +171,7 @@ TEST_F(GpuPack, OnePrimitiveIsPackedOnTheCpu) {
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   m.triangles = {{0, 1, 2}};
   const TriangleSoup soup = traversaltest::soupOf({m});
-  for (const char* layout : {"v1", kLayoutBvh2cb}) {
+  for (const char* layout : kPackedLayouts) {
     PackedBvh gpu;
     const Bvh bvh = build("lbvh-gpu", soup, layout, BuildOptions{}, &gpu);
     expectSameStreams(gpu, cpuPack(bvh, soup, layout));
@@ -219,10 +230,53 @@ TEST_F(GpuPack, TimedAsThePackPhase) {
     const GpuBuildTiming unpacked = timeGpuBuild(builder, input, BuildOptions{}, 3);
     EXPECT_TRUE(unpacked.packLayout.empty());
     for (const auto& [phase, ms] : unpacked.phaseMedianMs) EXPECT_NE(phase, "pack");
+    // cwbvh: the binary pack's steps, then the wide collapse's three.
+    const GpuBuildTiming wide = timeGpuBuild(builder, input, BuildOptions{}, 3, kLayoutCwbvh, &soup);
+    EXPECT_EQ(wide.packLayout, kLayoutCwbvh);
+    std::vector<std::string> tail;
+    for (size_t p = wide.phaseMedianMs.size() >= 4 ? wide.phaseMedianMs.size() - 4 : 0; p < wide.phaseMedianMs.size(); ++p)
+      tail.push_back(wide.phaseMedianMs[p].first);
+    EXPECT_EQ(tail, (std::vector<std::string>{"pack", "wide_costs", "wide_levels", "wide_nodes"})) << builder;
   }
 }
 
-// `build --json`: gpu_pack names the layout packed on the GPU (v1 or bvh2-cb with raw triangles) and
+// A leaf slot of more triangles than cwbvh's 7-bit count: 300 copies of one triangle at leaf size 255
+// collapse into leaves past 127. The CPU's packer refuses it, and so does the GPU's, with the same
+// advice; buffers past the GL limit are refused before any work.
+TEST_F(GpuPack, CwbvhRefusesLeavesPastItsCountAndBuffersPastTheLimit) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  for (int i = 0; i < 300; ++i) m.triangles.push_back({0, 1, 2});
+  const TriangleSoup soup = traversaltest::soupOf({m});
+  BuildOptions big;
+  big.maxLeafSize = 255;
+  for (const char* builder : {"lbvh-gpu", "ploc-gpu"}) {
+    SCOPED_TRACE(builder);
+    PackedBvh gpu;
+    try {
+      const Bvh bvh = build(builder, soup, kLayoutCwbvh, big, &gpu);
+      ADD_FAILURE() << "a leaf past 127 triangles was packed";
+      EXPECT_THROW(packCwbvh(bvh, soup), std::runtime_error);
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("stores at most 127"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("--leaf-size 127"), std::string::npos) << e.what();
+    }
+    PackedBvh v1;
+    const Bvh bvh = build(builder, soup, "v1", big, &v1);
+    EXPECT_THROW(packCwbvh(bvh, soup), std::runtime_error) << "the CPU packs it: the case tests nothing";
+  }
+  const gpubuild::GpuLimits limits{60 * 1000, 1u << 20};
+  try {
+    gpubuild::GpuWidePack::checkLimits(1000, limits);
+    ADD_FAILURE() << "the cwbvh pack's buffers were not checked";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("(cwbvh pack)"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("GL_MAX_SHADER_STORAGE_BLOCK_SIZE"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(gpubuild::GpuWidePack::checkLimits(1000, gpubuild::GpuLimits{1u << 20, 1u << 20}));
+}
+
+// `build --json`: gpu_pack names the layout packed on the GPU (v1, bvh2-cb or cwbvh with raw triangles) and
 // is null where the CPU packs (another layout or triangle format).
 TEST(GpuPackCli, BuildJsonSaysWhichLayoutWasPackedOnTheGpu) {
   std::string obj;
@@ -232,7 +286,8 @@ TEST(GpuPackCli, BuildJsonSaysWhichLayoutWasPackedOnTheGpu) {
     obj += "f " + std::to_string(3 * i + 1) + " " + std::to_string(3 * i + 2) + " " + std::to_string(3 * i + 3) + "\n";
   const std::string mesh = clitest::writeTemp("gpu_pack.obj", obj).string();
   const std::pair<std::string, nlohmann::json> cases[] = {
-      {"--layout bvh2-cb", "bvh2-cb"}, {"", "v1"}, {"--layout bvh4", nullptr}, {"--triangles precomputed", nullptr}};
+      {"--layout bvh2-cb", "bvh2-cb"}, {"--layout cwbvh", "cwbvh"}, {"", "v1"}, {"--layout bvh4", nullptr},
+      {"--triangles precomputed", nullptr}};
   for (const auto& [flags, expected] : cases) {
     const clitest::Result r = clitest::run("build --mesh " + mesh + " --builder ploc-gpu --json --gpu-builds 2 " + flags);
     ASSERT_EQ(r.code, 0) << flags << ": " << r.err;

@@ -241,7 +241,7 @@ GpuBuildTiming timeGpuBuild(const std::string& builder, const BuildInput& input,
   }
   timing.builds = builds;
   if (pack) {
-    expectSameStreams(packed, packLayout == "v1" ? packBvh(last, *soup) : packBvh2cb(last, *soup), builder);
+    expectSameStreams(packed, gpubuild::cpuPackFor(last, *soup, packLayout), builder);
     timing.packLayout = packLayout;
   }
   timing.passes = times.passes;

@@ -7,7 +7,9 @@
 #include <vector>
 
 #include "builders/gpu/gpu_build_steps.hpp"
+#include "builders/gpu/gpu_pack_wide.hpp"
 #include "layout/layout_bvh2cb.hpp"
+#include "layout/layout_cwbvh.hpp"
 #include "render/gl_context.hpp"
 
 namespace bvhlab::gpubuild {
@@ -53,12 +55,17 @@ void deleteStreams(GpuStreamBuffers& streams) {
   streams = GpuStreamBuffers{};
 }
 
-bool gpuPackable(const std::string& layout) { return layout == "v1" || layout == kLayoutBvh2cb; }
+bool gpuPackable(const std::string& layout) {
+  return layout == "v1" || layout == kLayoutBvh2cb || layout == kLayoutCwbvh;
+}
+
+PackedBvh cpuPackFor(const Bvh& bvh, const TriangleSoup& soup, const std::string& layout) {
+  if (!gpuPackable(layout)) throw std::invalid_argument("GPU pack: layout '" + layout + "' is packed on the CPU");
+  return layout == "v1" ? packBvh(bvh, soup) : layout == kLayoutBvh2cb ? packBvh2cb(bvh, soup) : packCwbvh(bvh, soup);
+}
 
 void packOnTheCpu(const Bvh& bvh, const GpuPackRequest& request) {
-  if (!gpuPackable(request.layout))
-    throw std::invalid_argument("GPU pack: layout '" + request.layout + "' is packed on the CPU");
-  *request.out = request.layout == "v1" ? packBvh(bvh, *request.soup) : packBvh2cb(bvh, *request.soup);
+  *request.out = cpuPackFor(bvh, *request.soup, request.layout);
   if (request.keep) {
     deleteStreams(*request.keep);
     request.keep->node = makeStorageBuffer(request.out->nodes.size() * 16, request.out->nodes.data());
@@ -77,6 +84,13 @@ GpuPacker::GpuPacker()
       triangles_("gpubuild_pack_triangles.glsl"),
       soupBoxes_("gpubuild_soup_boxes.glsl") {}
 
+GpuPacker::~GpuPacker() = default;
+
+const WidePackPrograms& GpuPacker::widePrograms() const {
+  if (!wide_) wide_ = std::make_unique<WidePackPrograms>();
+  return *wide_;
+}
+
 std::array<std::pair<const char*, uint64_t>, 6> GpuPacker::buffers(uint64_t n) {
   const uint64_t nodes = 2 * n - 1;
   return {{{"soup texels (pack)", n * 7 * 16},
@@ -90,8 +104,8 @@ std::array<std::pair<const char*, uint64_t>, 6> GpuPacker::buffers(uint64_t n) {
 GpuPackJob::GpuPackJob(const GpuPacker& packer, const GpuPackRequest& request, uint32_t primitives)
     : packer_(packer), request_(request), n_(primitives) {
   if (!gpuPackable(request.layout))
-    throw std::invalid_argument("GPU pack: layout '" + request.layout + "' is packed on the CPU (the GPU packs v1 and " +
-                                kLayoutBvh2cb + ")");
+    throw std::invalid_argument("GPU pack: layout '" + request.layout + "' is packed on the CPU (the GPU packs v1, " +
+                                kLayoutBvh2cb + " and " + kLayoutCwbvh + ")");
   if (!request.soup || !request.out || request.soup->size() != primitives)
     throw std::invalid_argument("GPU pack: the soup has " + std::to_string(request.soup ? request.soup->size() : 0) +
                                 " triangles for a build of " + std::to_string(primitives) + " primitives");
@@ -99,6 +113,11 @@ GpuPackJob::GpuPackJob(const GpuPacker& packer, const GpuPackRequest& request, u
     throw InputError("GPU pack: " + std::to_string(primitives) + " primitives make more nodes than layout v1's limit of " +
                      std::to_string(kEscapeEnd - 1));
   const uint64_t nodes = 2 * uint64_t(primitives) - 1;
+  const bool wide = request.layout == kLayoutCwbvh;
+  if (wide) {  // its buffers past the binary pack's (which the builder's checkLimits counts)
+    GpuWidePack::checkLimits(primitives, queryGpuLimits());
+    wide_ = std::make_unique<GpuWidePack>(primitives);
+  }
   if (request.soupTexels == 0) ids_[kSoup] = uploadSoupTexels(*request.soup);
   soup_ = request.soupTexels != 0 ? request.soupTexels : ids_[kSoup];
   ids_[kSteps] = makeStorageBuffer(2 * nodes * 16);
@@ -106,7 +125,7 @@ GpuPackJob::GpuPackJob(const GpuPacker& packer, const GpuPackRequest& request, u
   PackState state;
   state.groups = groupsFor(nodes);
   ids_[kState] = makeStorageBuffer(sizeof state, &state);
-  ids_[kNodeStream] = makeStorageBuffer(2 * nodes * 16);
+  ids_[kNodeStream] = makeStorageBuffer(wide ? 5 * std::max<uint64_t>(1, primitives - 1) * 16 : 2 * nodes * 16);
   ids_[kTriangleStream] = makeStorageBuffer(uint64_t(primitives) * 3 * 16);
   ids_[kAttributeStream] = makeStorageBuffer(uint64_t(primitives) * 4 * 16);
   checkGl("GPU pack: making the buffers");
@@ -150,6 +169,15 @@ void GpuPackJob::run(const GpuTreeBuffers& tree, PhaseStamps& stamps) {
     packer_.gate_.dispatch(1, "GPU pack jump: the gate (gpubuild_pack_gate.glsl)");
   }
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+  if (wide_) {  // v1's triangle order into the wide pack's buffers, then the wide passes
+    bind({tree.keys, ids_[kSteps], ids_[kState], soup_, wide_->v1Triangles(), wide_->v1Attributes()});
+    packer_.triangles_.set("u_count", n_);
+    packer_.triangles_.dispatch(groupsFor(n_), "GPU pack triangles: v1's order (gpubuild_pack_triangles.glsl)");
+    stamps.mark("pack");
+    wide_->run(packer_.widePrograms(), packer_.jump_, packer_.gate_, tree, ids_[kSteps], ids_[kState],
+               ids_[kNodeStream], ids_[kTriangleStream], ids_[kAttributeStream], stamps);
+    return;
+  }
   const ComputeProgram& nodesPass = request_.layout == "v1" ? packer_.nodesV1_ : packer_.nodesBvh2cb_;
   bind({tree.children, tree.nodeBoxes, tree.info, ids_[kState], ids_[kSteps], ids_[kNodeStream]});
   nodesPass.set("u_count", n_);
@@ -173,6 +201,15 @@ void GpuPackJob::download() const {
   out = PackedBvh{};
   out.layout = request_.layout;
   out.depth = state.depth;
+  if (wide_) {
+    const auto [wideNodes, depth] = wide_->nodesAndDepth();
+    out.depth = depth;
+    out.nodes = gpubuild::download<glm::uvec4>(ids_[kNodeStream], kCwbvhNodeTexels * size_t(wideNodes));
+    out.triangles = gpubuild::download<glm::uvec4>(ids_[kTriangleStream], 3 * size_t(n_));
+    out.attributes = gpubuild::download<glm::uvec4>(ids_[kAttributeStream], 4 * size_t(n_));
+    checkGl("GPU pack (cwbvh): download");
+    return;
+  }
   const size_t texels = request_.layout == "v1" ? 2 * (1 + 2 * size_t(rootInfo[1]))
                                                  : kBvh2cbRecordTexels * std::max<size_t>(1, rootInfo[1]);
   out.nodes = gpubuild::download<glm::uvec4>(ids_[kNodeStream], texels);

@@ -1,5 +1,5 @@
-// The GPU pack: a GPU builder's tree, still in its build buffers, packed into layout v1 or bvh2-cb
-// (layout/layout.hpp, layout/layout_bvh2cb.hpp) by compute passes, so that a build on the GPU gives
+// The GPU pack: a GPU builder's tree, still in its build buffers, packed into layout v1, bvh2-cb or
+// cwbvh (layout/layout.hpp, layout/layout_bvh2cb.hpp, layout/layout_cwbvh.hpp) by compute passes, so that a build on the GPU gives
 // the streams a renderer binds without a round trip through the CPU. Timed as the builders' `pack`
 // phase (builders/gpu/gpu_lbvh.hpp, gpu_ploc.hpp):
 //   edges      every node's step from its parent: v1 slot, bvh2-cb record and first-primitive offsets,
@@ -10,12 +10,15 @@
 //   nodes      the NODE stream (gpubuild_pack_nodes.glsl, one program per layout)
 //   triangles  the TRIANGLE and ATTRIBUTE streams in leaf order, gathered from the soup's texels
 //              (gpubuild_pack_triangles.glsl)
+// cwbvh takes the edges, the jumping and v1's triangle order, and goes on to the wide collapse and its
+// packing instead of the node pass (builders/gpu/gpu_pack_wide.hpp).
 // The streams are those layout/pack.cpp and pack_bvh2cb.cpp write for the Bvh the build downloads,
-// texel for texel (tests/test_gpu_pack.cpp). The soup's texels (7 per triangle, in original order) are
+// (pack_cwbvh.cpp for cwbvh) texel for texel (tests/test_gpu_pack.cpp). The soup's texels (7 per triangle, in original order) are
 // uploaded before the timed phases, as a renderer keeps its triangles resident on the GPU.
 #pragma once
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -25,9 +28,14 @@
 namespace bvhlab::gpubuild {
 
 class PhaseStamps;
+struct WidePackPrograms;
+class GpuWidePack;
 
-// The layouts the GPU pack writes (with the raw triangle format): v1 and bvh2-cb.
+// The layouts the GPU pack writes (with the raw triangle format): v1, bvh2-cb and cwbvh.
 bool gpuPackable(const std::string& layout);
+
+// The CPU's pack of `bvh` into a gpuPackable layout: what the GPU pack must equal.
+PackedBvh cpuPackFor(const Bvh& bvh, const TriangleSoup& soup, const std::string& layout);
 
 // Rounds of pointer jumping issued: trees up to 2^16 levels deep. A deeper tree is an error at download.
 constexpr uint32_t kMaxJumpRounds = 16;
@@ -80,19 +88,23 @@ void packOnTheCpu(const Bvh& bvh, const GpuPackRequest& request);
 class GpuPacker {
  public:
   GpuPacker();
+  ~GpuPacker();
   // The storage buffers a pack of n primitives adds to a build (for checkBuildLimits).
   static std::array<std::pair<const char*, uint64_t>, 6> buffers(uint64_t n);
 
  private:
   friend class GpuPackJob;
+  const WidePackPrograms& widePrograms() const;  // compiled at the first cwbvh pack
   ComputeProgram edges_, jump_, gate_, nodesV1_, nodesBvh2cb_, triangles_, soupBoxes_;
+  mutable std::unique_ptr<WidePackPrograms> wide_;
 };
 
 // One build's pack: constructed before the timed phases (checks the request, uploads the soup's
 // texels, makes the buffers), run() after the collapse pass (marks `pack`), download() after the
 // timestamps are read. Throws std::invalid_argument for a layout the GPU does not pack or a soup of
-// another size, std::runtime_error for a GL error (naming the pass) or a tree deeper than
-// 2^kMaxJumpRounds levels.
+// another size, InputError for cwbvh buffers past GL_MAX_SHADER_STORAGE_BLOCK_SIZE, std::runtime_error
+// for a GL error (naming the pass) or a tree deeper than 2^kMaxJumpRounds levels (cwbvh:
+// GpuWidePack::nodesAndDepth's errors).
 class GpuPackJob {
  public:
   GpuPackJob(const GpuPacker& packer, const GpuPackRequest& request, uint32_t primitives);
@@ -113,6 +125,7 @@ class GpuPackJob {
   GpuTreeBuffers tree_;
   std::array<GLuint, kBuffers> ids_{};  // ids_[kSoup] is 0 where the request's soupTexels are used
   GLuint soup_ = 0;                     // the soup texels the pack reads
+  std::unique_ptr<GpuWidePack> wide_;   // layout cwbvh's buffers and passes
 };
 
 }  // namespace bvhlab::gpubuild

@@ -1,0 +1,111 @@
+// GPU pack into cwbvh, step 2: the SAH-optimal collapse to width 8 (layout/collapse_wide.hpp, Ylitie,
+// Karras & Laine 2017, section 4.1), its dynamic program bottom-up as the collapse phase climbs
+// (atomic counters: the second child to arrive solves the parent). Over the COLLAPSED binary tree: a
+// node whose info says it emits no inner node is a binary leaf, whose cost is Ci A P for every slot
+// count; its descendants are skipped. Per inner node p that emits inner nodes, for i = 1..8 slots:
+//   costs[8p + i - 1]   C(p, i), in double, with the CPU's operations in the CPU's order under
+//                       `precise` (no fused multiply-add): leaf Ci A P (infinite past the leaf cap),
+//                       internal Ct A + Cdistribute(p, 8), Cdistribute(p, j) the first least of
+//                       C(left, k) + C(right, j - k) over k = 1..j - 1 (strict <), ties to the leaf
+//   counts[8p + i - 1]  the wide nodes the choice makes in p's subtree (0 for a leaf, 1 + the two
+//                       sides' for an internal node, the sides' for a distribution): the packer's
+//                       node numbering needs subtree sizes
+//   decisions[2p + ..]  byte i - 1: the choice (0 leaf, 1 internal, 2 distribute) | its split << 2;
+//                       bits 5..7 of byte 0: the split of Cinternal's 8 slots
+// A is the node's half area as Aabb::halfArea computes it, in double; no division enters a decision,
+// so the choices are the CPU's bit for bit. Costs are finite sums or +infinity, never NaN.
+layout(local_size_x = 256) in;
+layout(std430, binding = 0) readonly buffer Children { uint children[]; };
+layout(std430, binding = 1) readonly buffer Parents { uint parents[]; };
+layout(std430, binding = 2) readonly buffer NodeBoxes { float nodeBoxes[]; };
+layout(std430, binding = 3) readonly buffer Info { uint info[]; };
+layout(std430, binding = 4) coherent buffer Costs { double costs[]; };
+layout(std430, binding = 5) coherent buffer Counts { uint counts[]; };
+layout(std430, binding = 6) coherent buffer Decisions { uint decisions[]; };
+layout(std430, binding = 7) coherent buffer Counters { uint counters[]; };
+layout(std430, binding = 8) readonly buffer WideState {  // builders/gpu/gpu_pack_wide.cpp WideState
+  uvec3 levelGroups;
+  uint levelBegin, levelEnd, queued, leafCap, largestLeaf, levels, pad0, pad1, pad2;
+  uvec3 nodeGroups;
+  uint pad3;
+};
+uniform uint u_count;  // primitives n: inner nodes 0 .. n - 2, leaves n - 1 + sorted position
+uniform float u_ct, u_ci;
+
+const uint kWidth = 8u;
+const uint kMaxLeafSize = 255u;  // builders/bvh.hpp
+
+float halfArea(uint node) {
+  vec3 lo = vec3(nodeBoxes[6u * node], nodeBoxes[6u * node + 1u], nodeBoxes[6u * node + 2u]);
+  vec3 hi = vec3(nodeBoxes[6u * node + 3u], nodeBoxes[6u * node + 4u], nodeBoxes[6u * node + 5u]);
+  if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return 0.0;
+  precise vec3 e = hi - lo;
+  precise float a = e.x * e.y + e.y * e.z + e.z * e.x;
+  return a;
+}
+
+bool isLeaf(uint x) { return info[2u * x + 1u] == 0u; }
+
+// C(x, i) of a child: a binary leaf's Ci A P whatever i, else what x's solve stored.
+double childCost(uint x, uint i) {
+  if (isLeaf(x)) {
+    precise double c = double(u_ci) * double(halfArea(x)) * double(info[2u * x]);
+    return c;
+  }
+  return costs[kWidth * x + i - 1u];
+}
+uint childCount(uint x, uint i) { return isLeaf(x) ? 0u : counts[kWidth * x + i - 1u]; }
+
+void solve(uint p, double infinity) {
+  uint l = children[2u * p], r = children[2u * p + 1u];
+  uint refs = info[2u * p];
+  double area = double(halfArea(p));
+  precise double leafCost = refs <= min(leafCap, kMaxLeafSize) ? double(u_ci) * area * double(refs) : infinity;
+  double left[8], right[8];
+  for (uint i = 1u; i <= kWidth; ++i) left[i - 1u] = childCost(l, i), right[i - 1u] = childCost(r, i);
+  double dist[9];
+  uint best[9];
+  for (uint j = 2u; j <= kWidth; ++j) {
+    dist[j] = infinity;
+    best[j] = 1u;
+    for (uint k = 1u; k < j; ++k) {
+      precise double d = left[k - 1u] + right[j - k - 1u];
+      if (d < dist[j]) dist[j] = d, best[j] = k;
+    }
+  }
+  precise double internalCost = double(u_ct) * area + dist[kWidth];
+  uint internalSplit = best[kWidth];
+  bool asLeaf = leafCost <= internalCost;
+  double c = asLeaf ? leafCost : internalCost;
+  uint choice = asLeaf ? 0u : 1u, split = 0u;
+  uint count = asLeaf ? 0u : 1u + childCount(l, internalSplit) + childCount(r, kWidth - internalSplit);
+  uint bytes[2] = uint[2](0u, 0u);
+  for (uint i = 1u; i <= kWidth; ++i) {
+    if (i > 1u && dist[i] < c) {
+      c = dist[i], choice = 2u, split = best[i];
+      count = childCount(l, split) + childCount(r, i - split);
+    }
+    costs[kWidth * p + i - 1u] = c;
+    counts[kWidth * p + i - 1u] = count;
+    bytes[(i - 1u) / 4u] |= (choice | split << 2) << (8u * ((i - 1u) % 4u));
+  }
+  bytes[0] |= internalSplit << 5;
+  decisions[2u * p] = bytes[0];
+  decisions[2u * p + 1u] = bytes[1];
+}
+
+void main() {
+  uint k = gl_GlobalInvocationID.x;
+  if (k >= u_count) return;
+  double infinity = double(uintBitsToFloat(0x7f800000u));
+  uint node = u_count - 1u + k;
+  for (;;) {
+    uint parent = parents[node];
+    if (parent == 0xffffffffu) break;
+    memoryBarrierBuffer();
+    if (atomicAdd(counters[parent], 1u) == 0u) break;
+    memoryBarrierBuffer();
+    if (!isLeaf(parent)) solve(parent, infinity);
+    node = parent;
+  }
+}

@@ -1,0 +1,27 @@
+// GPU pack into cwbvh, step 3's gate, after each level (one invocation): the entries the level
+// appended become the next level, dispatched with one invocation each; once a level appends none, the
+// level dispatches that remain get 0 workgroups, the wide tree's depth is known (levels, plus 1 for the
+// leaf children: PackedBvh::depth), and the pointer jumping and the node pass get their workgroups.
+layout(local_size_x = 1) in;
+layout(std430, binding = 0) buffer WideState {  // builders/gpu/gpu_pack_wide.cpp WideState
+  uvec3 levelGroups;
+  uint levelBegin, levelEnd, queued, leafCap, largestLeaf, levels, pad0, pad1, pad2;
+  uvec3 nodeGroups;
+  uint pad3;
+};
+layout(std430, binding = 1) buffer PackState { uvec3 dispatchGroups; uint unfinished; uint finalHalf; uint depth; };
+
+void main() {
+  if (levelGroups.x == 0u) return;  // the levels are over
+  ++levels;
+  levelBegin = levelEnd;
+  levelEnd = queued;
+  uint groups = (levelEnd - levelBegin + 255u) / 256u;
+  levelGroups.x = groups;
+  if (groups == 0u) {
+    uint all = (queued + 255u) / 256u;
+    nodeGroups = uvec3(all, 1u, 1u);
+    dispatchGroups = uvec3(all, 1u, 1u);
+    depth = levels + 1u;
+  }
+}
