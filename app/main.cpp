@@ -106,7 +106,8 @@ int buildCommand(const BuildCommand& c) {
                         {"prims_per_leaf_mean", stats.primsPerLeafMean},
                         {"prims_per_leaf_max", stats.primsPerLeafMax}};
     if (findBuilder(c.builder).gpu) {  // GL timer queries per phase over repeated builds
-      // v1 and bvh2-cb with raw triangles are packed on the GPU too (phase `pack`), checked against the CPU's.
+      // v1, bvh2-cb and cwbvh with raw triangles are packed on the GPU too (phase `pack`, and the wide_*
+      // phases for cwbvh), checked against the CPU's.
       // A pack whose buffers pass the GL limits where the build's alone do not is left out (said in
       // gpu_pack_refused), so the build is still timed.
       const bool gpuPack = gpubuild::gpuPackable(layout.name) && triangleFormat == "raw";
@@ -117,7 +118,9 @@ int buildCommand(const BuildCommand& c) {
       try {
         t = timeGpuBuild(c.builder, input, options, builds, gpuPack ? layout.name : std::string(), &soup);
       } catch (const InputError& e) {
-        if (!gpuPack || std::string(e.what()).find("(pack)") == std::string::npos) throw;
+        const std::string what = e.what();
+        if (!gpuPack || (what.find("(pack)") == std::string::npos && what.find("(cwbvh pack)") == std::string::npos))
+          throw;
         packRefused = e.what();
         std::fprintf(stderr, "bvhlab: warning: %s; timed without the GPU pack\n", e.what());
         t = timeGpuBuild(c.builder, input, options, builds);

@@ -34,30 +34,20 @@ std::vector<uint32_t> preOrder(const Bvh& bvh) {
   return order;
 }
 
-// Half areas, raw (the program's decisions) or relative to the root's (the cost it reports). A root of
-// zero area (every primitive in one point) has children of zero area: the relative areas are then all
-// 0, and the program only breaks ties either way.
-std::vector<double> halfAreas(const Bvh& bvh, bool relative) {
+// Half areas relative to the root's. A root of zero area (every primitive in one point) makes every
+// ratio meaningless; the areas are then all 0 and the program only breaks ties.
+std::vector<double> relativeAreas(const Bvh& bvh) {
   const double root = bvh.nodes[0].bounds.halfArea();
   if (!std::isfinite(root)) throw std::runtime_error("collapseWide: the root box is not finite");
   std::vector<double> a(bvh.nodes.size());
-  for (size_t n = 0; n < a.size(); ++n) {
-    const double area = bvh.nodes[n].bounds.halfArea();
-    a[n] = !relative ? area : root > 0.0 ? area / root : 0.0;
-  }
+  for (size_t n = 0; n < a.size(); ++n) a[n] = root > 0.0 ? bvh.nodes[n].bounds.halfArea() / root : 0.0;
   return a;
-}
-
-// The program's cost at the root, over the root's area.
-double relativeCost(const Bvh& bvh, double cost) {
-  const double root = bvh.nodes[0].bounds.halfArea();
-  return root > 0.0 ? cost / root : 0.0;
 }
 
 class Collapse {
  public:
   Collapse(const Bvh& bvh, uint32_t width, const CostModel& cost, uint32_t maxLeafSize)
-      : bvh_(bvh), w_(width), area_(halfAreas(bvh, false)), refs_(subtreeReferences(bvh)) {
+      : bvh_(bvh), w_(width), area_(relativeAreas(bvh)), refs_(subtreeReferences(bvh)) {
     const size_t cells = bvh.nodes.size() * w_;
     c_.assign(cells, kInfinite);
     choice_.assign(cells, Choice::Leaf);
@@ -72,10 +62,10 @@ class Collapse {
     WideTree out;
     out.width = w_;
     if (bvh_.nodes[0].isLeaf()) {
-      out.cost = relativeCost(bvh_, c(0, 1));
+      out.cost = c(0, 1);
       return out;
     }
-    out.cost = relativeCost(bvh_, internalCost_[0]);
+    out.cost = internalCost_[0];
     emitInternal(0, out);
     return out;
   }
@@ -179,7 +169,7 @@ WideTree collapseWide(const Bvh& bvh, uint32_t width, const CostModel& cost, uin
 }
 
 double wideSahCost(const Bvh& bvh, const WideTree& wide, const CostModel& cost) {
-  const std::vector<double> area = halfAreas(bvh, true);
+  const std::vector<double> area = relativeAreas(bvh);
   const std::vector<uint32_t> refs = subtreeReferences(bvh);
   if (wide.nodes.empty()) return cost.intersectionCost * area[0] * double(refs[0]);
   double inner = 0.0, leaf = 0.0;

@@ -10,10 +10,8 @@
 //   Cinternal(n)    = Ct * A(n) + Cdistribute(n, W)          (n becomes a wide node)
 //   Cdistribute(n,j)= min over 0 < k < j of C(left, k) + C(right, j - k)
 // A binary leaf is always a leaf (C(n, i) = Cleaf(n), whatever its size: the collapse never splits a
-// leaf the builder made). A(n) is n's half area (Aabb::halfArea, in double), Ct and Ci the CostModel's.
-// The program compares raw areas; the cost it reports is divided by the root's area (the project's SAH
-// convention, builders/bvh.hpp). Only products and sums, no division, go into a decision, so the GPU's
-// copy of the program (builders/gpu/gpubuild_wide_costs.glsl) reaches the same choices bit for bit. The root is always an inner wide node (a kernel
+// leaf the builder made). A(n) is n's half area over the root's (the project's SAH convention,
+// builders/bvh.hpp), Ct and Ci the CostModel's. The root is always an inner wide node (a kernel
 // starts at a record) unless the binary root is itself a leaf.
 #pragma once
 #include <cstdint>

@@ -55,7 +55,7 @@ class GpuClip : public ::testing::Test {
 std::unique_ptr<GlContext> GpuClip::context_;
 
 PackedBvh cpuPack(const Bvh& bvh, const TriangleSoup& soup, const std::string& layout) {
-  return layout == "v1" ? packBvh(bvh, soup) : packBvh2cb(bvh, soup);
+  return gpubuild::cpuPackFor(bvh, soup, layout);
 }
 
 // A sphere and a random soup, with every vertex coordinate that is 0 made -0 on the sphere's lower
@@ -151,7 +151,7 @@ TEST_F(GpuClip, ATracerBoundToTheStreamsOnTheGpuTracesTheCpuPack) {
   using namespace traversaltest;
   const Mesh base = sphereMesh(12, 24, 1.0f);
   for (const char* builder : {"lbvh-gpu", "ploc-gpu", "hploc-gpu"})
-    for (const char* layout : {"v1", kLayoutBvh2cb})
+    for (const char* layout : {"v1", kLayoutBvh2cb, "cwbvh"})
       for (const Storage storage : {Storage::Tbo, Storage::Ssbo}) {
         SCOPED_TRACE(std::string(builder) + ", " + layout + (storage == Storage::Tbo ? ", tbo" : ", ssbo"));
         std::unique_ptr<GpuClipBuilder> resident = makeResidentClipBuilder(builder, BuildOptions{}, layout);
@@ -295,7 +295,7 @@ TEST(GpuClipCli, TraceUpdateRebuildWithAGpuBuilderBuildsOnTheGpuAndGivesTheCpuBu
                                                "amplitude = 0.3\nwavelength = 1\n")
                                   .string();
   const std::string common = scene + " --update rebuild --rays diffuse --count 256 --update-repeats 2";
-  for (const char* layout : {"v1", "bvh2-cb"}) {
+  for (const char* layout : {"v1", "bvh2-cb", "cwbvh"}) {
     SCOPED_TRACE(layout);
     const json gpu = traceJson(common + " --builder ploc-gpu --layout " + layout);
     const json cpu = traceJson(common + " --builder ploc --layout " + layout);

@@ -17,6 +17,7 @@
 #include "builders/gpu/gpu_compute.hpp"
 #include "builders/gpu/gpu_hploc.hpp"
 #include "builders/gpu/gpu_lbvh.hpp"
+#include "builders/gpu/gpu_pack_wide.hpp"
 #include "builders/gpu/gpu_ploc.hpp"
 #include "render/gl_context.hpp"
 #include "require.hpp"
@@ -34,6 +35,7 @@ TEST(GpuBuilderGlsl, EveryComputeProgramCompilesWithGlslang) {
     const gpubuild::GpuLbvh lbvh;
     const gpubuild::GpuPloc ploc, plocpp(std::nullopt, gpubuild::PlocPasses::Fused);
     const gpubuild::GpuHploc hploc;
+    const gpubuild::WidePackPrograms wide;  // the cwbvh pack's, which a packer compiles at its first cwbvh pack
   }
   const auto sources = gpubuild::computeSourcesMade();
   // Every embedded builder module was among them, as a program or a prelude.

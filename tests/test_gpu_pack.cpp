@@ -130,6 +130,19 @@ TEST_F(GpuPack, SyntheticMeshesGiveTheCpuStreams) {
   // Equal triangles on a grid: equal areas make equal costs, where the wide collapse's and the slot
   // assignment's tie-breaks decide.
   expectCpuStreams(soupOf({gridMesh(24)}), "a grid");
+  // Boxes of zero area (triangles along the x axis, some of them points) beside ordinary ones, and
+  // a whole scene of one point (a root of zero area: every relative area 0).
+  Mesh lines = randomSoupMesh(200, 9), point;
+  for (int k = 0; k < 60; ++k) {
+    const uint32_t v = uint32_t(lines.positions.size());
+    const float x = float(k % 7) * 0.25f;
+    lines.positions.insert(lines.positions.end(), {{x, 0.5f, 0.5f}, {x + float(k % 3) * 0.1f, 0.5f, 0.5f}, {x, 0.5f, 0.5f}});
+    lines.triangles.push_back({v, v + 1, v + 2});
+  }
+  point.positions = {{1, 2, 3}};
+  for (int k = 0; k < 40; ++k) point.triangles.push_back({0, 0, 0});
+  expectCpuStreams(soupOf({lines}), "boxes of zero area");
+  expectCpuStreams(soupOf({point}), "one point");
   const TriangleSoup deep = soupOf({mortonChain()});
   expectCpuStreams(deep, "a chain of Morton bits");
   PackedBvh gpu;

@@ -12,8 +12,9 @@
 //                       node numbering needs subtree sizes
 //   decisions[2p + ..]  byte i - 1: the choice (0 leaf, 1 internal, 2 distribute) | its split << 2;
 //                       bits 5..7 of byte 0: the split of Cinternal's 8 slots
-// A is the node's half area as Aabb::halfArea computes it, in double; no division enters a decision,
-// so the choices are the CPU's bit for bit. Costs are finite sums or +infinity, never NaN.
+// A is the node's half area as Aabb::halfArea computes it, over the root's, a double quotient rounded as
+// the CPU's IEEE division rounds it (divideRounded), so the choices are the CPU's bit for bit. Costs
+// are finite sums or +infinity, never NaN.
 layout(local_size_x = 256) in;
 layout(std430, binding = 0) readonly buffer Children { uint children[]; };
 layout(std430, binding = 1) readonly buffer Parents { uint parents[]; };
@@ -46,10 +47,68 @@ float halfArea(uint node) {
 
 bool isLeaf(uint x) { return info[2u * x + 1u] == 0u; }
 
+// The neighbours of a positive finite double (its bits as a 64-bit integer, plus or minus one).
+double nextUp(double q) {
+  uvec2 w = unpackDouble2x32(q);
+  w.x += 1u;
+  if (w.x == 0u) w.y += 1u;
+  return packDouble2x32(w);
+}
+double nextDown(double q) {
+  uvec2 w = unpackDouble2x32(q);
+  if (w.x == 0u) w.y -= 1u;
+  w.x -= 1u;
+  return packDouble2x32(w);
+}
+
+// x = hi + lo exactly, hi holding x's upper 26 significant bits (Veltkamp's split, 2^27 + 1 for a
+// 53-bit significand; `precise` keeps every operation rounded on its own).
+void split(double x, out double hi, out double lo) {
+  precise double t = 134217729.0LF * x;
+  precise double h = t - (t - x);
+  precise double l = x - h;
+  hi = h, lo = l;
+}
+
+// a - q b exactly, for q one of the two doubles around a / b: Dekker's product gives q b = p + e exactly;
+// a - p is exact (two doubles within a factor 2 of each other: Sterbenz's lemma), and so is its
+// difference with e, since that residual is itself a double. Only + - * rounded to nearest, which GLSL
+// and every GPU give for doubles; no fma, whose fusing Mesa's llvmpipe does not promise.
+double residual(double a, double q, double b) {
+  precise double p = q * b;
+  double qh, ql, bh, bl;
+  split(q, qh, ql);
+  split(b, bh, bl);
+  precise double e = ((qh * bh - p) + qh * bl + ql * bh) + ql * bl;
+  precise double r = (a - p) - e;
+  return r;
+}
+
+// a / b rounded to nearest, as an IEEE division rounds it, for finite a >= 0 and b > 0 (areas here, so
+// no product in residual overflows or underflows). GLSL promises no rounding for a double division, so
+// the driver's quotient q (taken to be within an ulp: one of the two doubles around a / b) is checked
+// against its neighbour on the side its residual points to; the nearer of the two leaves the smaller
+// residual (a quotient of doubles is never halfway between two doubles, so there is no tie).
+double divideRounded(double a, double b) {
+  double q = a / b;
+  if (a == 0.0) return 0.0;
+  double r = residual(a, q, b);
+  if (r == 0.0) return q;
+  double n = r > 0.0 ? nextUp(q) : nextDown(q);
+  return abs(residual(a, n, b)) < abs(r) ? n : q;
+}
+
+// The CPU's relative area (layout/collapse_wide.cpp relativeAreas): 0 for every node under a root of zero
+// area.
+double area(uint x) {
+  double root = double(halfArea(0u));
+  return root > 0.0 ? divideRounded(double(halfArea(x)), root) : 0.0;
+}
+
 // C(x, i) of a child: a binary leaf's Ci A P whatever i, else what x's solve stored.
 double childCost(uint x, uint i) {
   if (isLeaf(x)) {
-    precise double c = double(u_ci) * double(halfArea(x)) * double(info[2u * x]);
+    precise double c = double(u_ci) * area(x) * double(info[2u * x]);
     return c;
   }
   return costs[kWidth * x + i - 1u];
@@ -59,8 +118,8 @@ uint childCount(uint x, uint i) { return isLeaf(x) ? 0u : counts[kWidth * x + i 
 void solve(uint p, double infinity) {
   uint l = children[2u * p], r = children[2u * p + 1u];
   uint refs = info[2u * p];
-  double area = double(halfArea(p));
-  precise double leafCost = refs <= min(leafCap, kMaxLeafSize) ? double(u_ci) * area * double(refs) : infinity;
+  double a = area(p);
+  precise double leafCost = refs <= min(leafCap, kMaxLeafSize) ? double(u_ci) * a * double(refs) : infinity;
   double left[8], right[8];
   for (uint i = 1u; i <= kWidth; ++i) left[i - 1u] = childCost(l, i), right[i - 1u] = childCost(r, i);
   double dist[9];
@@ -73,7 +132,7 @@ void solve(uint p, double infinity) {
       if (d < dist[j]) dist[j] = d, best[j] = k;
     }
   }
-  precise double internalCost = double(u_ct) * area + dist[kWidth];
+  precise double internalCost = double(u_ct) * a + dist[kWidth];
   uint internalSplit = best[kWidth];
   bool asLeaf = leafCost <= internalCost;
   double c = asLeaf ? leafCost : internalCost;

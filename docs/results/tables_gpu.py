@@ -171,7 +171,11 @@ def gpu_build_time(dirname):
     groups = {}
     for n, b in enumerate(builds, 1):
         mesh = os.path.splitext(os.path.basename(str(b.get("mesh", "?"))))[0]
-        groups.setdefault((mesh, b.get("builder", "?")), []).append((n, b))
+        # A GPU build packed into another layout than v1 (`--layout cwbvh`) is its own row: the pack is
+        # part of its GL-timed build.
+        pack = b.get("gpu_pack")
+        builder = f"`{b.get('builder', '?')}`" + (f" into {pack}" if pack not in (None, "v1") else "")
+        groups.setdefault((mesh, builder), []).append((n, b))
     cells = {}
     for (mesh, builder), bs in groups.items():
         where = f"{rel(path)}: object {bs[0][0]}"
@@ -189,7 +193,7 @@ def gpu_build_time(dirname):
         cells[(mesh, builder)] = (ms, sah, time, how, g is not None and isinstance(g, dict))
     out = []
     for (mesh, builder), (ms, sah, time, how, gpu) in sorted(cells.items(), key=lambda kv: (kv[0][0], not kv[1][4], kv[1][0])):
-        ref = cells.get((mesh, "sah-binned"))
+        ref = cells.get((mesh, "`sah-binned`"))
         vs_sah = f"{sah / ref[1]:.3f}" if ref else "–"
         speedup = "–"
         if gpu:
@@ -197,13 +201,14 @@ def gpu_build_time(dirname):
             # rounding of equal trees' costs summed in another order).
             cpu = [c[0] for (m, _), c in cells.items() if m == mesh and not c[4] and c[1] <= sah * (1 + 1e-9)]
             speedup = f"{sig(min(cpu) / ms)}x" if cpu else "no CPU builder as good"
-        out.append([mesh, f"`{builder}`", how, time, f"{sah:.2f}", vs_sah, speedup])
+        out.append([mesh, builder, how, time, f"{sah:.2f}", vs_sah, speedup])
     header = ["mesh", "builder", "timed as", "build ms", "SAH cost", "SAH / sah-binned's",
               "fastest CPU build of the same or better SAH / this build"]
     lines = table(header, out)
     lines += ["", "GPU builders: the median of `build --json --gpu-builds` GL-timed builds after an untimed warm-up, "
                   "with its 95% order-statistic interval; the times cover the passes from the uploaded boxes to the "
-                  "packed streams (`gpu_phases_ms`), not the upload or the download. CPU builders: `build --json`'s "
+                  "packed streams (`gpu_phases_ms`; v1 unless the row names another layout), not the upload or the "
+                  "download. CPU builders: `build --json`'s "
                   "wall-clock `build_ms` of one build on every host core, repeated."]
     renderers = sorted({b.get("gpu_renderer") for b in builds if b.get("gpu_renderer")})
     rows = [{"git_commit": src.get("git_commit", ""), "gl_renderer": r} for r in renderers]

@@ -114,7 +114,8 @@ class GpuBuildTime(unittest.TestCase):
                                      "gpu_build_ms": {"median": ms, "low": ms * 0.9, "high": ms * 1.1, "builds": 11},
                                      "gpu_renderer": "NVIDIA H100"}
         cpu = lambda name, ms, sah: {"mesh": "m/scaling_1M.toml", "builder": name, "sah_cost": sah, "build_ms": ms}
-        self.write([gpu("lbvh-gpu", 2.0, 60.0), gpu("ploc-gpu", 5.0, 50.0), gpu("odd-gpu", 1.0, 10.0),
+        wide = dict(gpu("ploc-gpu", 8.0, 50.0), gpu_pack="cwbvh")
+        self.write([gpu("lbvh-gpu", 2.0, 60.0), gpu("ploc-gpu", 5.0, 50.0), gpu("odd-gpu", 1.0, 10.0), wide,
                     cpu("lbvh", 30.0, 60.0), cpu("lbvh", 50.0, 60.0), cpu("lbvh", 40.0, 60.0),
                     cpu("ploc", 100.0, 50.0), cpu("sah-binned", 80.0, 45.0)])
         rows = self.rows()
@@ -124,6 +125,8 @@ class GpuBuildTime(unittest.TestCase):
         self.assertEqual(rows["`lbvh`"][3], "40.0 [30.0, 50.0]")
         self.assertEqual(rows["`ploc-gpu`"][5], f"{50 / 45:.3f}")
         self.assertEqual(rows["`lbvh`"][6], "–")
+        self.assertEqual(rows["`ploc-gpu` into cwbvh"][6], "10.0x")  # its own row, not merged with v1's
+        self.assertEqual(rows["`ploc-gpu`"][3], "5.00 [4.50, 5.50]")
 
     def test_a_missing_key_names_the_file_and_object(self):
         self.write([{"mesh": "a.off", "builder": "lbvh", "build_ms": 3.0}])
