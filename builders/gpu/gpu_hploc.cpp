@@ -22,7 +22,7 @@ uint32_t hplocGroupsFor(uint64_t n) { return uint32_t((n + kHplocGroup - 1) / kH
 GpuHploc::GpuHploc(std::optional<GpuLimits> limits)
     : limits_(limits ? *limits : queryGpuLimits()),
       hierarchy_("gpubuild_hploc.glsl", "", {"gpubuild_ploc_pairs.glsl"}),
-      collapse_("gpubuild_collapse.glsl") {}
+      collapse_("gpubuild_collapse.glsl", "", {"gpubuild_tree_area.glsl"}) {}
 
 void GpuHploc::checkLimits(size_t n, bool pack) const {
   std::vector<std::pair<const char*, uint64_t>> buffers = sharedBuildBuffers(n, pack);

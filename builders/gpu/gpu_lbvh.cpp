@@ -27,7 +27,7 @@ GpuLbvh::GpuLbvh(std::optional<GpuLimits> limits)
       labels_("gpubuild_labels.glsl"),
       hierarchy_("gpubuild_hierarchy.glsl"),
       fit_("gpubuild_fit.glsl"),
-      collapse_("gpubuild_collapse.glsl") {}
+      collapse_("gpubuild_collapse.glsl", "", {"gpubuild_tree_area.glsl"}) {}
 
 void GpuLbvh::checkLimits(size_t n, bool pack) const {
   checkBuildLimits("lbvh-gpu", n, limits_, sharedBuildBuffers(n, pack));

@@ -14,7 +14,7 @@ namespace bvhlab::gpubuild {
 
 namespace {
 
-// gpubuild_wide_*.glsl's WideState as it lies in the buffer (std430: a uvec3 at 0, uints from 12, a
+// gpubuild_wide_state.glsl's WideState as it lies in the buffer (std430: a uvec3 at 0, uints from 12, a
 // uvec3 at 48).
 struct WideState {
   uint32_t levelGroups[3] = {1, 1, 1};  // the next level's indirect dispatch (the root's level first)
@@ -37,11 +37,11 @@ static_assert(sizeof(JumpState) == 24);
 }  // namespace
 
 WidePackPrograms::WidePackPrograms()
-    : leafCap("gpubuild_wide_leafcap.glsl"),
-      costs("gpubuild_wide_costs.glsl"),
-      level("gpubuild_wide_level.glsl"),
-      levelGate("gpubuild_wide_gate.glsl"),
-      nodes("gpubuild_wide_nodes.glsl") {}
+    : leafCap("gpubuild_wide_leafcap.glsl", "", {"gpubuild_wide_state.glsl"}),
+      costs("gpubuild_wide_costs.glsl", "", {"gpubuild_wide_state.glsl", "gpubuild_tree_area.glsl"}),
+      level("gpubuild_wide_level.glsl", "", {"gpubuild_wide_state.glsl"}),
+      levelGate("gpubuild_wide_gate.glsl", "", {"gpubuild_wide_state.glsl"}),
+      nodes("gpubuild_wide_nodes.glsl", "", {"gpubuild_wide_state.glsl"}) {}
 
 std::array<std::pair<const char*, uint64_t>, 10> GpuWidePack::buffers(uint64_t n) {
   const uint64_t inner = std::max<uint64_t>(1, n - 1);  // wide nodes are at most the binary inner nodes

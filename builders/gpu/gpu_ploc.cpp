@@ -55,7 +55,7 @@ GpuPloc::GpuPloc(std::optional<GpuLimits> limits, PlocPasses passes)
       scanPass_("gpubuild_scan.glsl", "#define COUNT_FROM_PASS_STATE 1\n"),
       merge_("gpubuild_ploc_merge.glsl", "", {"gpubuild_ploc_pairs.glsl"}),
       next_("gpubuild_ploc_next.glsl"),
-      collapse_("gpubuild_collapse.glsl") {
+      collapse_("gpubuild_collapse.glsl", "", {"gpubuild_tree_area.glsl"}) {
   if (passes_ == PlocPasses::Fused) fused_.emplace("gpubuild_ploc_fused.glsl", "", std::vector<std::string>{"gpubuild_ploc_pairs.glsl"});
 }
 

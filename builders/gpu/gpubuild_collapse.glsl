@@ -5,24 +5,13 @@
 // on its own (no fused multiply-add), as the CPU computes it. Areas are float half areas as
 // Aabb::halfArea computes them ((x y + y z) + z x).
 layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer Children { uint children[]; };
-layout(std430, binding = 1) readonly buffer Parents { uint parents[]; };
-layout(std430, binding = 2) readonly buffer NodeBoxes { float nodeBoxes[]; };
+// bindings 0-2 (children, parents, node boxes) and halfArea: gpubuild_tree_area.glsl
 layout(std430, binding = 3) coherent buffer Info { uint info[]; };  // count, inner per node
 layout(std430, binding = 4) coherent buffer Costs { double costs[]; };
 layout(std430, binding = 5) coherent buffer Counters { uint counters[]; };
 uniform uint u_count;
 uniform uint u_maxLeaf;
 uniform float u_ct, u_ci;
-
-float halfArea(uint node) {
-  vec3 lo = vec3(nodeBoxes[6u * node], nodeBoxes[6u * node + 1u], nodeBoxes[6u * node + 2u]);
-  vec3 hi = vec3(nodeBoxes[6u * node + 3u], nodeBoxes[6u * node + 4u], nodeBoxes[6u * node + 5u]);
-  if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return 0.0;
-  precise vec3 e = hi - lo;
-  precise float a = e.x * e.y + e.y * e.z + e.z * e.x;
-  return a;
-}
 
 void main() {
   uint k = gl_GlobalInvocationID.x;

@@ -16,34 +16,18 @@
 // the CPU's IEEE division rounds it (divideRounded), so the choices are the CPU's bit for bit. Costs
 // are finite sums or +infinity, never NaN.
 layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer Children { uint children[]; };
-layout(std430, binding = 1) readonly buffer Parents { uint parents[]; };
-layout(std430, binding = 2) readonly buffer NodeBoxes { float nodeBoxes[]; };
+// bindings 0-2 (children, parents, node boxes) and halfArea: gpubuild_tree_area.glsl
 layout(std430, binding = 3) readonly buffer Info { uint info[]; };
 layout(std430, binding = 4) coherent buffer Costs { double costs[]; };
 layout(std430, binding = 5) coherent buffer Counts { uint counts[]; };
 layout(std430, binding = 6) coherent buffer Decisions { uint decisions[]; };
 layout(std430, binding = 7) coherent buffer Counters { uint counters[]; };
-layout(std430, binding = 8) readonly buffer WideState {  // builders/gpu/gpu_pack_wide.cpp WideState
-  uvec3 levelGroups;
-  uint levelBegin, levelEnd, queued, leafCap, largestLeaf, levels, pad0, pad1, pad2;
-  uvec3 nodeGroups;
-  uint pad3;
-};
+layout(std430, binding = 8) readonly buffer WideStateBuffer { WideState state; };  // gpubuild_wide_state.glsl
 uniform uint u_count;  // primitives n: inner nodes 0 .. n - 2, leaves n - 1 + sorted position
 uniform float u_ct, u_ci;
 
 const uint kWidth = 8u;
 const uint kMaxLeafSize = 255u;  // builders/bvh.hpp
-
-float halfArea(uint node) {
-  vec3 lo = vec3(nodeBoxes[6u * node], nodeBoxes[6u * node + 1u], nodeBoxes[6u * node + 2u]);
-  vec3 hi = vec3(nodeBoxes[6u * node + 3u], nodeBoxes[6u * node + 4u], nodeBoxes[6u * node + 5u]);
-  if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return 0.0;
-  precise vec3 e = hi - lo;
-  precise float a = e.x * e.y + e.y * e.z + e.z * e.x;
-  return a;
-}
 
 bool isLeaf(uint x) { return info[2u * x + 1u] == 0u; }
 
@@ -119,7 +103,7 @@ void solve(uint p, double infinity) {
   uint l = children[2u * p], r = children[2u * p + 1u];
   uint refs = info[2u * p];
   double a = area(p);
-  precise double leafCost = refs <= min(leafCap, kMaxLeafSize) ? double(u_ci) * a * double(refs) : infinity;
+  precise double leafCost = refs <= min(state.leafCap, kMaxLeafSize) ? double(u_ci) * a * double(refs) : infinity;
   double left[8], right[8];
   for (uint i = 1u; i <= kWidth; ++i) left[i - 1u] = childCost(l, i), right[i - 1u] = childCost(r, i);
   double dist[9];

@@ -5,17 +5,12 @@
 layout(local_size_x = 256) in;
 layout(std430, binding = 0) readonly buffer Parents { uint parents[]; };
 layout(std430, binding = 1) readonly buffer Info { uint info[]; };  // count, inner per node
-layout(std430, binding = 2) buffer WideState {  // builders/gpu/gpu_pack_wide.cpp WideState
-  uvec3 levelGroups;
-  uint levelBegin, levelEnd, queued, leafCap, largestLeaf, levels, pad0, pad1, pad2;
-  uvec3 nodeGroups;
-  uint pad3;
-};
+layout(std430, binding = 2) buffer WideStateBuffer { WideState state; };  // gpubuild_wide_state.glsl
 uniform uint u_nodes;  // 2n - 1
 
 void main() {
   uint x = gl_GlobalInvocationID.x;
   if (x >= u_nodes || info[2u * x + 1u] != 0u) return;
   uint p = parents[x];
-  if (p == 0xffffffffu || info[2u * p + 1u] != 0u) atomicMax(leafCap, info[2u * x]);
+  if (p == 0xffffffffu || info[2u * p + 1u] != 0u) atomicMax(state.leafCap, info[2u * x]);
 }

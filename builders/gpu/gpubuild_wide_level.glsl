@@ -27,12 +27,7 @@ layout(std430, binding = 3) readonly buffer Counts { uint counts[]; };
 layout(std430, binding = 4) readonly buffer Decisions { uint decisions[]; };
 layout(std430, binding = 5) readonly buffer V1Steps { uvec4 v1Steps[]; };  // the binary pack's path sums
 layout(std430, binding = 6) readonly buffer PackState { uvec3 dispatchGroups; uint unfinished; uint finalHalf; uint depth; };
-layout(std430, binding = 7) buffer WideState {  // builders/gpu/gpu_pack_wide.cpp WideState
-  uvec3 levelGroups;
-  uint levelBegin, levelEnd, queued, leafCap, largestLeaf, levels, pad0, pad1, pad2;
-  uvec3 nodeGroups;
-  uint pad3;
-};
+layout(std430, binding = 7) buffer WideStateBuffer { WideState state; };  // gpubuild_wide_state.glsl
 layout(std430, binding = 8) buffer Queue { uvec4 queue[]; };               // (binary, parent, rank, 0)
 layout(std430, binding = 9) writeonly buffer WideSteps { uvec4 wideSteps[]; };        // first half
 layout(std430, binding = 10) writeonly buffer WideAncestors { uint wideAncestors[]; };  // first half
@@ -90,8 +85,8 @@ uvec2 quantise(float p, float scale, float lo, float hi) {
 void putByte(inout uvec4 t[4], uint j, uint value) { t[j / 16u][(j / 4u) % 4u] |= value << (8u * (j % 4u)); }
 
 void main() {
-  uint q = levelBegin + gl_GlobalInvocationID.x;
-  if (q >= levelEnd) return;
+  uint q = state.levelBegin + gl_GlobalInvocationID.x;
+  if (q >= state.levelEnd) return;
   uint b = queue[q].x;
 
   // The children, left first: binary node, slot count it was given, leaf or inner.
@@ -151,7 +146,7 @@ void main() {
 
   // The node's texels, and its inner children's queue entries and steps.
   uint inner = n - uint(bitCount(leafMask));
-  uint base = inner > 0u ? atomicAdd(queued, inner) : 0u;
+  uint base = inner > 0u ? atomicAdd(state.queued, inner) : 0u;
   uvec4 bytes[4] = uvec4[4](uvec4(0u), uvec4(0u), uvec4(0u), uvec4(0u));  // texels 1..4: meta in bytes 8..15, q from 16
   uvec4 leafFirst[2] = uvec4[2](uvec4(0u), uvec4(0u));
   uint ownTriangles = 0u;
@@ -184,7 +179,7 @@ void main() {
       putByte(bytes, 16u + 8u * (3u + a) + s, qq.y);
     }
   }
-  if (largest > 127u) atomicMax(largestLeaf, largest);
+  if (largest > 127u) atomicMax(state.largestLeaf, largest);
   scratch[7u * q] = uvec4(floatBitsToUint(p), e.x | e.y << 8 | e.z << 16 | n << 24);
   for (uint t = 0u; t < 4u; ++t) scratch[7u * q + 1u + t] = bytes[t];
   scratch[7u * q + 5u] = leafFirst[0];

@@ -6,12 +6,7 @@
 // the node's 5 texels (the level pass's, with childBase and triBase) and copies each leaf slot's
 // triangles (3 TRIANGLE and 4 ATTRIBUTE texels each) from v1's streams, where they are consecutive.
 layout(local_size_x = 256) in;
-layout(std430, binding = 0) readonly buffer WideState {  // builders/gpu/gpu_pack_wide.cpp WideState
-  uvec3 levelGroups;
-  uint levelBegin, levelEnd, queued, leafCap, largestLeaf, levels, pad0, pad1, pad2;
-  uvec3 nodeGroups;
-  uint pad3;
-};
+layout(std430, binding = 0) readonly buffer WideStateBuffer { WideState state; };  // gpubuild_wide_state.glsl
 layout(std430, binding = 1) readonly buffer Queue { uvec4 queue[]; };
 layout(std430, binding = 2) readonly buffer WideSteps { uvec4 wideSteps[]; };  // two halves of u_bound
 layout(std430, binding = 3) readonly buffer PackState { uvec3 dispatchGroups; uint unfinished; uint finalHalf; uint depth; };
@@ -28,7 +23,7 @@ const uint kMetaInner = 0x80u;
 
 void main() {
   uint q = gl_GlobalInvocationID.x;
-  if (q >= queued) return;
+  if (q >= state.queued) return;
   uvec4 entry = queue[q];
   uint halfBase = finalHalf * u_bound;
   uvec4 sums = wideSteps[halfBase + q];

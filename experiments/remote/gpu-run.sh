@@ -126,5 +126,8 @@ sed -e 's|"\.\./\.\./datasets/|"'"$PWD"'/datasets/|' \
     -e 's|^builders = \["lbvh-gpu", "ploc-gpu", "plocpp-gpu"\]|builders = ["lbvh-gpu", "ploc-gpu", "plocpp-gpu", "hploc-gpu"]|' \
     experiments/configs/dynamic.toml > /tmp/gpu-run/dynamic-gpu.toml
 printf '[[sweep]]\nname = "gpu-rebuild-explode"\nscenes = { file = "%s/datasets/scenes/bench/anim-explode.toml", name = "explode", clip_step = 1, clip_frames = 30 }\nbuilders = ["lbvh-gpu", "ploc-gpu", "plocpp-gpu", "hploc-gpu"]\nupdates = ["rebuild"]\n' "$PWD" >> /tmp/gpu-run/dynamic-gpu.toml
+# The same rebuilds packed into cwbvh on the GPU (the wide collapse included in the update) and traced by
+# the paper's kernel: the whole per-frame path of a real-time renderer with a compressed wide BVH.
+printf '[[sweep]]\nname = "gpu-rebuild-explode-cwbvh"\nscenes = { file = "%s/datasets/scenes/bench/anim-explode.toml", name = "explode", clip_step = 1, clip_frames = 30 }\nbuilders = ["lbvh-gpu", "ploc-gpu", "plocpp-gpu", "hploc-gpu"]\nupdates = ["rebuild"]\nlayouts = ["cwbvh"]\nkernels = "cwbvh-groups"\n' "$PWD" >> /tmp/gpu-run/dynamic-gpu.toml
 sweep dynamic-gpu /tmp/gpu-run/dynamic-gpu.toml "$dynamic_s"
 step "done"; ls -la "$out"
