@@ -142,6 +142,26 @@ TEST_F(GpuPack, SyntheticMeshesGiveTheCpuStreams) {
   point.positions = {{1, 2, 3}};
   for (int k = 0; k < 40; ++k) point.triangles.push_back({0, 0, 0});
   expectCpuStreams(soupOf({lines}), "boxes of zero area");
+  // Grids near the ends of float's range: coordinates of 1e18 (boxes whose half areas near 1e37, grid
+  // steps up at 2^60) and of 1e-36 (steps down at the smallest normal, 2^-126).
+  for (const float scale : {1e18f, 1e-36f}) {
+    Mesh far = randomSoupMesh(300, 11);
+    for (glm::vec3& p : far.positions) p *= scale;
+    expectCpuStreams(soupOf({far}), "coordinates of magnitude " + std::to_string(scale));
+  }
+  // Past them, a root whose half area overflows a float: the CPU's collapse refuses it, and so does the
+  // GPU's, instead of letting an infinity into its program.
+  Mesh huge = randomSoupMesh(300, 11);
+  for (glm::vec3& p : huge.positions) p *= 1e20f;
+  const TriangleSoup hugeSoup = soupOf({huge});
+  PackedBvh v1, wide;
+  EXPECT_THROW(packCwbvh(build("lbvh-gpu", hugeSoup, "v1", BuildOptions{}, &v1), hugeSoup), std::runtime_error);
+  try {
+    build("lbvh-gpu", hugeSoup, kLayoutCwbvh, BuildOptions{}, &wide);
+    ADD_FAILURE() << "a root of infinite area was packed into cwbvh on the GPU";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("overflows a float"), std::string::npos) << e.what();
+  }
   expectCpuStreams(soupOf({point}), "one point");
   const TriangleSoup deep = soupOf({mortonChain()});
   expectCpuStreams(deep, "a chain of Morton bits");

@@ -21,7 +21,7 @@ struct WideState {
   uint32_t levelBegin = 0, levelEnd = 1, queued = 1;  // the level's queue entries; all entries so far
   uint32_t leafCap = 1;                 // the collapsed tree's largest leaf (at least 1, as on the CPU)
   uint32_t largestLeaf = 0;             // the largest leaf slot past kCwbvhMaxLeaf (0: none)
-  uint32_t levels = 0, pad[3] = {0, 0, 0};
+  uint32_t levels = 0, rootInfinite = 0, pad[2] = {0, 0};
   uint32_t nodeGroups[3] = {0, 1, 1};   // the node pass's indirect dispatch, set when the levels end
   uint32_t pad3 = 0;
 };
@@ -153,6 +153,9 @@ std::pair<uint32_t, uint32_t> GpuWidePack::nodesAndDepth() const {
   if (state.levelGroups[0] != 0)
     throw std::runtime_error("GPU pack (cwbvh): the wide tree is deeper than " + std::to_string(kMaxWideLevels) +
                              " levels (kMaxWideLevels level dispatches); pack it on the CPU (layout/pack_cwbvh.cpp)");
+  if (state.rootInfinite != 0)
+    throw std::runtime_error("GPU pack (cwbvh): the root box's half area overflows a float; the wide collapse "
+                             "refuses it, as collapseWide does (\"the root box is not finite\")");
   if (state.largestLeaf > kCwbvhMaxLeaf)
     throw std::runtime_error("packCwbvh: a leaf of " + std::to_string(state.largestLeaf) +
                              " triangles; layout cwbvh stores at most " + std::to_string(kCwbvhMaxLeaf) +

@@ -63,7 +63,8 @@ class GpuWidePack {
            GLuint attributeStream, PhaseStamps& stamps) const;
 
   // After run: the wide nodes written and PackedBvh::depth. Throws std::runtime_error for a wide tree
-  // deeper than kMaxWideLevels or a leaf of more triangles than layout cwbvh stores (as packCwbvh does).
+  // deeper than kMaxWideLevels, a root whose half area overflows a float, or a leaf of more triangles
+  // than layout cwbvh stores (the last two as packCwbvh does).
   std::pair<uint32_t, uint32_t> nodesAndDepth() const;
 
  private:

@@ -22,7 +22,7 @@ layout(std430, binding = 4) coherent buffer Costs { double costs[]; };
 layout(std430, binding = 5) coherent buffer Counts { uint counts[]; };
 layout(std430, binding = 6) coherent buffer Decisions { uint decisions[]; };
 layout(std430, binding = 7) coherent buffer Counters { uint counters[]; };
-layout(std430, binding = 8) readonly buffer WideStateBuffer { WideState state; };  // gpubuild_wide_state.glsl
+layout(std430, binding = 8) buffer WideStateBuffer { WideState state; };  // gpubuild_wide_state.glsl
 uniform uint u_count;  // primitives n: inner nodes 0 .. n - 2, leaves n - 1 + sorted position
 uniform float u_ct, u_ci;
 
@@ -83,9 +83,14 @@ double divideRounded(double a, double b) {
 }
 
 // The CPU's relative area (layout/collapse_wide.cpp relativeAreas): 0 for every node under a root of zero
-// area.
+// area. A root whose area overflows a float is refused by the CPU; here it is flagged (rootInfinite, an
+// error at the download) and every area is 0, so that no infinity or NaN enters the program.
 double area(uint x) {
   double root = double(halfArea(0u));
+  if (isinf(root)) {
+    state.rootInfinite = 1u;
+    return 0.0;
+  }
   return root > 0.0 ? divideRounded(double(halfArea(x)), root) : 0.0;
 }
 

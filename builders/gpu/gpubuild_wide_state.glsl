@@ -5,10 +5,11 @@
 //   leafCap       the collapsed tree's largest leaf (atomicMax; the host starts it at 1)
 //   largestLeaf   the largest leaf slot past cwbvh's 127 triangles (0: none)
 //   levels        the levels done
+//   rootInfinite  1 where the root's half area overflows a float (the CPU's collapse refuses the tree)
 //   nodeGroups    the node pass's indirect dispatch, set when the levels end
 struct WideState {
   uvec3 levelGroups;
-  uint levelBegin, levelEnd, queued, leafCap, largestLeaf, levels, pad0, pad1, pad2;
+  uint levelBegin, levelEnd, queued, leafCap, largestLeaf, levels, rootInfinite, pad1, pad2;
   uvec3 nodeGroups;
   uint pad3;
 };
