@@ -84,33 +84,29 @@ double divideRounded(double a, double b) {
 
 // The CPU's relative area (layout/collapse_wide.cpp relativeAreas): 0 for every node under a root of zero
 // area. A root whose area overflows a float is refused by the CPU; here it is flagged (rootInfinite, an
-// error at the download) and every area is 0, so that no infinity or NaN enters the program.
-double area(uint x) {
-  double root = double(halfArea(0u));
-  if (isinf(root)) {
-    state.rootInfinite = 1u;
-    return 0.0;
-  }
-  return root > 0.0 ? divideRounded(double(halfArea(x)), root) : 0.0;
-}
+// error at the download) before anything is solved.
+// `root`: the root's half area, finite (main refuses an infinite one).
+double area(uint x, double root) { return root > 0.0 ? divideRounded(double(halfArea(x)), root) : 0.0; }
 
-// C(x, i) of a child: a binary leaf's Ci A P whatever i, else what x's solve stored.
-double childCost(uint x, uint i) {
+// C(x, 1..8) of a child: a binary leaf's Ci A P whatever the slots, else what x's solve stored.
+void childCosts(uint x, double root, out double c[8]) {
   if (isLeaf(x)) {
-    precise double c = double(u_ci) * area(x) * double(info[2u * x]);
-    return c;
+    precise double leaf = double(u_ci) * area(x, root) * double(info[2u * x]);
+    for (uint i = 0u; i < kWidth; ++i) c[i] = leaf;
+  } else {
+    for (uint i = 0u; i < kWidth; ++i) c[i] = costs[kWidth * x + i];
   }
-  return costs[kWidth * x + i - 1u];
 }
 uint childCount(uint x, uint i) { return isLeaf(x) ? 0u : counts[kWidth * x + i - 1u]; }
 
-void solve(uint p, double infinity) {
+void solve(uint p, double root, double infinity) {
   uint l = children[2u * p], r = children[2u * p + 1u];
   uint refs = info[2u * p];
-  double a = area(p);
+  double a = area(p, root);
   precise double leafCost = refs <= min(state.leafCap, kMaxLeafSize) ? double(u_ci) * a * double(refs) : infinity;
   double left[8], right[8];
-  for (uint i = 1u; i <= kWidth; ++i) left[i - 1u] = childCost(l, i), right[i - 1u] = childCost(r, i);
+  childCosts(l, root, left);
+  childCosts(r, root, right);
   double dist[9];
   uint best[9];
   for (uint j = 2u; j <= kWidth; ++j) {
@@ -146,6 +142,11 @@ void main() {
   uint k = gl_GlobalInvocationID.x;
   if (k >= u_count) return;
   double infinity = double(uintBitsToFloat(0x7f800000u));
+  double root = double(halfArea(0u));
+  if (isinf(root)) {  // flagged, not solved: no infinity or NaN enters the program
+    state.rootInfinite = 1u;
+    return;
+  }
   uint node = u_count - 1u + k;
   for (;;) {
     uint parent = parents[node];
@@ -153,7 +154,7 @@ void main() {
     memoryBarrierBuffer();
     if (atomicAdd(counters[parent], 1u) == 0u) break;
     memoryBarrierBuffer();
-    if (!isLeaf(parent)) solve(parent, infinity);
+    if (!isLeaf(parent)) solve(parent, root, infinity);
     node = parent;
   }
 }
