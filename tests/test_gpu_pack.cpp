@@ -4,6 +4,10 @@
 // the bunny, synthetic meshes, a deep tree and a root that is one leaf, at several leaf sizes; one
 // primitive packed on the CPU; other layouts, mismatched soups and sizes past the GL limits refused;
 // the `pack` phase timed; `build --json` saying which layout it packed.
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <random>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -24,11 +28,13 @@
 #include "builders/gpu/gpu_ploc.hpp"
 #include "datasets/scene.hpp"
 #include "datasets/scene_io.hpp"
+#include "gl_compute.hpp"
 #include "layout/layout.hpp"
 #include "layout/layout_bvh2cb.hpp"
 #include "layout/layout_cwbvh.hpp"
 #include "render/gl_context.hpp"
 #include "require.hpp"
+#include "shaders/assemble.hpp"
 #include "traversal_test_util.hpp"
 
 namespace bvhlab {
@@ -307,6 +313,52 @@ TEST_F(GpuPack, CwbvhRefusesLeavesPastItsCountAndBuffersPastTheLimit) {
     EXPECT_NE(std::string(e.what()).find("GL_MAX_SHADER_STORAGE_BLOCK_SIZE"), std::string::npos) << e.what();
   }
   EXPECT_NO_THROW(gpubuild::GpuWidePack::checkLimits(1000, gpubuild::GpuLimits{1u << 20, 1u << 20}));
+}
+
+// The wide collapse's division (gpubuild_exact_division.glsl): from either neighbour of the IEEE
+// quotient, correctQuotient gives the IEEE quotient back, bit for bit, on quotients of half areas as the
+// collapse makes them (doubles of floats, a child's at most its root's, over float's whole range). On
+// llvmpipe the driver's own division is IEEE, so this is what exercises the correction at all.
+TEST_F(GpuPack, TheWideCollapsesDivisionIsCorrectedToTheIeeeQuotient) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> exponent(-36.0, 36.0), below(-30.0, 0.0);
+  std::vector<glm::uvec2> in;
+  std::vector<double> quotients;
+  auto add = [&](double a, double b) {
+    const double q = a / b;
+    for (double v : {a, b, q}) in.push_back(std::bit_cast<glm::uvec2>(v));
+    quotients.push_back(q);
+  };
+  for (int k = 0; k < 20000; ++k) {
+    const float root = float(std::pow(10.0, exponent(rng)));
+    const float child = std::max(float(double(root) * std::pow(10.0, below(rng))), std::numeric_limits<float>::min());
+    add(double(child), double(root));
+  }
+  for (float v : {1.0f, 3.0f, 1e-30f, 7e30f}) add(double(v), double(v)), add(double(v) * 0.5, double(v));
+  const std::string source = std::string("#version 450\n") + glslSources().at("gpubuild_exact_division.glsl") + R"(
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) readonly buffer In { uvec2 ins[]; };     // a, b, the IEEE a / b
+layout(std430, binding = 1) writeonly buffer Out { uvec2 outs[]; };  // corrected from above and below
+uniform int u_count;
+void main() {
+  uint i = gl_GlobalInvocationID.x;
+  if (i >= uint(u_count)) return;
+  double a = packDouble2x32(ins[3u * i]), b = packDouble2x32(ins[3u * i + 1u]), q = packDouble2x32(ins[3u * i + 2u]);
+  outs[2u * i] = unpackDouble2x32(correctQuotient(a, b, nextUp(q)));
+  outs[2u * i + 1u] = unpackDouble2x32(correctQuotient(a, b, nextDown(q)));
+}
+)";
+  const GLuint program = test::compileCompute(source);
+  const std::vector<glm::uvec2> out =
+      test::dispatchCompute<glm::uvec2>(program, in, 2 * quotients.size(), quotients.size(), "exact division");
+  glDeleteProgram(program);
+  size_t wrong = 0;
+  for (size_t i = 0; i < quotients.size(); ++i)
+    for (int side = 0; side < 2; ++side)
+      if (std::bit_cast<double>(out[2 * i + size_t(side)]) != quotients[i] ||
+          std::signbit(std::bit_cast<double>(out[2 * i + size_t(side)])))
+        ++wrong;
+  EXPECT_EQ(wrong, 0u) << "of " << 2 * quotients.size() << " corrections";
 }
 
 // `build --json`: gpu_pack names the layout packed on the GPU (v1, bvh2-cb or cwbvh with raw triangles) and

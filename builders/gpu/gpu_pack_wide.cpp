@@ -38,7 +38,8 @@ static_assert(sizeof(JumpState) == 24);
 
 WidePackPrograms::WidePackPrograms()
     : leafCap("gpubuild_wide_leafcap.glsl", "", {"gpubuild_wide_state.glsl"}),
-      costs("gpubuild_wide_costs.glsl", "", {"gpubuild_wide_state.glsl", "gpubuild_tree_area.glsl"}),
+      costs("gpubuild_wide_costs.glsl", "",
+            {"gpubuild_wide_state.glsl", "gpubuild_tree_area.glsl", "gpubuild_exact_division.glsl"}),
       level("gpubuild_wide_level.glsl", "", {"gpubuild_wide_state.glsl"}),
       levelGate("gpubuild_wide_gate.glsl", "", {"gpubuild_wide_state.glsl"}),
       nodes("gpubuild_wide_nodes.glsl", "", {"gpubuild_wide_state.glsl"}) {}
