@@ -169,23 +169,21 @@ void GpuPackJob::run(const GpuTreeBuffers& tree, PhaseStamps& stamps) {
     packer_.gate_.dispatch(1, "GPU pack jump: the gate (gpubuild_pack_gate.glsl)");
   }
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
-  if (wide_) {  // v1's triangle order into the wide pack's buffers, then the wide passes
-    bind({tree.keys, ids_[kSteps], ids_[kState], soup_, wide_->v1Triangles(), wide_->v1Attributes()});
-    packer_.triangles_.set("u_count", n_);
-    packer_.triangles_.dispatch(groupsFor(n_), "GPU pack triangles: v1's order (gpubuild_pack_triangles.glsl)");
-    stamps.mark("pack");
-    wide_->run(packer_.widePrograms(), packer_.jump_, packer_.gate_, tree, ids_[kSteps], ids_[kState],
-               ids_[kNodeStream], ids_[kTriangleStream], ids_[kAttributeStream], stamps);
-    return;
+  if (!wide_) {  // cwbvh writes its node stream in the wide passes below
+    const ComputeProgram& nodesPass = request_.layout == "v1" ? packer_.nodesV1_ : packer_.nodesBvh2cb_;
+    bind({tree.children, tree.nodeBoxes, tree.info, ids_[kState], ids_[kSteps], ids_[kNodeStream]});
+    nodesPass.set("u_count", n_);
+    nodesPass.dispatch(groupsFor(nodes), "GPU pack nodes: the node stream (gpubuild_pack_nodes.glsl)");
   }
-  const ComputeProgram& nodesPass = request_.layout == "v1" ? packer_.nodesV1_ : packer_.nodesBvh2cb_;
-  bind({tree.children, tree.nodeBoxes, tree.info, ids_[kState], ids_[kSteps], ids_[kNodeStream]});
-  nodesPass.set("u_count", n_);
-  nodesPass.dispatch(groupsFor(nodes), "GPU pack nodes: the node stream (gpubuild_pack_nodes.glsl)");
-  bind({tree.keys, ids_[kSteps], ids_[kState], soup_, ids_[kTriangleStream], ids_[kAttributeStream]});
+  // The triangles in v1's leaf order: the streams themselves, or, for cwbvh, what its node pass reorders.
+  bind({tree.keys, ids_[kSteps], ids_[kState], soup_, wide_ ? wide_->v1Triangles() : ids_[kTriangleStream],
+        wide_ ? wide_->v1Attributes() : ids_[kAttributeStream]});
   packer_.triangles_.set("u_count", n_);
   packer_.triangles_.dispatch(groupsFor(n_), "GPU pack triangles: the triangle and attribute streams (gpubuild_pack_triangles.glsl)");
   stamps.mark("pack");
+  if (wide_)
+    wide_->run(packer_.widePrograms(), packer_.jump_, packer_.gate_, tree, ids_[kSteps], ids_[kState],
+               ids_[kNodeStream], ids_[kTriangleStream], ids_[kAttributeStream], stamps);
 }
 
 void GpuPackJob::download() const {
