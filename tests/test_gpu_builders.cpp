@@ -155,9 +155,10 @@ TEST_F(GpuBuilders, ZeroAndOnePrimitivesAsTheCpuBuilders) {
 }
 
 // The radix sort alone: random 63-bit codes drawn from few values in both halves (many duplicates,
-// digits varying in every pass), against std::stable_sort by code.
+// digits varying in every pass), against std::stable_sort by code. 257 x 4096 + 1 keys are 258 blocks:
+// the per-digit scan's second chunk of 256 blocks, with the running total of the first.
 TEST_F(GpuBuilders, RadixSortIsStdStableSort) {
-  for (uint32_t n : {1u, 5u, 4096u, 4097u, 30000u}) {
+  for (uint32_t n : {1u, 5u, 4096u, 4097u, 30000u, 257u * 4096u + 1u}) {
     SCOPED_TRACE(n);
     std::mt19937_64 rng(n);
     std::vector<uint64_t> values(37);
