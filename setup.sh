@@ -70,7 +70,8 @@ case "${1:-}" in
     deps; bash datasets/fetch.sh; build
     # One test process per core. A GL test's llvmpipe draws on every core, so two at once share them,
     # but no test asserts a time, and much of a GL test is single-threaded (shader compiles, set-up):
-    # on the 2-core machine the 966 tests took 518 s with -j 2 against 933 s one at a time.
+    # on the 2-core machine the 966 tests took 518 s with -j 2, against 933 s one at a time (a run that
+    # shared the machine with a build: its tests' own times add up to 932 s).
     ctest --test-dir build --output-on-failure -j "$(nproc)" ;;
   main)
     deps; bash datasets/fetch.sh; build
