@@ -1,4 +1,5 @@
-// A stable LSD radix sort of Morton keys in GL buffers (gpubuild_radix_*.glsl, gpubuild_scan.glsl):
+// A stable LSD radix sort of Morton keys in GL buffers (gpubuild_radix_{hist,scan,scatter}.glsl, with
+// gpubuild_workgroup_scan.glsl):
 // 8 passes of 8-bit digits over the 64-bit code, each a per-block digit count, a scan of each digit's
 // counts over the blocks (one workgroup per digit) and a stable scatter that starts each digit after
 // the lower digits' totals. Equal codes keep their input order, so
