@@ -13,6 +13,7 @@
 #include <glm/glm.hpp>
 
 #include "builders/bvh.hpp"
+#include "datasets/random_draws.hpp"
 
 #if __has_include("datasets/mesh_io.hpp")
 #include "datasets/mesh_io.hpp"
@@ -70,17 +71,11 @@ inline PrimitiveSet randomSoup(size_t count, uint32_t seed = 1) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), signedUnit(-1.0f, 1.0f);
   for (size_t i = 0; i < count; ++i) {
-    // The draws are sequenced explicitly, z first: the order of function arguments is unspecified
-    // (GCC evaluated glm::vec3(unit(rng), unit(rng), unit(rng)) right to left, Clang left to right), and
-    // the same seed must give the same soup, so the same tree hashes, under every compiler (the
-    // sanitizer build is Clang's). z, y, x keeps the soups the GCC build always made.
-    auto draw3 = [&](std::uniform_real_distribution<float>& d) {
-      const float z = d(rng), y = d(rng), x = d(rng);
-      return glm::vec3(x, y, z);
-    };
-    const glm::vec3 c = draw3(unit);
+    // draw3 makes the draws in a fixed order (datasets/random_draws.hpp): the same seed must give the
+    // same soup, so the same tree hashes, under every compiler (the sanitizer build is Clang's).
+    const glm::vec3 c = draw3<glm::vec3>(unit, rng);
     const float size = 0.002f * std::pow(100.0f, unit(rng));
-    auto corner = [&] { return c + size * draw3(signedUnit); };
+    auto corner = [&] { return c + size * draw3<glm::vec3>(signedUnit, rng); };
     const glm::vec3 a = corner(), b = corner(), d = corner();
     set.addTriangle(a, b, d);
   }
@@ -133,13 +128,13 @@ inline PrimitiveSet thinTriangles(size_t count, uint32_t seed = 3) {
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), signedUnit(-1.0f, 1.0f);
   auto direction = [&] {
     while (true) {
-      const glm::vec3 d(signedUnit(rng), signedUnit(rng), signedUnit(rng));
+      const glm::vec3 d = draw3<glm::vec3>(signedUnit, rng);
       const float len = glm::length(d);
       if (len > 0.1f && len <= 1.0f) return d / len;
     }
   };
   for (size_t i = 0; i < count; ++i) {
-    const glm::vec3 c(unit(rng), unit(rng), unit(rng));
+    const glm::vec3 c = draw3<glm::vec3>(unit, rng);
     const float length = 0.1f * std::pow(6.0f, unit(rng));
     const glm::vec3 d = direction();
     glm::vec3 side = glm::cross(d, direction());
@@ -157,9 +152,14 @@ inline PrimitiveSet planeSoup(size_t count, uint32_t seed = 2) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), small(-0.001f, 0.001f);
   for (size_t i = 0; i < count; ++i) {
-    const glm::vec3 c(unit(rng), 0.0f, unit(rng));
-    set.addTriangle(c + glm::vec3(small(rng), 0.0f, small(rng)), c + glm::vec3(small(rng), 0.0f, small(rng)),
-                    c + glm::vec3(small(rng), 0.0f, small(rng)));
+    // One draw per statement, in the order of datasets/random_draws.hpp (last first).
+    const auto inPlane = [&](std::uniform_real_distribution<float>& d) {
+      const float z = d(rng), x = d(rng);
+      return glm::vec3(x, 0.0f, z);
+    };
+    const glm::vec3 c = inPlane(unit);
+    const glm::vec3 v2 = c + inPlane(small), v1 = c + inPlane(small), v0 = c + inPlane(small);
+    set.addTriangle(v0, v1, v2);
   }
   return set;
 }

@@ -46,7 +46,10 @@ struct SplitMix {
 // A point in the unit ball (rejection from the cube: deterministic for a given stream).
 glm::dvec3 inUnitBall(SplitMix& rng) {
   for (;;) {
-    const glm::dvec3 r(2.0 * rng.unit() - 1.0, 2.0 * rng.unit() - 1.0, 2.0 * rng.unit() - 1.0);
+    // One draw per statement, z first, so a seed gives the same ball point with every compiler (the
+    // order GCC drew them in when they were arguments of one constructor).
+    const double z = 2.0 * rng.unit() - 1.0, y = 2.0 * rng.unit() - 1.0, x = 2.0 * rng.unit() - 1.0;
+    const glm::dvec3 r(x, y, z);
     if (glm::dot(r, r) <= 1.0) return r;
   }
 }

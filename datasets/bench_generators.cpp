@@ -62,8 +62,10 @@ class Builder {
   // Tops up the budget with small random triangles (edge ~`size`) in the box centre +- half.
   void fill(glm::vec3 centre, glm::vec3 half, float size, SplitMix64& rng) {
     while (!full()) {
-      const glm::vec3 p = centre + half * glm::vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
-      tri(p, p + size * rng.unitVector(), p + size * rng.unitVector());
+      const glm::vec3 p = centre + half * rng.uniform3(-1.0f, 1.0f);
+      const glm::vec3 c = p + size * rng.unitVector();  // the last corner is drawn first (see SplitMix64)
+      const glm::vec3 b = p + size * rng.unitVector();
+      tri(p, b, c);
     }
   }
   Mesh take() { return std::move(mesh_); }
@@ -227,8 +229,9 @@ Mesh makeInterior(uint64_t triangles, uint64_t seed) {
   // Furniture: random boxes (0.3..1.2 m, tables and cabinets) on the floors until the budget is spent.
   while (b.left() >= 12) {
     const int f = int(rng.next() % kStoreys);
-    const glm::vec3 size(rng.uniform(0.3f, 1.2f), rng.uniform(0.3f, 1.2f), rng.uniform(0.3f, 1.2f));
-    const glm::vec3 lo(rng.uniform(0.0f, W - size.x), kStorey * float(f), rng.uniform(0.0f, D - size.z));
+    const glm::vec3 size = rng.uniform3(0.3f, 1.2f);
+    const float z = rng.uniform(0.0f, D - size.z), x = rng.uniform(0.0f, W - size.x);  // z first: SplitMix64
+    const glm::vec3 lo(x, kStorey * float(f), z);
     b.box(lo, lo + size);
   }
   b.fill({0.5f * W, 0.5f, 0.5f * D}, {0.5f * W, 0.5f, 0.5f * D}, 0.1f, rng);
@@ -246,7 +249,8 @@ Mesh makeHairball(uint64_t triangles, uint64_t seed) {
   constexpr float kHalfWidth = 0.002f;  // ribbons 0.004 wide: triangles 20x longer than wide
   constexpr float kWiggle = 0.35f;      // direction change per segment (a random vector of this length)
   while (!b.full()) {
-    glm::vec3 p = 0.9f * std::cbrt(rng.uniform()) * rng.unitVector();  // uniform in the ball of radius 0.9
+    const glm::vec3 towards = rng.unitVector();  // drawn before the radius (see SplitMix64)
+    glm::vec3 p = 0.9f * std::cbrt(rng.uniform()) * towards;  // uniform in the ball of radius 0.9
     glm::vec3 d = rng.unitVector();
     glm::vec3 side = glm::cross(d, rng.unitVector());
     // A unit vector almost parallel to d gives no side: fall back to an axis that cannot be parallel.

@@ -11,9 +11,11 @@
 //
 // Every generator returns EXACTLY the requested number of triangles (so a scene's count is the number
 // its file asks for), is a pure function of (triangles, seed) (SplitMix64 and integer hashing, never
-// std:: distributions), has no normals or UVs (flat shading), and sits in a documented box. The request
-// is checked in 64 bits against [kMinBenchTriangles, kMaxProceduralTriangles] before anything is
-// allocated; a bad request is an InputError naming the generator.
+// std:: distributions; no two draws unsequenced in one expression, so every compiler makes the same mesh:
+// tests/test_bench_scenes.cpp pins their hashes), has no normals or UVs (flat shading), and sits in a
+// documented box. The request is checked in 64 bits against [kMinBenchTriangles,
+// kMaxProceduralTriangles] before anything is allocated; a bad request is an InputError naming the
+// generator.
 #pragma once
 #include <cstddef>
 #include <cstdint>

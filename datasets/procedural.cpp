@@ -31,6 +31,16 @@ float SplitMix64::normal() {
   return std::sqrt(-2.0f * std::log(u)) * std::cos(2.0f * kPi * v);
 }
 
+glm::vec3 SplitMix64::uniform3(float lo, float hi) {
+  const float z = uniform(lo, hi), y = uniform(lo, hi), x = uniform(lo, hi);
+  return glm::vec3(x, y, z);
+}
+
+glm::vec3 SplitMix64::normal3() {
+  const float z = normal(), y = normal(), x = normal();
+  return glm::vec3(x, y, z);
+}
+
 glm::vec3 SplitMix64::unitVector() {
   // Uniform z in [-1,1] and azimuth: Archimedes' hat-box theorem makes this uniform on the sphere.
   const float z = uniform(-1.0f, 1.0f), phi = uniform(0.0f, 2.0f * kPi);
@@ -266,11 +276,11 @@ Mesh makeTriangleSoup(size_t count, uint64_t seed, float minSize, float maxSize)
   m.positions.reserve(3 * count);
   m.triangles.reserve(count);
   for (size_t i = 0; i < count; ++i) {
-    const glm::vec3 c(rng.uniform(), rng.uniform(), rng.uniform());
+    const glm::vec3 c = rng.uniform3(0.0f, 1.0f);
     const float size = minSize * std::exp(logRange * rng.uniform());
     const uint32_t base = uint32_t(m.positions.size());
     for (int k = 0; k < 3; ++k)
-      m.positions.push_back(c + size * glm::vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)));
+      m.positions.push_back(c + size * rng.uniform3(-1.0f, 1.0f));
     m.triangles.emplace_back(base, base + 1, base + 2);
   }
   return m;
@@ -331,7 +341,8 @@ Mesh makeLargeMesh(size_t triangles, uint64_t seed) {
   glm::vec3 centres[kClusters];
   float spreads[kClusters];
   for (int c = 0; c < kClusters; ++c) {
-    centres[c] = rng.unitVector() * rng.uniform(1.4f, 3.5f);
+    const float radius = rng.uniform(1.4f, 3.5f);  // drawn before the direction (see SplitMix64)
+    centres[c] = rng.unitVector() * radius;
     spreads[c] = rng.uniform(0.05f, 0.4f);
   }
   auto addTriangle = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c) {
@@ -345,7 +356,7 @@ Mesh makeLargeMesh(size_t triangles, uint64_t seed) {
   while (m.triangles.size() < triangles) {
     const int c = int(rng.next() % kClusters);
     const glm::vec3 centre =
-        centres[c] + spreads[c] * glm::vec3(rng.normal(), rng.normal(), rng.normal());
+        centres[c] + spreads[c] * rng.normal3();
     const float size = 0.003f * std::exp(logRange * rng.uniform());
     const glm::vec3 p0 = centre + size * rng.unitVector(), p1 = centre + size * rng.unitVector(),
                     p2 = centre + size * rng.unitVector(), p3 = centre + size * rng.unitVector();

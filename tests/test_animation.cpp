@@ -241,6 +241,17 @@ TEST(Deformations, ExplodeMovesPiecesApartMonotonically) {
   const Scene other = loadScene(writeScene("explode3", deformedTerrain("kind = \"explode\"\nspeed = 0.4\njitter = 0.5\nseed = 4\n")));
   EXPECT_EQ(same.animation->objects[0].pieceVelocity, a.pieceVelocity);
   EXPECT_NE(other.animation->objects[0].pieceVelocity, a.pieceVelocity);
+  // And the same with every compiler: the velocities are pinned by a hash of their bits (FNV-1a 64). The
+  // three draws of a jitter vector were once the arguments of one constructor, an order each compiler
+  // chose for itself; a deliberate change to the explosion updates this value.
+  uint64_t hash = 0xcbf29ce484222325ull;
+  for (const glm::dvec3& v : a.pieceVelocity)
+    for (int k = 0; k < 3; ++k) {
+      uint64_t bits;
+      std::memcpy(&bits, &v[k], sizeof bits);
+      for (int b = 0; b < 8; ++b) hash = (hash ^ ((bits >> (8 * b)) & 0xffu)) * 0x100000001b3ull;
+    }
+  EXPECT_EQ(hash, 0xccb4bd7219ea7b32ull) << std::hex << "velocity hash 0x" << hash;
 }
 
 TEST(Deformations, ExplodeByComponentsKeepsEachComponentRigid) {

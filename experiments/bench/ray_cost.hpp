@@ -12,6 +12,7 @@
 
 #include "builders/bvh.hpp"
 #include "builders/test_inputs.hpp"
+#include "datasets/random_draws.hpp"
 
 namespace bvhlab::bench {
 
@@ -34,10 +35,10 @@ inline std::vector<Ray> curveRays(const PrimitiveSet& set, size_t count) {
   std::uniform_real_distribution<float> u(0.0f, 1.0f), n(-1.0f, 1.0f);
   std::vector<Ray> rays;
   while (rays.size() < count) {
-    const glm::vec3 p(n(rng), n(rng), n(rng));
+    const glm::vec3 p = draw3<glm::vec3>(n, rng);  // fixed order: datasets/random_draws.hpp
     if (!(glm::dot(p, p) > 1e-6f && glm::dot(p, p) <= 1.0f)) continue;  // uniform direction by rejection
     const glm::vec3 origin = centre + radius * glm::normalize(p);
-    const glm::vec3 target = bounds.min + glm::vec3(u(rng), u(rng), u(rng)) * extent;
+    const glm::vec3 target = bounds.min + draw3<glm::vec3>(u, rng) * extent;
     glm::vec3 dir = glm::normalize(target - origin);
     // No zero components: 1 / 0 and then 0 * inf would make the slab test NaN for origins on a slab.
     // 1e-20 is far below any direction component that changes a float slab distance in these scenes.
