@@ -16,6 +16,7 @@
 #include "builders/builder.hpp"
 #include "datasets/hard_cases.hpp"
 #include "datasets/procedural.hpp"
+#include "datasets/random_draws.hpp"
 #include "datasets/scene_io.hpp"
 #include "layout/layout.hpp"
 #include "layout/layouts.hpp"
@@ -93,7 +94,7 @@ inline std::vector<BatchRay> testRays(const TriangleSoup& soup, size_t count, ui
   const float radius = glm::length(e);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  const auto inside = [&] { return box.min + glm::vec3(u(rng), u(rng), u(rng)) * e; };
+  const auto inside = [&] { return box.min + draw3<glm::vec3>(u, rng) * e; };
   // A few scattered triangles leave most of their box empty: aim the outside rays at them instead.
   const bool sparse = soup.size() < 50;
   const auto target = [&] {
@@ -105,13 +106,13 @@ inline std::vector<BatchRay> testRays(const TriangleSoup& soup, size_t count, ui
     BatchRay r{glm::vec3(0.0f), 0.0f, glm::vec3(0.0f, 0.0f, 1.0f), INFINITY};
     const size_t kind = i % 4;
     if (kind == 0 || kind == 3) {
-      const glm::vec3 dir = glm::normalize(glm::vec3(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f) + 1e-3f);
+      const glm::vec3 dir = glm::normalize((draw3<glm::vec3>(u, rng) - 0.5f) + 1e-3f);
       r.origin = c + dir * 1.5f * radius;
       r.dir = glm::normalize(target() - r.origin);
       if (kind == 3) r.tMax = 1.5f * radius * u(rng) + 0.5f * radius;
     } else if (kind == 1) {
       r.origin = inside();
-      r.dir = glm::normalize(glm::vec3(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f) + 1e-3f);
+      r.dir = glm::normalize((draw3<glm::vec3>(u, rng) - 0.5f) + 1e-3f);
     } else {
       const int axis = int(rng() % 3);
       r.origin = inside();

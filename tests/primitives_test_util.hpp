@@ -33,6 +33,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/constants.hpp>
 
+#include "datasets/random_draws.hpp"
 #include "shaders/primitives.hpp"
 
 namespace bvhlab::primtest {
@@ -479,14 +480,14 @@ inline std::vector<Case> randomCases(const Shape& shape, const RandomConfig& con
   const double S = shape.boundingRadius();
   auto randomDirection = [&]() {
     dvec3 v;
-    do v = dvec3(u(rng), u(rng), u(rng)); while (dot(v, v) > 1.0 || dot(v, v) < 1e-4);
+    do v = draw3<dvec3>(u, rng); while (dot(v, v) > 1.0 || dot(v, v) < 1e-4);
     return normalize(v);
   };
   // Points near the shape (its bounding box slightly enlarged; for the torus a shell around the tube): the
   // aim points of outside rays and the origins of "inside" rays, so rays hit, miss and graze.
   const bool flat = shape.kind == Kind::Plane || shape.kind == Kind::InfinitePlane;
   auto nearPoint = [&](double yHalf) {
-    if (shape.kind != Kind::Torus) return dvec3(1.05 * u(rng), yHalf * u(rng), 1.05 * u(rng));
+    if (shape.kind != Kind::Torus) return dvec3(1.05, yHalf, 1.05) * draw3<dvec3>(u, rng);
     double phi = 2.0 * glm::pi<double>() * u01(rng);
     return double(shape.radii.x) * dvec3(std::cos(phi), 0.0, std::sin(phi)) +
            1.3 * double(shape.radii.y) * u01(rng) * randomDirection();

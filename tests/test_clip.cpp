@@ -24,6 +24,7 @@
 #include "builders/builder.hpp"
 #include "builders/clip.hpp"
 #include "builders/test_inputs.hpp"
+#include "datasets/random_draws.hpp"
 #include "layout/layout.hpp"
 #include "traversal/kernels.hpp"
 #include "traversal/ray_triangle.hpp"
@@ -189,8 +190,8 @@ TEST(Clip, MatchesCgalOnRandomTriangles) {
   size_t nonEmpty = 0, total = 0;
   for (int i = 0; i < 120; ++i) {
     const float scale = std::pow(10.0f, float(i % 7) - 3.0f);  // 1e-3 .. 1e3
-    const glm::vec3 offset = glm::vec3(u(rng), u(rng), u(rng)) * (i % 2 ? 100.0f : 0.0f);
-    auto corner = [&] { return offset + scale * glm::vec3(u(rng), u(rng), u(rng)); };
+    const glm::vec3 offset = draw3<glm::vec3>(u, rng) * (i % 2 ? 100.0f : 0.0f);
+    auto corner = [&] { return offset + scale * draw3<glm::vec3>(u, rng); };
     const glm::vec3 a = corner(), b = corner(), c = corner();
     for (int axis = 0; axis < 3; ++axis)
       for (const auto& [lo, hi] : slabsFor(a, b, c, axis, rng)) {
@@ -207,7 +208,8 @@ TEST(Clip, MatchesCgalOnDegenerateTriangles) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   std::vector<std::array<glm::vec3, 3>> tris;
   for (int i = 0; i < 12; ++i) {
-    const glm::vec3 a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng)), c(u(rng), u(rng), u(rng));
+    const glm::vec3 a = draw3<glm::vec3>(u, rng), b = draw3<glm::vec3>(u, rng),
+                    c = draw3<glm::vec3>(u, rng);
     for (int axis = 0; axis < 3; ++axis) {
       // Axis-parallel: all three in the plane x[axis] = a[axis].
       glm::vec3 b2 = b, c2 = c;
@@ -245,7 +247,8 @@ TEST(Clip, SuccessiveSplitsKeepTheExactPart) {
   std::mt19937 rng(13);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), unit(0.0f, 1.0f);
   for (int i = 0; i < 40; ++i) {
-    const glm::vec3 a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng)), c(u(rng), u(rng), u(rng));
+    const glm::vec3 a = draw3<glm::vec3>(u, rng), b = draw3<glm::vec3>(u, rng),
+                    c = draw3<glm::vec3>(u, rng);
     Aabb box;
     box.grow(a), box.grow(b), box.grow(c);
     // Split repeatedly at random planes, following a random side, as a builder does.

@@ -365,7 +365,9 @@ TEST(FindingsIntervals, BandTestsAgreeWithTheirIntervals) {
     const BandTest t = normalBandTest(est, se, band);
     const bool outside = est - kZ95 * se > band || est + kZ95 * se < -band;
     EXPECT_EQ(t.p() < 0.05, outside) << est;
-    if (outside) EXPECT_EQ(t.slowerSide(), est > 0) << est;
+    if (outside) {
+      EXPECT_EQ(t.slowerSide(), est > 0) << est;
+    }
   }
   EXPECT_EQ(normalBandTest(std::nan(""), 0.01, 0.0).p(), 1.0);
   // Sign test: the dual of the order-statistic interval (n = 8: [x_(1), x_(8)], coverage 99.2%).

@@ -102,8 +102,11 @@ TEST(FindingsClip, StrategiesAreCalledOnlyBeyondTheClipControlsBand) {
   json noControl = rows;
   noControl[0].erase("aa_clip_control");
   const json g = computeFindings(noControl, json::object(), json{{"update", "rebuild"}});
-  for (const json& c : g["comparisons"])
-    if (c["axis"] == "update") EXPECT_EQ(c["verdict"], "not called: no noise band") << c.dump();
+  for (const json& c : g["comparisons"]) {
+    if (c["axis"] == "update") {
+      EXPECT_EQ(c["verdict"], "not called: no noise band") << c.dump();
+    }
+  }
 }
 
 // The mixed question also compares the clips' update time and ray cost (what a mixed strategy saves

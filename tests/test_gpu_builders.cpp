@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "builder_test_util.hpp"
+#include "datasets/random_draws.hpp"
 #include "gpu_builder_test_util.hpp"
 #include "cli_run.hpp"
 #include "builders/builder.hpp"
@@ -94,7 +95,7 @@ TEST_F(GpuBuilders, OptionsAndGridsGiveLbvhsTree) {
   std::mt19937 rng(9);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   for (int i = 0; i < 3000; ++i) {
-    const glm::vec3 c(1e-33f * u(rng), 1e-30f * u(rng), u(rng));
+    const glm::vec3 c = glm::vec3(1e-33f, 1e-30f, 1.0f) * draw3<glm::vec3>(u, rng);
     tiny.addTriangle(c, c + glm::vec3(0.0f, 0.0f, 1e-3f), c + glm::vec3(0.0f, 1e-31f, 0.0f));
   }
   expectSameAsLbvh(tiny.input(), axes);
@@ -115,7 +116,7 @@ TEST_F(GpuBuilders, EqualMortonCodesSplitInTheMiddleAsLbvh) {
   std::shuffle(centres.begin(), centres.end(), rng);
   std::uniform_real_distribution<float> tiny(-1e-3f, 1e-3f);
   for (const glm::vec3& c : centres) {
-    const glm::vec3 d(tiny(rng), tiny(rng), tiny(rng));
+    const glm::vec3 d = draw3<glm::vec3>(tiny, rng);
     set.addTriangle(c + d, c - d, c + glm::vec3(d.y, d.z, d.x));
   }
   // Every primitive of a run gets the run's centroid (builders take the caller's centroids), so the

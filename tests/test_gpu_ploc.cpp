@@ -18,6 +18,7 @@
 
 #include "builder_test_util.hpp"
 #include "cli_run.hpp"
+#include "datasets/random_draws.hpp"
 #include "gpu_builder_test_util.hpp"
 #include "builders/builder.hpp"
 #include "builders/test_inputs.hpp"
@@ -115,7 +116,7 @@ TEST_F(GpuPloc, EqualMortonCodesStartAsPlocsBalancedRuns) {
   std::shuffle(centres.begin(), centres.end(), rng);
   std::uniform_real_distribution<float> tiny(-1e-3f, 1e-3f);
   for (const glm::vec3& c : centres) {
-    const glm::vec3 d(tiny(rng), tiny(rng), tiny(rng));
+    const glm::vec3 d = draw3<glm::vec3>(tiny, rng);
     set.addTriangle(c + d, c - d, c + glm::vec3(d.y, d.z, d.x));
   }
   for (size_t i = 0; i < set.size(); ++i) set.centroids[i] = centres[i];  // the codes collide

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "builders/builder.hpp"
+#include "datasets/random_draws.hpp"
 #include "layout/layout.hpp"
 
 namespace bvhlab {
@@ -47,8 +48,8 @@ Mesh randomSoupMesh(size_t count, uint32_t seed) {
   Mesh m;
   m.name = "random-soup";
   for (size_t i = 0; i < count; ++i) {
-    const glm::vec3 c(unit(rng), unit(rng), unit(rng));
-    for (int k = 0; k < 3; ++k) m.positions.push_back(c + glm::vec3(edge(rng), edge(rng), edge(rng)));
+    const glm::vec3 c = draw3<glm::vec3>(unit, rng);
+    for (int k = 0; k < 3; ++k) m.positions.push_back(c + draw3<glm::vec3>(edge, rng));
     m.triangles.push_back({uint32_t(3 * i), uint32_t(3 * i + 1), uint32_t(3 * i + 2)});
   }
   return m;

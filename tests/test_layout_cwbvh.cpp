@@ -17,6 +17,7 @@
 
 #include <gtest/gtest.h>
 
+#include "datasets/random_draws.hpp"
 #include "layout/collapse_v1.hpp"
 #include "layout/layout_cwbvh.hpp"
 #include "layout/layouts.hpp"
@@ -64,7 +65,7 @@ TriangleSoup tinyTriangles(size_t n) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0.5f, 0.999f);
   for (size_t i = 0; i < n; ++i) {
-    const glm::vec3 c(u(rng), u(rng), u(rng));
+    const glm::vec3 c = draw3<glm::vec3>(u, rng);
     s.v0[i] = c;
     s.v1[i] = {std::nextafter(c.x, 2.0f), c.y, std::nextafter(std::nextafter(c.z, 2.0f), 2.0f)};
     s.v2[i] = {c.x, std::nextafter(c.y, 2.0f), std::nextafter(c.z, 0.0f)};

@@ -13,6 +13,7 @@
 #include "builders/morton.hpp"
 #include "builders/test_inputs.hpp"
 #include "builder_test_util.hpp"
+#include "datasets/random_draws.hpp"
 
 namespace bvhlab {
 namespace {
@@ -81,7 +82,7 @@ TEST(MortonCodes, TheGridIsAnOptionOfLbvhAndPlocOnly) {
   std::mt19937 rng(12);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   for (int i = 0; i < 4000; ++i) {
-    const glm::vec3 p(100.0f * u(rng), 0.5f * u(rng), 10.0f * u(rng));
+    const glm::vec3 p = glm::vec3(100.0f, 0.5f, 10.0f) * draw3<glm::vec3>(u, rng);
     flat.addTriangle(p, p + glm::vec3(0.3f, 0.01f, 0.0f), p + glm::vec3(0.0f, 0.02f, 0.3f));
   }
   BuildOptions axes;
@@ -124,7 +125,7 @@ TEST(MortonCodes, MonotoneInPositionForEqualSizes) {
   std::uniform_int_distribution<uint32_t> coordinate(0, (1u << 21) - 1);
   std::vector<glm::uvec3> cells;
   for (int a = 0; a < 3; ++a) {  // a walk along each axis from a random start, the other axes fixed
-    glm::uvec3 c(coordinate(rng), coordinate(rng), coordinate(rng));
+    glm::uvec3 c = draw3<glm::uvec3>(coordinate, rng);
     for (uint32_t step = 0, start = coordinate(rng) / 2; step < 300; ++step) {
       c[a] = start + step * 997;
       cells.push_back(c);

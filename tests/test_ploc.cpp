@@ -21,6 +21,7 @@
 #include "builders/test_inputs.hpp"
 #include "builder_test_util.hpp"
 #include "datasets/procedural.hpp"
+#include "datasets/random_draws.hpp"
 #include "require.hpp"
 
 namespace bvhlab {
@@ -502,10 +503,10 @@ Rays measurementRays(const PrimitiveSet& set) {
   const glm::vec3 centre = 0.5f * (bounds.min + bounds.max);
   const float radius = glm::length(bounds.max - bounds.min);
   while (rays.origins.size() < 20000) {
-    const glm::vec3 w = glm::vec3(u(rng), u(rng), u(rng)) * 2.0f - 1.0f;
+    const glm::vec3 w = draw3<glm::vec3>(u, rng) * 2.0f - 1.0f;
     if (glm::length(w) > 1.0f || glm::length(w) < 1e-3f) continue;  // uniform directions, none near 0
     const glm::vec3 from = centre + radius * glm::normalize(w);
-    const glm::vec3 to = bounds.min + glm::vec3(u(rng), u(rng), u(rng)) * (bounds.max - bounds.min);
+    const glm::vec3 to = bounds.min + draw3<glm::vec3>(u, rng) * (bounds.max - bounds.min);
     rays.origins.push_back(from);
     rays.directions.push_back(glm::normalize(to - from));
   }

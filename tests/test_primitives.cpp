@@ -14,6 +14,7 @@
 
 #include <glm/glm.hpp>
 
+#include "datasets/random_draws.hpp"
 #include "primitives_test_util.hpp"
 
 namespace {
@@ -306,8 +307,8 @@ TEST(AllKinds, UnnormalisedDirectionGivesTheSameHitPoint) {
   int hits = 0;
   for (const Shape& shape : kAllShapes) {
     for (int i = 0; i < 200; ++i) {
-      vec3 origin = 4.0f * normalize(vec3(u(rng), u(rng), u(rng)) + vec3(0, 0.01f, 0));
-      vec3 dir = normalize(vec3(u(rng), u(rng), u(rng)) * 0.8f - origin);
+      vec3 origin = 4.0f * normalize(bvhlab::draw3<vec3>(u, rng) + vec3(0, 0.01f, 0));
+      vec3 dir = normalize(bvhlab::draw3<vec3>(u, rng) * 0.8f - origin);
       Hit unit = trace(shape, {origin, dir}, 0.0f, kInf);
       for (float scale : {1e-3f, 0.37f, 3.0f, 1e3f}) {
         Hit scaled = trace(shape, {origin, dir * scale}, 0.0f, kInf);

@@ -14,6 +14,7 @@
 #include "builders/builder.hpp"
 #include "builders/epo.hpp"
 #include "datasets/procedural.hpp"
+#include "datasets/random_draws.hpp"
 #include "layout/layout.hpp"
 #include "layout/tree_hash.hpp"
 
@@ -49,9 +50,9 @@ Triangles randomTriangles(size_t count, uint32_t seed, float minSize = 0.01f, fl
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), signedUnit(-1.0f, 1.0f);
   Triangles t;
   for (size_t i = 0; i < count; ++i) {
-    const glm::vec3 c(unit(rng), unit(rng), unit(rng));
+    const glm::vec3 c = draw3<glm::vec3>(unit, rng);
     const float size = minSize * std::pow(maxSize / minSize, unit(rng));
-    auto corner = [&] { return c + size * glm::vec3(signedUnit(rng), signedUnit(rng), signedUnit(rng)); };
+    auto corner = [&] { return c + size * draw3<glm::vec3>(signedUnit, rng); };
     const glm::vec3 a = corner(), b = corner(), d = corner();
     t.add(a, b, d);
   }
@@ -154,7 +155,7 @@ TEST(Clip, PiecesOfASplitBoxAddUp) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), frac(0.0f, 1.0f);
   int straddling = 0;
   for (int i = 0; i < 2000; ++i) {
-    const glm::dvec3 a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng)), c(u(rng), u(rng), u(rng));
+    const glm::dvec3 a = draw3<glm::dvec3>(u, rng), b = draw3<glm::dvec3>(u, rng), c = draw3<glm::dvec3>(u, rng);
     Aabb box = boxOf({{u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}});
     const int axis = i % 3;
     const float cut = box.min[axis] + frac(rng) * (box.max[axis] - box.min[axis]);
@@ -370,9 +371,14 @@ TEST_P(EpoEveryBuilder, MatchesBruteForce) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), edge(-0.05f, 0.05f);
   for (int i = 0; i < 200; ++i) {
-    const glm::vec3 c(unit(rng), 0.0f, unit(rng));
-    flat.add(c + glm::vec3(edge(rng), 0, edge(rng)), c + glm::vec3(edge(rng), 0, edge(rng)),
-             c + glm::vec3(edge(rng), 0, edge(rng)));
+    // One draw per statement, last first (see random_draws.hpp).
+    const auto inPlane = [&](std::uniform_real_distribution<float>& d) {
+      const float z = d(rng), x = d(rng);
+      return glm::vec3(x, 0.0f, z);
+    };
+    const glm::vec3 c = inPlane(unit);
+    const glm::vec3 v2 = c + inPlane(edge), v1 = c + inPlane(edge), v0 = c + inPlane(edge);
+    flat.add(v0, v1, v2);
   }
   const Bvh bvh = buildBvh(GetParam(), flat.input(), BuildOptions{});
   const double reference = bruteForceEpo(bvh, flat, {});

@@ -21,6 +21,7 @@
 #include "builders/test_inputs.hpp"
 #include "builder_test_util.hpp"
 #include "datasets/procedural.hpp"
+#include "datasets/random_draws.hpp"
 #include "layout/layout.hpp"
 #include "traversal/kernels.hpp"
 #include "traversal/ray_triangle.hpp"
@@ -348,7 +349,7 @@ TEST(Reinsert, OptimisedTreesTraceLikeBruteForce) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   for (int i = 0; i < 400; ++i) {
-    const glm::vec3 from = glm::vec3(u(rng), u(rng), u(rng)) * 3.0f - 1.0f, to(u(rng), u(rng), u(rng));
+    const glm::vec3 from = draw3<glm::vec3>(u, rng) * 3.0f - 1.0f, to = draw3<glm::vec3>(u, rng);
     Query q;
     q.ray = {from, glm::normalize(to - from)};
     for (size_t k = 0; k < set.size(); ++k) {

@@ -14,6 +14,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "datasets/hard_cases.hpp"
+#include "datasets/random_draws.hpp"
 #include "layout/layouts.hpp"
 #include "render/hard_cases_command.hpp"
 #include "gl_compute.hpp"
@@ -158,7 +159,7 @@ std::vector<FallbackCase> fallbackCases() {
   std::uniform_int_distribution<int> ulps(-3, 3);
   std::vector<FallbackCase> out;
   for (int trial = 0; trial < 200000 && out.size() < 600; ++trial) {
-    const glm::vec2 b(coord(rng), coord(rng));
+    const glm::vec2 b = draw2<glm::vec2>(coord, rng);
     glm::vec2 c = -scale(rng) * b;
     const int k = ulps(rng);
     if (k == 0) continue;

@@ -20,6 +20,7 @@
 #include "builders/builder.hpp"
 #include "builders/clip.hpp"
 #include "builders/test_inputs.hpp"
+#include "datasets/random_draws.hpp"
 #include "layout/layout.hpp"
 #include "traversal/kernels.hpp"
 #include "traversal/ray_triangle.hpp"
@@ -262,8 +263,8 @@ std::vector<RayQuery> randomRays(const Aabb& bounds, size_t count, uint32_t seed
   const glm::vec3 c = bounds.center(), e = bounds.extent();
   std::vector<RayQuery> rays;
   for (size_t i = 0; i < count; ++i) {
-    const glm::vec3 from = c + (glm::vec3(u(rng), u(rng), u(rng)) - 0.5f) * 2.0f * e;
-    const glm::vec3 to = bounds.min + glm::vec3(u(rng), u(rng), u(rng)) * e;
+    const glm::vec3 from = c + (draw3<glm::vec3>(u, rng) - 0.5f) * 2.0f * e;
+    const glm::vec3 to = bounds.min + draw3<glm::vec3>(u, rng) * e;
     glm::vec3 dir = to - from;
     if (i % 2) dir = glm::normalize(dir);
     RayQuery q{{from, dir}, 0.0f, glsl::INF};

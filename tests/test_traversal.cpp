@@ -22,6 +22,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "datasets/random_draws.hpp"
 #include "gl_compute.hpp"
 #include "builders/builder.hpp"
 #include "datasets/mesh_io.hpp"
@@ -68,7 +69,7 @@ TEST(Traversal, SphereFromOutsideAndInside) {
   std::mt19937 rng(2);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   for (int i = 0; i < 100; ++i)  // from inside a closed surface every ray hits
-    rays.push_back({{glm::vec3(u(rng), u(rng), u(rng)) * 0.3f, glm::vec3(u(rng), u(rng), u(rng))}, 0.0f, glsl::INF});
+    rays.push_back({{draw3<glm::vec3>(u, rng) * 0.3f, draw3<glm::vec3>(u, rng)}, 0.0f, glsl::INF});
   checkScene("sphere", soup, rays, true);
 }
 

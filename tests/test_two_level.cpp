@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "builders/builder.hpp"
+#include "datasets/random_draws.hpp"
 #include "gl_compute.hpp"
 #include "layout/layouts.hpp"
 #include "layout/pack_two_level.hpp"
@@ -121,7 +122,7 @@ TEST(TwoLevel, TranslationFirstKeepsTheOriginErrorSmall) {
     const glm::mat4x3 inv = inverseAffine(inst.objectToWorld);
     const glm::dmat3 lInv{glm::dvec3(inv[0]), glm::dvec3(inv[1]), glm::dvec3(inv[2])};
     for (int k = 0; k < 200; ++k) {
-      const glm::vec3 o = inst.objectToWorld[3] + glm::vec3(u(rng), u(rng), u(rng));
+      const glm::vec3 o = inst.objectToWorld[3] + draw3<glm::vec3>(u, rng);
       // Exact, for the stored (rounded) L^-1: the error of the evaluation alone.
       const glm::dvec3 exact = lInv * (glm::dvec3(o) - glm::dvec3(inst.objectToWorld[3]));
       const glm::vec3 p = o - inst.objectToWorld[3];

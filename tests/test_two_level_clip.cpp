@@ -12,6 +12,7 @@
 #include "builders/update.hpp"
 #include "cli_run.hpp"
 #include "datasets/animation.hpp"
+#include "datasets/random_draws.hpp"
 #include "datasets/scene_io.hpp"
 #include "layout/two_level_update.hpp"
 #include "two_level_test_util.hpp"
@@ -73,7 +74,7 @@ std::vector<RayQuery> frameRays(const std::vector<FlatTriangle>& flat, size_t co
   const glm::vec3 c = bounds.center(), e = bounds.extent();
   for (size_t i = rays.size(); i < count; ++i) {
     const FlatTriangle& f = flat[(i * 7919u) % flat.size()];
-    const glm::vec3 from = c + 1.5f * glm::vec3(u(rng), u(rng), u(rng)) * e;
+    const glm::vec3 from = c + 1.5f * draw3<glm::vec3>(u, rng) * e;
     const glm::vec3 to = glm::vec3((f.v0 + f.v1 + f.v2) / 3.0);
     rays.push_back({{from, to - from}, 0.0f, glsl::INF});
   }

@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 #include "builders/builder.hpp"
 #include "datasets/mesh_io.hpp"
+#include "datasets/random_draws.hpp"
 #include "layout/layout.hpp"
 #include "traversal/kernels.hpp"
 #include "traversal/ray_box.hpp"
@@ -58,8 +59,8 @@ inline Mesh randomSoupMesh(size_t count, uint32_t seed) {
   Mesh m;
   m.name = "random-soup";
   for (size_t i = 0; i < count; ++i) {
-    const glm::vec3 c(unit(rng), unit(rng), unit(rng));
-    for (int k = 0; k < 3; ++k) m.positions.push_back(c + glm::vec3(edge(rng), edge(rng), edge(rng)));
+    const glm::vec3 c = draw3<glm::vec3>(unit, rng);
+    for (int k = 0; k < 3; ++k) m.positions.push_back(c + draw3<glm::vec3>(edge, rng));
     m.triangles.push_back({uint32_t(3 * i), uint32_t(3 * i + 1), uint32_t(3 * i + 2)});
   }
   return m;
@@ -238,8 +239,8 @@ inline std::vector<RayQuery> randomRays(const Aabb& bounds, size_t count, uint32
   const float radius = glm::length(e);
   std::vector<RayQuery> rays;
   for (size_t i = 0; i < count; ++i) {
-    const glm::vec3 from = c + (glm::vec3(u(rng), u(rng), u(rng)) - 0.5f) * 2.0f * e;
-    const glm::vec3 to = bounds.min + glm::vec3(u(rng), u(rng), u(rng)) * e;
+    const glm::vec3 from = c + (draw3<glm::vec3>(u, rng) - 0.5f) * 2.0f * e;
+    const glm::vec3 to = bounds.min + draw3<glm::vec3>(u, rng) * e;
     glm::vec3 dir = to - from;
     if (i % 3 != 0) dir = glm::normalize(dir);
     const float scale = radius / glm::length(dir);  // world distance -> t

@@ -11,6 +11,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include "datasets/random_draws.hpp"
 #include "layout/layouts.hpp"
 #include "layout/pack_two_level.hpp"
 #include "traversal/two_level.hpp"
@@ -77,10 +78,11 @@ inline TwoLevelScene randomScene(glm::vec3 offset, glm::vec3 scale, size_t count
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   for (size_t i = 0; i < count; ++i) {
-    const glm::vec3 axis = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)) + glm::vec3(0.0f, 0.0f, 1e-3f));
+    const glm::vec3 axis = glm::normalize(draw3<glm::vec3>(u, rng) + glm::vec3(0.0f, 0.0f, 1e-3f));
     const float k = 1.0f + 0.5f * u(rng);
-    s.instances.push_back({uint32_t(i % 3), affine(offset + 4.0f * glm::vec3(u(rng), u(rng), u(rng)), axis,
-                                                   3.0f * u(rng), k * scale)});
+    const float angle = 3.0f * u(rng);  // drawn before the offset (see random_draws.hpp)
+    const glm::vec3 at = offset + 4.0f * draw3<glm::vec3>(u, rng);
+    s.instances.push_back({uint32_t(i % 3), affine(at, axis, angle, k * scale)});
   }
   return s;
 }
@@ -167,8 +169,8 @@ inline std::vector<RayQuery> sceneRays(const TwoLevelScene& scene, const Aabb& b
   const glm::vec3 c = bounds.center(), e = bounds.extent();
   for (size_t i = rays.size(); i < count; ++i) {
     const Instance& inst = scene.instances[i % scene.instances.size()];
-    const glm::vec3 from = c + glm::vec3(u(rng), u(rng), u(rng)) * e;
-    const glm::vec3 to = inst.objectToWorld * glm::vec4(0.5f * glm::vec3(u(rng), u(rng), u(rng)), 1.0f);
+    const glm::vec3 from = c + draw3<glm::vec3>(u, rng) * e;
+    const glm::vec3 to = inst.objectToWorld * glm::vec4(0.5f * draw3<glm::vec3>(u, rng), 1.0f);
     rays.push_back({{from, to - from}, 0.0f, glsl::INF});
   }
   return rays;
