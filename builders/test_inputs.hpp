@@ -152,14 +152,9 @@ inline PrimitiveSet planeSoup(size_t count, uint32_t seed = 2) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), small(-0.001f, 0.001f);
   for (size_t i = 0; i < count; ++i) {
-    // One draw per statement, in the order of datasets/random_draws.hpp (last first).
-    const auto inPlane = [&](std::uniform_real_distribution<float>& d) {
-      const float z = d(rng), x = d(rng);
-      return glm::vec3(x, 0.0f, z);
-    };
-    const glm::vec3 c = inPlane(unit);
-    const glm::vec3 v2 = c + inPlane(small), v1 = c + inPlane(small), v0 = c + inPlane(small);
-    set.addTriangle(v0, v1, v2);
+    const glm::vec3 c = drawXZ<glm::vec3>(unit, rng);  // fixed order (datasets/random_draws.hpp): last first
+    const glm::vec3 v2 = c + drawXZ<glm::vec3>(small, rng), v1 = c + drawXZ<glm::vec3>(small, rng);
+    set.addTriangle(c + drawXZ<glm::vec3>(small, rng), v1, v2);
   }
   return set;
 }

@@ -31,4 +31,12 @@ Vec draw2(Dist& dist, Rng& rng) {
   return Vec(x, y);
 }
 
+// A point of the plane y = 0: z drawn first, then x.
+template <class Vec, class Dist, class Rng>
+Vec drawXZ(Dist& dist, Rng& rng) {
+  const auto z = dist(rng);
+  const auto x = dist(rng);
+  return Vec(x, 0, z);
+}
+
 }  // namespace bvhlab

@@ -371,14 +371,9 @@ TEST_P(EpoEveryBuilder, MatchesBruteForce) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), edge(-0.05f, 0.05f);
   for (int i = 0; i < 200; ++i) {
-    // One draw per statement, last first (see random_draws.hpp).
-    const auto inPlane = [&](std::uniform_real_distribution<float>& d) {
-      const float z = d(rng), x = d(rng);
-      return glm::vec3(x, 0.0f, z);
-    };
-    const glm::vec3 c = inPlane(unit);
-    const glm::vec3 v2 = c + inPlane(edge), v1 = c + inPlane(edge), v0 = c + inPlane(edge);
-    flat.add(v0, v1, v2);
+    const glm::vec3 c = drawXZ<glm::vec3>(unit, rng);  // fixed order (random_draws.hpp): the last corner first
+    const glm::vec3 v2 = c + drawXZ<glm::vec3>(edge, rng), v1 = c + drawXZ<glm::vec3>(edge, rng);
+    flat.add(c + drawXZ<glm::vec3>(edge, rng), v1, v2);
   }
   const Bvh bvh = buildBvh(GetParam(), flat.input(), BuildOptions{});
   const double reference = bruteForceEpo(bvh, flat, {});
