@@ -1,4 +1,4 @@
-// Procedural meshes for the benchmark suite (datasets/scenes/bench/, issue 13): scenes on which BVH
+// Procedural meshes for the benchmark suite (datasets/scenes/bench/): scenes on which BVH
 // builders produce genuinely different trees, unlike a compact scan seen by primary rays.
 //
 //   stadium   "teapot in a stadium": a dense torus-knot tube ~1e-3 of the enclosure's size at the centre

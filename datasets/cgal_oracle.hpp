@@ -1,4 +1,4 @@
-// cgal_oracle.hpp — exact ground truth for the hard-case suite (issue 4): ray/triangle and ray/box
+// cgal_oracle.hpp — exact ground truth for the hard-case suite: ray/triangle and ray/box
 // decisions in CGAL's Exact_predicates_exact_constructions_kernel on the exact values of the float
 // inputs. CGAL stays inside cgal_oracle.cpp (compile-heavy); this header has no CGAL in it.
 #pragma once

@@ -1,4 +1,4 @@
-// hard_cases.hpp — the hard-case suite for ray/triangle and ray/box robustness (issue 4): small
+// hard_cases.hpp — the hard-case suite for ray/triangle and ray/box robustness: small
 // triangle soups with ray lists aimed at the places where floating-point tests fail (shared edges and
 // vertices, slab planes, degenerate triangles, far offsets, extreme scales). Pure functions of their
 // arguments: the same call gives bit-identical data everywhere. Each case documents itself in

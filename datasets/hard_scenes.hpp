@@ -1,4 +1,4 @@
-// hard_scenes.hpp — the scene-level hard cases of issue 4 (datasets/hard/): whole scenes where a
+// hard_scenes.hpp — the scene-level hard cases (datasets/hard/): whole scenes where a
 // Whitted tracer's numerics fail visibly — grazing Fresnel, total internal reflection, nested
 // refraction, self-intersection ("acne") of secondary rays, torus tangents, a camera inside a closed
 // mesh, and one base scene moved far from the origin and scaled (it should render the same image).

@@ -2,7 +2,7 @@
 // formatting, scene building blocks, the individual scenes, the far mesh files.
 //   hard_scenes_common.cpp      formatting, materials/lights/objects, transformed(), toToml()
 //   hard_scenes_cases.cpp       the individual scenes (grazing, TIR, nested, torus, inside, acne, base)
-//   hard_scenes_far_meshes.cpp  mesh files far from the origin and their scenes (issue 16)
+//   hard_scenes_far_meshes.cpp  mesh files far from the origin and their scenes
 //   hard_scenes_families.cpp    makeHardScenes(): the suite, far/scaled families, measured facts
 //   hard_scenes_files.cpp       hardSceneFiles(): README.md, .toml files, meshes; the writer
 #pragma once

@@ -49,7 +49,7 @@ const FamilyMeasurement kFamilyMeasurements[] = {
      "Rebased to the eye like acne_large_1e4 (before camera-relative loading, the ULP offset failed with "
      "11.7 / 9.7 %, the floor acne of scale_1e2)."},
     {"mesh_far_1e5", true, true, "epsilon 0.00 / 0.0 %, ULP 0.00 / 0.0 %",
-     "Mesh files are read in double and baked relative to the scene's origin in double (issue 16). With "
+     "Mesh files are read in double and baked relative to the scene's origin in double. With "
      "positions narrowed to float as they were read (the old reader) it still matched, barely visibly: 0.15 / "
      "0.1 % and 0.13 / 0.1 % (vertices moved by up to 2^-8)."},
     {"mesh_far_1e6", true, true, "epsilon 0.00 / 0.0 %, ULP 0.00 / 0.0 %",
@@ -153,7 +153,7 @@ std::vector<HardScene> makeHardScenes() {
     h.correct = "The image of base.toml.";
     out.push_back(h);
   }
-  // Mesh files far from the origin (issue 16), against the same ball near it.
+  // Mesh files far from the origin, against the same ball near it.
   out.push_back(meshNearScene());
   for (HardScene& h : meshFarScenes()) out.push_back(std::move(h));
   for (HardScene& h : out) {

@@ -1,4 +1,4 @@
-// hard_scenes_far_meshes.cpp — mesh files whose own coordinates lie far from the origin (issue 16:
+// hard_scenes_far_meshes.cpp — mesh files whose own coordinates lie far from the origin (as in
 // scanned or georeferenced data), and the scenes that use them. The same ball is written near the
 // origin (kBallMesh) and moved by 1e5, 1e6 and 1e7 into OBJ, ASCII PLY and binary PLY (property
 // double): a loader that narrows file positions to float before rebasing quantises it to 2^-7, 2^-4

@@ -1,4 +1,4 @@
-"""The robustness section of the experiment report (issue 4: "what accuracy costs in time").
+"""The robustness section of the experiment report: what accuracy costs in time.
 
 report.py calls section_robustness(page, data, root) with its Page, its Data and the sweep directory.
 Per scene, one table over the robustness variants (traversal/robustness.hpp) of runs that differ in

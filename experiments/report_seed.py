@@ -1,5 +1,5 @@
 """Report sections that mirror the seed report's Figs. 8-12 (configs with seed_figures = true) and the
-anti-aliasing comparison (issue 5: every AA mode's frame time and image error against the reference)."""
+anti-aliasing comparison (every AA mode's frame time and image error against the reference)."""
 import html
 
 from report_data import (AXES, describe, fmt, fmt_fps, fmt_ms, fps, frame_ci, group, in_sweep, label, matplotlib,
@@ -147,7 +147,7 @@ def aa_preset(row):
     # Colour edge detection is a variant of the SMAA mode, not another scene setting (luma: the default).
     edges = {"color": " (colour edges)", "geometry": " (geometry edges)"}.get(row.get("smaa_edges"), "")
     v = v + edges if v.startswith("smaa") else v
-    # Texture filtering by ray cones is part of the mode too (issue 40): "smaa-high + cones".
+    # Texture filtering by ray cones is part of the mode too: "smaa-high + cones".
     lod = row.get("texture_lod")
     return v + " + " + str(lod) if lod and lod != "none" else v
 
@@ -166,7 +166,7 @@ def worst_window(diff, frac=6):
 
 
 def section_antialiasing(page, data):
-    """Issue 5's comparison: per scene, every anti-aliasing mode's frame time and image error against
+    """The anti-aliasing comparison: per scene, every anti-aliasing mode's frame time and image error against
     the config's reference (16x supersampling), with the seed's two targets and crops (Fig. 12)."""
     rows = [r for r in data.ok if r.get("aa")]
     if len(data.values(rows, "aa")) < 2:
@@ -211,7 +211,7 @@ def section_antialiasing(page, data):
                 added_vs_ssaa4 = ratio(t - t_none, t_ssaa4 - t_none)
             verdict = ""
             base = modes.get(mode.split(" + ")[0]) if " + " in mode else None
-            if base is not None:  # a texture-LOD mode: issue 40's targets
+            if base is not None:  # a texture-LOD mode: its targets
                 checks = []
                 if err_ratio is not None and mode.startswith("smaa"):
                     checks.append("error %s" % ("✓" if err_ratio <= 0.5 else "✗ (target ≤ 0.5)"))

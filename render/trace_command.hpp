@@ -1,4 +1,4 @@
-// `bvhlab trace` (issue 13): a ray workload (render/workloads.hpp) traced by a GLSL kernel over the
+// `bvhlab trace`: a ray workload (render/workloads.hpp) traced by a GLSL kernel over the
 // chosen builder's tree and, in the same process with the frames interleaved, by Embree over the same
 // triangles; timings with intervals, counts per ray, and the answers compared ray by ray.
 #pragma once

@@ -1,4 +1,4 @@
-// Ray workloads for `bvhlab trace` (issue 13): buffers of rays generated on the CPU, deterministically
+// Ray workloads for `bvhlab trace`: buffers of rays generated on the CPU, deterministically
 // from a seed, over a scene's triangles. What each one is there for:
 //   primary   camera rays through a grid of pixel centres (coherent; what `render` traces first)
 //   shadow    from primary hits to one of the scene's lights, ending at a point light (any hit)

@@ -1,4 +1,4 @@
-// The benchmark scene suite (datasets/scenes/bench/, issue 13): the generators give exactly the
+// The benchmark scene suite (datasets/scenes/bench/): the generators give exactly the
 // triangles asked for, deterministically; the scene format's generate key and its errors; every bench
 // scene loads with the triangle count its README states and a camera that sees triangles.
 #include <algorithm>

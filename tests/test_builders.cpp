@@ -26,7 +26,7 @@ using testing::builderNames;
 using testing::identical;
 using testing::sameBox;
 
-// The SAH of the brief, written out independently of builders/stats.cpp:
+// The SAH cost, written out independently of builders/stats.cpp:
 // Ct * sum_inner A(n) / A(root) + Ci * sum_leaf A(n) / A(root) * count(n).
 double referenceSah(const Bvh& bvh, const CostModel& cost) {
   double sum = 0.0;

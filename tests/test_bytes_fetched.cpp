@@ -292,7 +292,7 @@ TEST(BytesFetched, CwbvhAgainstV1OnTheBunnysDiffuseRays) {
                 b.sum[0] / a.sum[0], b.sum[1] / a.sum[1], b.sum[2] / a.sum[2]);
     RecordProperty(k.name + "_over_v1_bytes", std::to_string(totalB / totalA));
     if (k.name == "cwbvh-groups") {
-      EXPECT_LE(totalB, 0.5 * totalA) << "issue 37's target: at most half v1's bytes per diffuse ray";
+      EXPECT_LE(totalB, 0.5 * totalA) << "the target: at most half v1's bytes per diffuse ray";
     }
   }
 }

@@ -1,4 +1,4 @@
-// The layout and triangle-format axes of experiment configs (issue 14): which kernel each layout runs
+// The layout and triangle-format axes of experiment configs: which kernel each layout runs
 // ("default", "all", kernels of another layout dropped from the product), which robustness variants a
 // triangle format runs, validation errors with file, line and key, keys of configs without the axes
 // unchanged, --layout/--triangles on the render and trace command lines, the rows' layout/bytes columns,

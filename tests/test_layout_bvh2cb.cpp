@@ -1,4 +1,4 @@
-// Layouts as an axis (issue 14): the registry, the bvh2-cb packer's invariants, every builder x layout
+// Layouts as an axis: the registry, the bvh2-cb packer's invariants, every builder x layout
 // x kernel of that layout against brute force, the bvh2-cb GLSL kernel against its C++ mirror per ray
 // (answer and counters), and the refusal of a kernel that walks another layout.
 #include <algorithm>

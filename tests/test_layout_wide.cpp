@@ -1,4 +1,4 @@
-// Wide layouts bvh4 / bvh8 (issue 14): the SAH-optimal collapse (coverage, widths, leaf cap, cost equal
+// Wide layouts bvh4 / bvh8: the SAH-optimal collapse (coverage, widths, leaf cap, cost equal
 // to the emitted tree's SAH and never above a greedy collapse's), the packer's invariants, every builder
 // x wide layout x kernel against brute force, the stack bound, and the GLSL kernels against their C++
 // mirror per ray (answer, visits, triangle tests, box tests; v1's and bvh2-cb's box counters too).

@@ -203,7 +203,7 @@ TEST(MeshIo, CorruptedFilesNeverCrash) {
   EXPECT_EQ(loaded + rejected, int(seeds.size()) * 60);
 }
 
-// ---- far meshes (issue 16): positions stay double until rebased -------------------------------------
+// ---- far meshes: positions stay double until rebased ---------------------------------------------
 
 namespace {
 
@@ -309,7 +309,7 @@ TEST(MeshIo, BinaryStlFloatsConvertExactly) {
   EXPECT_EQ(m.positions[2], glm::dvec3(1e6, 5e5 + 0.0625, -1e6));
 }
 
-// ---- resource limits (issue 16): absurd claimed counts fail with a clear error before allocation ----
+// ---- resource limits: absurd claimed counts fail with a clear error before allocation ---------
 
 TEST(MeshIo, AbsurdDeclaredCountsAreRefusedBeforeAllocation) {
   TempDir tmp;

@@ -310,7 +310,7 @@ TEST(Ploc, SahBelowSahBinnedOnRandomSoups) {
 }
 
 TEST(Ploc, SahNearSahBinnedOnTheBunny) {
-  // Measured 1.09x sah-binned (37.35 vs 34.25, leaf 4): issue 15's target of 1.05x is NOT met on
+  // Measured 1.09x sah-binned (37.35 vs 34.25, leaf 4): the quality target of 1.05x is NOT met on
   // scanned meshes (elephant and armadillo also 1.09x); radius 8..1024 does not change that (the
   // greedy merge order, not the window, is the limit). The bound guards against regressions.
   const PrimitiveSet bunny = testing::loadTriangles(testing::bunnyPath());
@@ -406,7 +406,7 @@ TEST(Ploc, TopDownAboveThePrimitiveCountIsPlainPloc) {
 
 TEST(Ploc, TopDownBringsTheSahWithin5PercentOfSahBinnedOnTheBunny) {
   // Measured (leaf 4, vertex-mean centroids as here): plain PLOC 1.098x sah-binned's SAH, with the
-  // last n/4 clusters split by binned SAH 1.035x (issue 15's target: 1.05x). The SAH top recovers
+  // last n/4 clusters split by binned SAH 1.035x (the target: 1.05x). The SAH top recovers
   // what PLOC loses in the upper levels (docs/builders.md).
   const PrimitiveSet bunny = testing::loadTriangles(testing::bunnyPath());
   if (bunny.size() == 0) BVHLAB_SKIP_OR_FAIL(testing::bunnyPath() << " is missing: run `bash datasets/fetch.sh`");

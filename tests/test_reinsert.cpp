@@ -381,7 +381,7 @@ TEST(Reinsert, OptimisedTreesTraceLikeBruteForce) {
 
 // ---- measurements (not run by default) -----------------------------------------------------------
 // ./tests/test_reinsert --gtest_also_run_disabled_tests --gtest_filter='*DISABLED_Meshes'
-// prints the table: builder, mesh, SAH before and after, change, pass time (leaf 4).
+// prints the measurement table: builder, mesh, SAH before and after, change, pass time (leaf 4).
 PrimitiveSet fromMesh(const Mesh& mesh, const std::string& name) {
   PrimitiveSet set;
   set.name = name;

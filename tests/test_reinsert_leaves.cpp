@@ -2,7 +2,7 @@
 // leaves are expanded to single primitives, the inner-structure pass runs, the result is collapsed
 // into SAH-optimal leaves. For every builder: a valid tree over the same references with exact boxes
 // and leaves within the leaf size, the SAH never rises, the depth stays bounded, the same tree for any
-// thread count; median trees gain >= 15% and sah-binned >= 3% (issue 15); trees whose leaves cannot
+// thread count; median trees gain >= 15% and sah-binned >= 3%; trees whose leaves cannot
 // be expanded (sbvh's clipped references, a leaf box that is not its primitives' union) keep their
 // leaves, exactly as the inner-structure pass leaves them; malformed trees are refused.
 #include <algorithm>
@@ -179,9 +179,9 @@ INSTANTIATE_TEST_SUITE_P(Builders, EveryBuilderReformed, ::testing::ValuesIn(bui
   return name;
 });
 
-// Issue 15's targets, on a generated mesh-like input (a bumpy sphere, 9,600 triangles): measured
+// The quality targets, on a generated mesh-like input (a bumpy sphere, 9,600 triangles): measured
 // median -35.4%, sah-binned -7.6%, lbvh -23.1% at leaf 4 (the scanned meshes: docs/builders.md).
-TEST(ReinsertLeaves, ReachesTheIssueTargetsOnABumpySphere) {
+TEST(ReinsertLeaves, ReachesTheQualityTargetsOnABumpySphere) {
   const PrimitiveSet set = testing::sphereSoup(80, 60, 0.2f);
   for (const auto& [builder, bound] :
        {std::pair<std::string, double>{"median", 0.85}, {"sah-binned", 0.97}, {"lbvh", 0.85}}) {

@@ -1,4 +1,4 @@
-// test_robust.cpp — issue 4: the robust variants (watertight ray/triangle, Ize's conservative slab
+// test_robust.cpp — the robust variants (watertight ray/triangle, Ize's conservative slab
 // test, the ULP origin offset) against the fast ones on the hard-case suite (datasets/hard_cases.hpp),
 // with CGAL's exact kernel as the oracle (datasets/cgal_oracle.hpp). Measured counts are printed.
 #include <gtest/gtest.h>

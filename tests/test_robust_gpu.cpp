@@ -1,4 +1,4 @@
-// Issue 4 through the real GLSL, per robustness variant (traversal/robustness.hpp):
+// The robustness variants through the real GLSL, one by one (traversal/robustness.hpp):
 //  - a camera inside closed tessellated meshes (unit scale, far away, tiny, huge; and from the cube's
 //    exact centre with pixel centres on its edges) must see the mesh in EVERY pixel whenever the
 //    variant has both the watertight triangle test and Ize's box test; the other variants' leak counts

@@ -230,7 +230,7 @@ TEST(SahBinned, SameTreeAsTheTextbookBuildOnTheBunnyAndForAnyThreadCount) {
   }
 }
 
-// The SAH the issue asks to keep: 34.25 at leaf 4 on the bunny with these triangle centroids (the
+// The SAH to keep: 34.25 at leaf 4 on the bunny with these triangle centroids (the
 // renderer's scene loader frames the mesh differently and measures 33.76), within 1.01x Embree MEDIUM.
 TEST(SahBinned, KeepsItsSahOnTheBunny) {
   const PrimitiveSet bunny = testing::loadTriangles(testing::bunnyPath());

@@ -1,7 +1,7 @@
 // The sbvh builder (builders/sbvh.cpp; its clipping against CGAL: test_clip.cpp): the tree's
 // invariants with duplicate references; the packed tree traced by the C++ mirror kernels against
 // brute force; determinism;
-// the options (alpha = 1, the reference budget); and the quality targets of issue 15 (SAH against
+// the options (alpha = 1, the reference budget); and the quality targets (SAH against
 // sah-binned on the meshes, traversal cost on long thin triangles).
 
 #include <algorithm>
@@ -349,7 +349,7 @@ TEST(Sbvh, MirrorKernelsFindTheBruteForceClosestHits) {
   }
 }
 
-// ---- quality against sah-binned (issue 15's targets) --------------------------------------------
+// ---- quality against sah-binned (the targets) ----------------------------------------------------
 
 struct RayCost {
   double visits = 0.0, tests = 0.0;
@@ -392,7 +392,7 @@ TEST(SbvhQuality, RayCostOnLongThinTriangles) {
   EXPECT_LE(sbvh.cost(), 0.85 * binned.cost());
 }
 
-// Issue 15 asks for SAH <= 0.92x sah-binned on these meshes. Measured (leaf 4, 32 bins, alpha 1e-5,
+// The target is SAH <= 0.92x sah-binned on these meshes. Measured (leaf 4, 32 bins, alpha 1e-5,
 // budget 2x): bunny 0.961x, elephant 0.978x, armadillo 0.976x. Well-tessellated scanned meshes have
 // few long or overlapping triangles, so spatial splits pay little on them (Stich et al. report their
 // large gains on architectural scenes); the target is NOT met, and this test guards what is: a

@@ -459,7 +459,7 @@ TEST(SceneDocs, TheCompleteExampleLoads) {
   EXPECT_EQ(s.world.kind, WorldKind::Map);
 }
 
-// Issue 16: a mesh file whose own coordinates are 1e7 from the origin, used by a scene near the origin
+// A mesh file whose own coordinates are 1e7 from the origin, used by a scene near the origin
 // (translate brings it back) and by a scene at its own place (the camera there, rebased to the eye).
 // Either way the baked vertices keep double precision: within 1e-6 of the exact values, where a float
 // reading of the file (spacing 1 at 1e7) is off by up to 0.5 and a float bake by as much.

@@ -387,7 +387,7 @@ INSTANTIATE_TEST_SUITE_P(Bench, BenchSceneTrace, ::testing::ValuesIn(benchScenes
                            return name;
                          });
 
-TEST(TraceCli, JsonHasTheIssueKeys) {
+TEST(TraceCli, JsonHasTheExpectedKeys) {
   const fs::path bunny = fs::path(BVHLAB_SOURCE_DIR) / "datasets/cache/meshes/bunny00.off";
   const std::string input = fs::exists(bunny) ? bunny.string() : clitest::scene("mesh.toml").string();
   if (!fs::exists(input)) BVHLAB_SKIP_OR_FAIL("no mesh input");

@@ -1,4 +1,4 @@
-// Triangle formats as a second layout axis (issue 14; layout/triangle_formats.hpp): the registry and
+// Triangle formats as a second layout axis (layout/triangle_formats.hpp): the registry and
 // the refused pairings, what each format decodes to (indexed: the soup's positions exactly, normals
 // within the oct32 bound, uvs within half precision), the bytes each stream takes, every format x
 // node layout x kernel against brute force, and the GLSL accessor modules against their mirrors.

@@ -1,4 +1,4 @@
-// Robustness variants (issue 4): three independent knobs, each chosen at shader-assembly time
+// Robustness variants: three independent knobs, each chosen at shader-assembly time
 // (shaders/assemble.cpp picks the GLSL module) and mirrored in C++ (traversal/intersectors.hpp for the
 // two intersection tests, shaders/tracer.cpp for the origin offset).
 //

@@ -231,7 +231,7 @@ TL = "texture-lod"
 
 
 def cpu_texture_lod():
-    """Issue 40: texture LOD by ray cones, without AA and with SMAA high: image error against the 16x
+    """Texture LOD by ray cones, without AA and with SMAA high: image error against the 16x
     supersampled reference (no LOD) and the frame time over the same AA mode without LOD (paired)."""
     fpath, findings = read_json(TL, "findings.json")
     cpath, rows = read_csv(TL, "results.csv")
@@ -306,7 +306,7 @@ DYN = "dynamic"
 
 
 def cpu_dynamic():
-    """Issue 39: every update strategy over the bench animations, each clip traced frame by frame
+    """Every update strategy over the bench animations, each clip traced frame by frame
     (`bvhlab trace --update`): the clip's total time with its bootstrap interval and its parts, and the
     ray cost of the first and last traced frame, from each run's record (runs/KEY.json)."""
     cpath, rows = read_csv(DYN, "results.csv")

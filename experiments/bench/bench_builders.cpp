@@ -1,5 +1,5 @@
 // Build time, SAH cost and node count of every registered builder (leaf size 4, Ct = Ci = 1) with 1
-// and with 2 threads, on the bunny (75k triangles), the two other scans the issue-15 targets name
+// and with 2 threads, on the bunny (75k triangles), the two other scans the quality targets name
 // (elephant 89k, armadillo 52k), the ship (CG-57, 180k, a CAD model: long thin
 // triangles), the bench suite's interior (200k: slabs and walls spanning a building;
 // datasets/bench_generators.hpp), a 1M-triangle procedural scene (datasets/procedural.hpp
@@ -17,7 +17,7 @@
 // embree-raw with 2 threads, and each builder's time against sah-binned's at the same thread count
 // as a paired ratio with its 95% interval (render/frame_stats.hpp pairedRatio: repetition r of every
 // benchmark runs in round r of the interleaving, so the r-th times of two builders are a pair; the
-// interval needs 6 or more repetitions, hence the default of 7); then issue 15's target lines per mesh:
+// interval needs 6 or more repetitions, hence the default of 7); then the target lines per mesh:
 // sah-binned with 1 thread vs embree-raw with 2 threads (paired the same way), sbvh's SAH and ploc's
 // SAH and time against sah-binned's (the SAH targets were set on scans, but their anchors come from
 // architectural scenes: the ship and the interior are that class here). One more row, "ploc[top-down=F]",
@@ -25,7 +25,7 @@
 // no such row) and the search radius --ploc-radius=R (16, the builder's default, unless given), with
 // its own target line; the plain ploc row keeps the default radius.
 //
-// --curve runs the accuracy curve of sah-binned's bin count instead (issue 15: what accuracy costs in
+// --curve runs the accuracy curve of sah-binned's bin count instead (what accuracy costs in
 // time): bins in kCurveBins on the bunny, the elephant, the armadillo and makeLargeMesh(1M), 1 and 2
 // threads, beside embree-raw (2 threads), all repetitions interleaved. Beside wall time it records
 // the process's CPU time (all threads; MeasureProcessCPUTime), which other processes on a loaded

@@ -1,6 +1,6 @@
 // Frame time of the GLSL tracer per robustness variant (traversal/robustness.hpp) on the bunny and on
 // the report's scene, as a ratio to the fast variant measured in the same process, frames interleaved:
-// the "accuracy costs time" table of issue 4. A summary table is printed at the end.
+// the "accuracy costs time" table. A summary table is printed at the end.
 //   ./build/experiments/bench/bench_robust [--benchmark_filter=bunny]
 #include <algorithm>
 #include <cstdio>

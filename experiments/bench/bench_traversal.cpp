@@ -1,6 +1,6 @@
 // Every registered layout (layout/layouts.hpp) with every one of its kernels (traversal/kernels.hpp)
 // against Embree 3 on the same primary rays, in one run: the bunny filling a 640x360 view (the close
-// view of issue 3) and the report scene's camera. One sah-binned tree (leaf size 4) per scene, packed
+// view) and the report scene's camera. One sah-binned tree (leaf size 4) per scene, packed
 // into each layout; the GLSL kernels trace it in the compute shader of `bvhlab trace`
 // (render/ray_tracer_gl), Embree (its own BVH, robust, every core) the identical ray buffer.
 //
@@ -9,7 +9,7 @@
 // median of per-round ratios to Embree's time with its 95% interval (render/frame_stats), and the
 // clock-free counts beside them (node visits, box and triangle tests per ray, SAH, bytes per
 // triangle), plus rays whose hit/miss answer differs from Embree's. Layouts and kernels come from the
-// registries, so a new one appears here without an edit. Target (issue 14): best <= 1.25x Embree.
+// registries, so a new one appears here without an edit. Target: best <= 1.25x Embree.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>

@@ -1,7 +1,7 @@
 // bench_builders' reporter: Google Benchmark's console output (aggregates only), then per mesh a table
 // of every builder's median times with 1 and 2 threads, SAH, ratios against embree-raw (2 threads) and
 // paired ratios against sah-binned at the same thread count (render/frame_stats.hpp pairedRatio:
-// repetition r of every benchmark runs in round r of the interleaving); then issue 15's target lines,
+// repetition r of every benchmark runs in round r of the interleaving); then the target lines,
 // or with --curve the bins curve. Benchmark names are "builder/mesh/threads:N"; the benchmarks report
 // the counters "sah", "epo" and "ray_cost". With a paired-out file, every paired ratio it prints also
 // goes there, one line each (across_processes.hpp: --processes=K combines them). Only
@@ -130,7 +130,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
     }
     std::printf("\n(x SAH: against embree-raw's tree; x b. SAH: against sah-binned's; faults/build: minor page faults "
                 "of the process per build, all threads, median over the repetitions: the heap policy's effect.)\n");
-    std::printf("\nTarget (issue 15): sah-binned with 1 thread <= 0.5x embree-raw (MEDIUM) with 2 threads, SAH <= 1.01x\n");
+    std::printf("\nTarget: sah-binned with 1 thread <= 0.5x embree-raw (MEDIUM) with 2 threads, SAH <= 1.01x\n");
     for (const auto& [key, r] : results_) {
       if (key.second != "sah-binned") continue;
       const Result* ref = find(key.first, "embree-raw");
@@ -139,7 +139,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
                   key.first.c_str(), r.time[0] / ref->time[1], paired(r.rounds[0], ref->rounds[1]).c_str(),
                   ref->sah > 0 ? r.sah / ref->sah : NAN);
     }
-    std::printf("\nTargets (issue 15): sbvh SAH <= 0.92x sah-binned's; ploc SAH <= 1.05x sah-binned's and time <= sah-binned's\n");
+    std::printf("\nTargets: sbvh SAH <= 0.92x sah-binned's; ploc SAH <= 1.05x sah-binned's and time <= "
+                "sah-binned's\n");
     const std::set<std::string> meshes = meshNames();
     for (const std::string& m : meshes) {
       const Result* binned = find(m, "sah-binned");
