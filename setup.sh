@@ -9,7 +9,7 @@
 #   bash setup.sh fuzz [SECONDS]  libFuzzer targets for every file parser and importer, SECONDS each
 #                                 (default 60), off the same build; exits 1 on a finding and prints its
 #                                 reproducer (tests/fuzz/run.sh)
-# CI (.ci/run) runs test, then sanitize, then fuzz 90 (FUZZ_SEED=1, FUZZ_RUNS=1000: the time is a cap).
+# CI (.ci/run) runs test, then sanitize, then fuzz 150 (FUZZ_SEED=1, FUZZ_RUNS=1000: the time is a cap).
 set -euo pipefail
 cd "$(dirname "$0")"
 
