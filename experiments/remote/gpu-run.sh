@@ -106,7 +106,7 @@ sed 's/^max_seconds = [0-9]*/max_seconds = 8/' experiments/configs/layouts-gpu.t
 sed -i 's|"\.\./\.\./datasets/|"'"$PWD"'/datasets/|' /tmp/gpu-run/layouts-gpu.toml
 sweep layouts-gpu /tmp/gpu-run/layouts-gpu.toml "$layouts_s"
 sweep kernels-gpu experiments/configs/kernels-gpu.toml "$kernels_s"
-# 5: builders-gpu.toml's settings, only the report scene's frames, programs shared (the default) and not.
+# 6: builders-gpu.toml's settings, only the report scene's frames, programs shared (the default) and not.
 awk '/^\[\[sweep\]\]/{n++} n<1' experiments/configs/builders-gpu.toml > /tmp/gpu-run/shared.toml
 printf '[[sweep]]\nname = "frames"\nscenes = { file = "%s/datasets/scenes/report.toml", name = "report" }\n' "$PWD" >> /tmp/gpu-run/shared.toml
 sed 's/^\[measure\]/[measure]\nshare_programs = false/' /tmp/gpu-run/shared.toml > /tmp/gpu-run/unshared.toml
