@@ -42,6 +42,7 @@ TABLES = {
     "gpu-layouts": tables_gpu.gpu_layouts,
     "cpu-build-quality": tables_cpu.cpu_build_quality,
     "cpu-layout-bytes": tables_cpu.cpu_layout_bytes,
+    "cpu-layout-kernels": tables_cpu.cpu_layout_kernels,
     "cpu-build-time": tables_cpu.cpu_build_time,
     "cpu-hard-cases": tables_cpu.cpu_hard_cases,
     "cpu-robust-cost": tables_cpu.cpu_robust_cost,

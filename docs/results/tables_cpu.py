@@ -416,3 +416,74 @@ def cpu_dynamic():
               "ray cost = node visits + triangle tests per ray, from the kernel's counters. Per-frame values: "
               f"`{rel(result_path(DYN, 'runs'))}/KEY.json` (the run's `trace --json` object)."]
     return lines + provenance([(cpath, rows)], src, commands(DYN, src))
+
+
+# ---- every layout with every kernel, on llvmpipe (experiments/configs/layouts-kernels.toml) ---------------
+
+LK = "layouts-kernels"
+
+
+def cpu_layout_kernels():
+    """Every (layout, kernel) on the bunny's primary and diffuse rays, one trace group: each kernel's time
+    against its baseline (the layout's first kernel against v1's stack-ordered, every other kernel
+    against its layout's first) as findings.json calls it, beside the diffuse rays' exact counts."""
+    fpath, findings = read_json(LK, "findings.json")
+    cpath, rows = read_csv(LK, "results.csv")
+    src = source(LK)
+    read_json(LK, "results.json")  # the per-round times the intervals come from must be committed too
+    runs = [r for r in rows if r.get("status") == "ok"]
+    # findings.json: the comparison whose `a` is this run (kernel axis within a layout, layout axis for a
+    # layout's baseline kernel against v1).
+    against = {}
+    for c in findings.get("comparisons") or []:
+        if c.get("kind") == "axis" and c.get("axis") in ("layout", "kernel") and c.get("metric") == "frame_ms":
+            against[c.get("a")] = c
+    base = findings.get("baselines") or {}
+    order = []
+    for r in runs:
+        if (r.get("layout"), r.get("kernel")) not in order:
+            order.append((r.get("layout"), r.get("kernel")))
+    out = []
+    for lay, kern in order:
+        row = [f"`{lay}`", f"`{kern}`"]
+        ref = None
+        for workload in ("primary", "diffuse"):
+            r = pick(runs, cpath, layout=lay, kernel=kern, workload=workload)
+            c = against.get(r.get("key"))
+            if c is None:
+                if lay != base.get("layout") or kern != base.get("kernel"):
+                    raise DataError(f"{rel(fpath)}: no comparison for run {r.get('key')} ({lay}, {kern}, {workload})")
+                row.append(f"**{sig(num(r, 'frame_ms', cpath))} ms**")
+                ref = "baseline"
+                continue
+            other = c.get("b_values") or {}
+            ref = f"`{other.get('kernel')}`" + (f" (`{other.get('layout')}`)" if c.get("axis") == "layout" else "")
+            row.append(with_ci(num(c, "ratio", fpath), num(c, "ci_low", fpath), num(c, "ci_high", fpath), f3)
+                       + f" {c.get('verdict')}")
+        row.insert(2, ref)
+        d = pick(runs, cpath, layout=lay, kernel=kern, workload="diffuse")
+        row += [f"{num(d, 'node_visits_per_ray', cpath):.1f}", f"{num(d, 'box_tests_per_ray', cpath):.1f}",
+                f"{num(d, 'triangle_tests_per_ray', cpath):.1f}",
+                " + ".join(f"{num(d, k, cpath):.0f}" for k in
+                           ("node_bytes_per_ray", "triangle_bytes_per_ray", "stack_bytes_per_ray"))]
+        out.append(row)
+    header = ["layout", "kernel", "against", "primary: time ratio [95% CI], verdict",
+              "diffuse: time ratio [95% CI], verdict", "diffuse: node visits / ray", "box tests / ray",
+              "triangle tests / ray", "bytes / ray (node + triangle + stack)"]
+    lines = table(header, out)
+    r0 = runs[0]
+    bands = sorted({band_cell(c) for c in against.values()})
+    counts = ", ".join(f"{pick(runs, cpath, layout=base.get('layout'), kernel=base.get('kernel'), workload=w).get('rays')} {w}"
+                       for w in ("primary", "diffuse"))
+    lines += ["", f"One trace group: every run traced the same {r0.get('scene')} rays ({counts}) in every round, "
+              f"rounds interleaved; {r0.get('builder')} tree, leaf size "
+              f"{r0.get('leaf_size')}, robust `{r0.get('robust')}`. Each ratio is the kernel's time over the run "
+              "named in `against` (a layout's first kernel against v1's `stack-ordered`, its other kernels against "
+              "its first), the median of the paired per-round ratios with its 95% interval, and findings.json's "
+              "verdict: `faster`/`slower` only where the interval clears the group's A/A noise band "
+              f"({', '.join(bands)}) after the Benjamini-Hochberg adjustment (docs/measurement.md). v1's "
+              "`stack-ordered` row gives its median time. The counts are exact (the kernels' counters, equal to "
+              "their C++ mirrors'); bytes per ray are what the kernel fetches, the figure a GPU's memory pays "
+              "for, where llvmpipe's time follows the box tests and the loop passes (\"Why the loop shape "
+              "matters on llvmpipe\" above)."]
+    return lines + provenance([(cpath, rows)], src, commands(LK, src))
