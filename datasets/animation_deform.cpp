@@ -8,6 +8,7 @@
 #include <glm/gtc/constants.hpp>
 
 #include "datasets/animation.hpp"
+#include "datasets/random_draws.hpp"
 
 namespace bvhlab {
 namespace {
@@ -46,10 +47,8 @@ struct SplitMix {
 // A point in the unit ball (rejection from the cube: deterministic for a given stream).
 glm::dvec3 inUnitBall(SplitMix& rng) {
   for (;;) {
-    // One draw per statement, z first, so a seed gives the same ball point with every compiler (the
-    // order GCC drew them in when they were arguments of one constructor).
-    const double z = 2.0 * rng.unit() - 1.0, y = 2.0 * rng.unit() - 1.0, x = 2.0 * rng.unit() - 1.0;
-    const glm::dvec3 r(x, y, z);
+    // In a fixed order, so a seed gives the same ball point with every compiler (datasets/random_draws.hpp).
+    const glm::dvec3 r = draw3<glm::dvec3>([&] { return 2.0 * rng.unit() - 1.0; });
     if (glm::dot(r, r) <= 1.0) return r;
   }
 }

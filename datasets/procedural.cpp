@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "datasets/image_io.hpp"
+#include "datasets/random_draws.hpp"
 
 namespace bvhlab {
 
@@ -32,13 +33,11 @@ float SplitMix64::normal() {
 }
 
 glm::vec3 SplitMix64::uniform3(float lo, float hi) {
-  const float z = uniform(lo, hi), y = uniform(lo, hi), x = uniform(lo, hi);
-  return glm::vec3(x, y, z);
+  return draw3<glm::vec3>([&] { return uniform(lo, hi); });
 }
 
 glm::vec3 SplitMix64::normal3() {
-  const float z = normal(), y = normal(), x = normal();
-  return glm::vec3(x, y, z);
+  return draw3<glm::vec3>([&] { return normal(); });
 }
 
 glm::vec3 SplitMix64::unitVector() {

@@ -65,11 +65,9 @@ struct SplitMix64 {
   float uniform(float lo, float hi) { return lo + (hi - lo) * uniform(); }
   float normal();                        // standard normal (Box-Muller)
   glm::vec3 unitVector();                // uniform on the unit sphere
-  // Vectors of three draws. The draws are made in a fixed order, z then y then x, so a seed gives the same
-  // vector with every compiler (glm::vec3(uniform(), uniform(), uniform()) leaves their order to the
-  // compiler: GCC draws z first, clang x). z first is GCC's order, so meshes made so far stay the same.
-  // Every random choice here is sequenced the same way: one draw per statement where two would meet in an
-  // expression.
+  // Vectors of three draws, made in draw3's fixed order (datasets/random_draws.hpp), so a seed gives the
+  // same vector with every compiler. Every random choice here is sequenced the same way: one draw per
+  // statement where two would meet in an expression.
   glm::vec3 uniform3(float lo, float hi);  // each coordinate uniform(lo, hi)
   glm::vec3 normal3();                     // each coordinate normal()
 };
